@@ -1,0 +1,25 @@
+// The look flags shared by every command that develops (develop, demo): stocks, exposure,
+// output mode, grain and MTF switches, seed and frame.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "core/develop.h"
+
+namespace darkroom::cli {
+
+struct LookOptions {
+    std::string film = "kodak-tri-x-400";
+    std::string paper = "vdr-paper-grade-2";  // "none" stops at the negative
+    DevelopSettings settings;
+    int threads = 0;
+    bool verbose = false;
+};
+
+void add_look_flags(CLI::App& command, LookOptions& look);
+
+// Resolves the stocks and compiles the plan for a frame; prints it with -v.
+Plan compile_look(const LookOptions& look, const FrameGeometry& frame);
+
+}  // namespace darkroom::cli

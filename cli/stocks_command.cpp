@@ -1,0 +1,27 @@
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "cli/commands.h"
+#include "core/stock.h"
+
+namespace darkroom::cli {
+
+void add_stocks_command(CLI::App& app) {
+    auto json_output = std::make_shared<bool>(false);
+    CLI::App* cmd = app.add_subcommand("stocks", "List the built-in stocks");
+    cmd->add_flag("--json", *json_output, "Machine-readable output");
+    cmd->callback([json_output] {
+        nlohmann::json list = nlohmann::json::array();
+        for (const Stock& s : builtin_stocks()) {
+            const char* kind = s.kind == StockKind::paper ? "paper" : "negative";
+            if (*json_output)
+                list.push_back({{"id", s.id}, {"name", s.name}, {"kind", kind}, {"iso_speed", s.iso_speed},
+                                {"layers", s.layers.size()}, {"sources", s.sources}});
+            else
+                std::cout << s.id << "  " << kind << "  ISO " << s.iso_speed << "  " << s.name << "\n";
+        }
+        if (*json_output) std::cout << list.dump(2) << "\n";
+    });
+}
+
+}  // namespace darkroom::cli

@@ -1,0 +1,92 @@
+// Developing an image: settings + stocks + frame geometry compile into a Plan, which runs
+// on any window of the frame.
+//
+// The pipeline is the seed paper's, run twice (Geigel & Musgrave 1997, Fig. 5):
+//   film:  expose -> spectral sensitivity -> scatter (MTF) -> develop (H&D) -> grain
+//   print: enlarger light through the negative -> paper: the same five modules
+//   convert: density -> transmittance (negative) or reflectance (print)
+// A stage that cannot change the result is left out of the plan, with the reason.
+//
+// Input pixels are scene-linear RGB in the working space (linear Rec.709 primaries, D65)
+// or, with InputUnits::lux_seconds, the exposure H itself. Treatment of bad pixels: NaN
+// counts as 0 (no light), negative exposure as 0, +Inf and values above 1e30 as 1e30;
+// every output is finite.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/image.h"
+#include "core/stages/grain.h"
+#include "core/stages/scatter.h"
+#include "core/stock.h"
+
+namespace darkroom {
+
+enum class OutputMode { print, negative, density };
+enum class InputUnits { scene_linear, lux_seconds };
+
+struct DevelopSettings {
+    double exposure_ev = 0.0;        // stops relative to the exposure the ISO speed implies
+    double print_exposure_ev = 0.0;  // stops relative to the automatic print exposure
+    OutputMode output = OutputMode::print;
+    InputUnits input_units = InputUnits::scene_linear;
+    bool grain = true;
+    bool mtf = true;
+    uint64_t seed = 0;
+    int frame = 0;
+    double frame_width_mm = 0.0;  // width of the film frame; 0 = the film stock's format
+    double print_width_mm = 0.0;  // width of the print; 0 = the paper stock's format
+};
+
+// What the full frame is: its size in pixels. Render scale is already in the size (a
+// half-resolution proxy is a frame half as wide, so the pixel pitch doubles).
+struct FrameGeometry {
+    int width = 0, height = 0;
+};
+
+// Exposure (lux-seconds) a scene-linear value of 0.18 receives at 0 EV: ISO 2720's
+// reflected-light meter equation, H = q K / S with K = 12.5 and q = 0.65.
+double mid_grey_exposure_lux_s(double iso_speed);
+
+// One material's run of the pipeline, precomputed.
+struct MaterialStages {
+    Stock stock;
+    double pixel_pitch_um = 0;
+    std::vector<std::array<double, 3>> rgb_weights;  // per layer: exposure per unit RGB
+    std::vector<ScatterKernel> scatter;              // per layer; empty when skipped
+    std::vector<GrainModel> grain;                   // per layer; empty when skipped
+    int halo_px() const;
+};
+
+class Plan {
+public:
+    // Throws std::invalid_argument naming the problem for unusable settings.
+    static Plan compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
+                        const FrameGeometry& frame);
+
+    // The input window needed to render `output` (grown by the halo, clipped to the frame).
+    Window input_window(const Window& output) const;
+    // Renders `out.window` from `in`, which must cover input_window(out.window). Writes
+    // channels 0-2 of `out`; copies a 4th channel (alpha) from `in` when both have one.
+    void run(const ConstImageView& in, const ImageView& out, int threads) const;
+
+    // The stages in order and those left out, one line each, for -v.
+    std::vector<std::string> describe() const;
+
+    double film_exposure_scale() const { return film_exposure_scale_; }
+    double enlarger_exposure_lux_s() const { return enlarger_exposure_lux_s_; }
+
+private:
+    DevelopSettings settings_;
+    bool prints_ = false;
+    Window frame_;
+    MaterialStages film_stages_, paper_stages_;
+    double film_exposure_scale_ = 1.0;       // lux-seconds per unit of input
+    double enlarger_exposure_lux_s_ = 0.0;   // paper exposure through a clear negative
+    std::vector<std::string> skipped_;
+};
+
+}  // namespace darkroom

@@ -1,0 +1,91 @@
+// Image views and windows in absolute frame coordinates.
+//
+// Conventions for all of core/:
+// - Pixels are float. A view does not own memory: it is a pointer plus strides, so an OFX
+//   host's buffer or an OIIO ImageBuf can be processed without copies.
+// - Every view knows where it sits in the full frame: `window.x0, window.y0` are the
+//   absolute coordinates of its first pixel. Grain, edges and filters are defined on
+//   absolute coordinates, which is what makes a tile or render window equal that window
+//   of a full-frame render, bit for bit.
+// - Strides are in floats, so negative (bottom-up) row strides are allowed.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+namespace darkroom {
+
+// A rectangle of pixels in absolute frame coordinates; x1, y1 are exclusive.
+struct Window {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+
+    int width() const { return x1 - x0; }
+    int height() const { return y1 - y0; }
+    bool empty() const { return x1 <= x0 || y1 <= y0; }
+    long long pixel_count() const { return empty() ? 0 : (long long)width() * height(); }
+    bool contains(const Window& o) const {
+        return o.empty() || (o.x0 >= x0 && o.y0 >= y0 && o.x1 <= x1 && o.y1 <= y1);
+    }
+    Window grown(int halo_px) const { return {x0 - halo_px, y0 - halo_px, x1 + halo_px, y1 + halo_px}; }
+    Window intersected(const Window& o) const {
+        return {std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
+    }
+    bool operator==(const Window& o) const { return x0 == o.x0 && y0 == o.y0 && x1 == o.x1 && y1 == o.y1; }
+};
+
+template <typename T>
+struct BasicImageView {
+    T* data = nullptr;          // first pixel, i.e. (window.x0, window.y0)
+    Window window;              // where the pixels sit in the frame
+    int channels = 0;
+    std::ptrdiff_t pixel_stride = 0;  // floats between horizontally adjacent pixels
+    std::ptrdiff_t row_stride = 0;    // floats between vertically adjacent pixels
+
+    // A view of mutable pixels is also a view of constant ones.
+    operator BasicImageView<const T>() const { return {data, window, channels, pixel_stride, row_stride}; }
+
+    // Pointer to pixel (x, y) in absolute coordinates.
+    T* at(int x, int y) const {
+        return data + (std::ptrdiff_t)(y - window.y0) * row_stride + (std::ptrdiff_t)(x - window.x0) * pixel_stride;
+    }
+};
+using ImageView = BasicImageView<float>;
+using ConstImageView = BasicImageView<const float>;
+
+// A single-channel float image that owns its pixels: the working buffer between stages.
+struct Plane {
+    Window window;
+    std::vector<float> pixels;
+
+    Plane() = default;
+    explicit Plane(const Window& w, float fill = 0.0f)
+        : window(w), pixels((size_t)std::max<long long>(w.pixel_count(), 0), fill) {}
+    float& at(int x, int y) { return pixels[(size_t)(y - window.y0) * window.width() + (x - window.x0)]; }
+    float at(int x, int y) const { return pixels[(size_t)(y - window.y0) * window.width() + (x - window.x0)]; }
+    float* row(int y) { return pixels.data() + (size_t)(y - window.y0) * window.width(); }
+    const float* row(int y) const { return pixels.data() + (size_t)(y - window.y0) * window.width(); }
+};
+
+// An interleaved float image that owns its pixels (tests, the CLI, synthetic scenes).
+struct Image {
+    Window window;
+    int channels = 0;
+    std::vector<float> pixels;
+
+    Image() = default;
+    Image(const Window& w, int nchannels, float fill = 0.0f)
+        : window(w), channels(nchannels), pixels((size_t)std::max<long long>(w.pixel_count(), 0) * nchannels, fill) {}
+    Image(int width, int height, int nchannels, float fill = 0.0f) : Image(Window{0, 0, width, height}, nchannels, fill) {}
+
+    ImageView view() {
+        return {pixels.data(), window, channels, channels, (std::ptrdiff_t)channels * window.width()};
+    }
+    ConstImageView view() const {
+        return {pixels.data(), window, channels, channels, (std::ptrdiff_t)channels * window.width()};
+    }
+    float* at(int x, int y) { return view().at(x, y); }
+    const float* at(int x, int y) const { return view().at(x, y); }
+};
+
+}  // namespace darkroom

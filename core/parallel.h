@@ -1,0 +1,49 @@
+// A minimal row-parallel loop on std::thread, so core needs no thread library and an
+// OFX host can still hand us its own threads (by calling with threads = 1 per tile).
+//
+// Work is split into contiguous row bands; each output row is computed by exactly one
+// thread with the same code path, so results never depend on the thread count.
+#pragma once
+
+#include <algorithm>
+#include <exception>
+#include <functional>
+#include <thread>
+#include <vector>
+
+namespace darkroom {
+
+// threads <= 0 means all hardware threads.
+inline int resolve_thread_count(int threads) {
+    if (threads > 0) return threads;
+    return std::max(1u, std::thread::hardware_concurrency());
+}
+
+// Calls body(begin, end) on disjoint sub-ranges of [begin, end). Exceptions propagate.
+inline void parallel_for(int begin, int end, int threads, const std::function<void(int, int)>& body) {
+    int n = end - begin;
+    if (n <= 0) return;
+    int workers = std::min(resolve_thread_count(threads), n);
+    if (workers == 1) {
+        body(begin, end);
+        return;
+    }
+    std::vector<std::thread> pool;
+    std::vector<std::exception_ptr> errors(workers);
+    for (int w = 0; w < workers; ++w) {
+        int b = begin + (int)((long long)n * w / workers);
+        int e = begin + (int)((long long)n * (w + 1) / workers);
+        pool.emplace_back([&, w, b, e] {
+            try {
+                body(b, e);
+            } catch (...) {
+                errors[w] = std::current_exception();
+            }
+        });
+    }
+    for (auto& t : pool) t.join();
+    for (auto& e : errors)
+        if (e) std::rethrow_exception(e);
+}
+
+}  // namespace darkroom

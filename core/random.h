@@ -1,0 +1,51 @@
+// Counter-based random numbers: a pure function of (seed, frame, stream, x, y).
+//
+// Philox4x32-10 from Salmon, Moraes, Dror & Shaw, "Parallel Random Numbers: As Easy as
+// 1, 2, 3" (SC 2011): ten rounds of multiply-xor on a 128-bit counter under a 64-bit key.
+// Grain keyed this way cannot depend on threads, tiles or render windows.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+namespace darkroom {
+
+using Philox4x32 = std::array<uint32_t, 4>;
+
+inline Philox4x32 philox4x32_10(Philox4x32 counter, uint32_t key0, uint32_t key1) {
+    constexpr uint32_t kMul0 = 0xD2511F53u, kMul1 = 0xCD9E8D57u;     // round multipliers
+    constexpr uint32_t kWeyl0 = 0x9E3779B9u, kWeyl1 = 0xBB67AE85u;   // key schedule increments
+    for (int round = 0; round < 10; ++round) {
+        uint64_t p0 = (uint64_t)kMul0 * counter[0];
+        uint64_t p1 = (uint64_t)kMul1 * counter[2];
+        counter = {uint32_t(p1 >> 32) ^ counter[1] ^ key0, uint32_t(p1), uint32_t(p0 >> 32) ^ counter[3] ^ key1,
+                   uint32_t(p0)};
+        key0 += kWeyl0;
+        key1 += kWeyl1;
+    }
+    return counter;
+}
+
+// Which independent noise field a draw belongs to (film layers, paper layers, ...).
+struct NoiseKey {
+    uint64_t seed = 0;
+    int32_t frame = 0;
+    uint32_t stream = 0;
+};
+
+// Uniform in (0, 1], never 0, from the top 24 bits.
+inline double uniform_open0(uint32_t bits) { return ((bits >> 8) + 1.0) * (1.0 / 16777216.0); }
+
+// Two independent standard normal draws for pixel (x, y) of the given field (Box-Muller).
+inline std::array<double, 2> normal_pair(const NoiseKey& key, int x, int y) {
+    Philox4x32 c = {uint32_t(x), uint32_t(y), uint32_t(key.frame), key.stream};
+    Philox4x32 r = philox4x32_10(c, uint32_t(key.seed), uint32_t(key.seed >> 32));
+    double radius = std::sqrt(-2.0 * std::log(uniform_open0(r[0])));
+    double angle = 6.283185307179586 * uniform_open0(r[1]);
+    return {radius * std::cos(angle), radius * std::sin(angle)};
+}
+
+inline float standard_normal(const NoiseKey& key, int x, int y) { return (float)normal_pair(key, x, y)[0]; }
+
+}  // namespace darkroom

@@ -1,0 +1,89 @@
+#include "core/stages/grain.h"
+
+#include <cmath>
+
+#include "core/parallel.h"
+
+namespace darkroom {
+
+double aperture_rms_per_unit_noise(double s_um, double d_um) {
+    // Integrand in u = pi d f: the aperture term [2 J1(u)/u]^2 decays as u^-3, so integrate to
+    // u_max and add the tail's mean (4/(pi u^3)) analytically, damped by the grain spectrum.
+    const double u_max = 600.0;
+    const int steps = 120000;
+    auto integrand = [&](double u) {
+        double f = u / (M_PI * d_um);
+        double airy = u < 1e-8 ? 1.0 : 2.0 * std::cyl_bessel_j(1.0, u) / u;
+        return 2.0 * M_PI * f * std::exp(-4.0 * M_PI * M_PI * s_um * s_um * f * f) * airy * airy / (M_PI * d_um);
+    };
+    double sum = 0.5 * (integrand(0) + integrand(u_max));
+    for (int i = 1; i < steps; ++i) sum += integrand(u_max * i / steps);
+    sum *= u_max / steps;
+    double f_max = u_max / (M_PI * d_um);
+    double tail = 8.0 / (M_PI * M_PI * M_PI * d_um * d_um * d_um * f_max);
+    sum += tail * std::exp(-4.0 * M_PI * M_PI * s_um * s_um * f_max * f_max);
+    return std::sqrt(sum);
+}
+
+bool GrainModel::is_noop() const { return pixel_sigma_at_unit_density() < kNoOpSigma; }
+
+double GrainModel::pixel_sigma_at_unit_density() const {
+    double k2 = 0;
+    for (float k : kernel) k2 += double(k) * k;
+    return sigma_per_pixel * k2;  // separable: sum over the 2D kernel of k^2 = (sum k1^2)^2
+}
+
+GrainModel design_grain(const GrainSpec& spec, double d_min, double pitch_um, NoiseKey key) {
+    GrainModel g;
+    g.d_min = float(d_min);
+    g.density_exponent = spec.density_exponent;
+    g.key = key;
+    double unit_noise_sigma48 = aperture_rms_per_unit_noise(spec.grain_size_um, kGranularityApertureUm);
+    g.sigma_per_pixel = spec.rms_granularity / unit_noise_sigma48 / pitch_um;
+    // Gaussian of std s/pitch pixels, integrated over each pixel's extent.
+    double s_px = spec.grain_size_um / pitch_um;
+    g.radius = s_px < 1e-3 ? 0 : (int)std::ceil(4.0 * s_px);
+    auto cdf = [&](double x) { return 0.5 * std::erfc(-x / (s_px * std::sqrt(2.0))); };
+    double sum = 0;
+    for (int i = -g.radius; i <= g.radius; ++i) {
+        double w = g.radius == 0 ? 1.0 : cdf(i + 0.5) - cdf(i - 0.5);
+        g.kernel.push_back(float(w));
+        sum += w;
+    }
+    for (float& k : g.kernel) k = float(k / sum);
+    return g;
+}
+
+void apply_grain(Plane& density, const GrainModel& g, int threads) {
+    const Window w = density.window;
+    const int r = g.radius, side = 2 * r + 1;
+    // Horizontal pass over the rows the vertical pass needs, then vertical. Each filtered
+    // value is summed in a fixed order from noise at absolute coordinates.
+    Window hw{w.x0, w.y0 - r, w.x1, w.y1 + r};
+    Plane horizontal(hw);
+    parallel_for(hw.y0, hw.y1, threads, [&](int y_begin, int y_end) {
+        std::vector<float> noise(w.width() + 2 * r);
+        for (int y = y_begin; y < y_end; ++y) {
+            for (int i = 0; i < (int)noise.size(); ++i) noise[i] = standard_normal(g.key, w.x0 - r + i, y);
+            float* out = horizontal.row(y);
+            for (int x = 0; x < w.width(); ++x) {
+                double acc = 0;
+                for (int k = 0; k < side; ++k) acc += double(g.kernel[k]) * noise[x + k];
+                out[x] = float(acc);
+            }
+        }
+    });
+    parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
+        for (int y = y_begin; y < y_end; ++y) {
+            float* d = density.row(y);
+            for (int x = 0; x < w.width(); ++x) {
+                double acc = 0;
+                for (int k = 0; k < side; ++k) acc += double(g.kernel[k]) * horizontal.row(y - r + k)[x];
+                double net = std::max(0.0, double(d[x]) - g.d_min);
+                d[x] = float(d[x] + g.sigma_per_pixel * std::pow(net, g.density_exponent) * acc);
+            }
+        }
+    });
+}
+
+}  // namespace darkroom

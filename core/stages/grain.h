@@ -1,0 +1,49 @@
+// Granularity: a spatially correlated density fluctuation, calibrated by Selwyn's law.
+//
+// The fluctuation is white noise of spectral density W0 (density^2 um^2) filtered by a
+// Gaussian of standard deviation `grain_size_um`, so its noise power spectrum is
+//   W(f) = W0 exp(-4 pi^2 s^2 f^2).
+// W0 is set so that the RMS density read through a 48 um circular aperture at net density
+// 1.0 equals the data sheet's RMS granularity:
+//   sigma_48^2 = W0 * integral 2 pi f exp(-4 pi^2 s^2 f^2) [2 J1(pi d f)/(pi d f)]^2 df,
+// which for s -> 0 is Selwyn's sigma^2 A = W0 (seed paper eq. 8). On the pixel grid the
+// white noise has standard deviation sqrt(W0)/pitch per pixel, filtered by the Gaussian
+// box-integrated over each pixel, and scaled with net density as (D - Dmin)^exponent.
+// The noise is keyed on (seed, frame, layer, absolute pixel), so any window agrees.
+#pragma once
+
+#include <vector>
+
+#include "core/image.h"
+#include "core/random.h"
+#include "core/stock.h"
+
+namespace darkroom {
+
+constexpr double kGranularityApertureUm = 48.0;
+
+// sigma_48 / sqrt(W0) for a Gaussian grain of this size: the aperture integral above.
+double aperture_rms_per_unit_noise(double grain_size_um, double aperture_diameter_um);
+
+struct GrainModel {
+    double sigma_per_pixel = 0;    // sqrt(W0)/pitch: density std of the unfiltered white noise
+    std::vector<float> kernel;     // 1D separable filter, 2*radius+1 taps
+    int radius = 0;
+    float d_min = 0;               // net density is measured from here (as stored in planes)
+    double density_exponent = 1.0 / 3.0;
+    NoiseKey key;
+
+    // Below this standard deviation (in density) at net density 1 the stage is skipped:
+    // it would change transmittance by less than 2.3e-6 relative.
+    static constexpr double kNoOpSigma = 1e-6;
+    bool is_noop() const;
+    // The standard deviation of the filtered field per pixel at net density 1.
+    double pixel_sigma_at_unit_density() const;
+};
+
+GrainModel design_grain(const GrainSpec& spec, double d_min, double pixel_pitch_um, NoiseKey key);
+
+// Adds grain to a density plane (its whole window).
+void apply_grain(Plane& density, const GrainModel& grain, int threads);
+
+}  // namespace darkroom

@@ -1,0 +1,105 @@
+#include "core/stages/scatter.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/parallel.h"
+
+namespace darkroom {
+
+double mtf_response(const Curve& mtf, double f) {
+    size_t n = mtf.x.size();
+    if (f <= mtf.x_max() || n < 2) return std::max(0.0, mtf(f));
+    double f0 = mtf.x[n - 2], f1 = mtf.x[n - 1], r0 = mtf.y[n - 2], r1 = mtf.y[n - 1];
+    if (!(r1 > 0)) return 0.0;
+    double slope = (r0 > r1 && r0 > 0) ? (std::log(r1) - std::log(r0)) / (f1 - f0) : 0.0;
+    return r1 * std::exp(slope * (f - f1));
+}
+
+double mtf_deviation_to_nyquist(const Curve& mtf, double pixel_pitch_um) {
+    double nyquist = 1000.0 / (2.0 * pixel_pitch_um);
+    double f_end = nyquist * std::sqrt(2.0), worst = 0;
+    for (int i = 0; i <= 512; ++i) worst = std::max(worst, std::abs(mtf_response(mtf, f_end * i / 512) - 1.0));
+    return worst;
+}
+
+// Kernel on an N x N periodic grid: h[m][n] = 1/N^2 sum_k sum_l MTF(f_kl) cos(2pi(km+ln)/N),
+// evaluated as two passes of 1D cosine sums (the MTF grid is symmetric).
+static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, int N) {
+    std::vector<double> response(N * N), cosines(N * N), partial(N * N, 0.0), h(N * N, 0.0);
+    for (int k = 0; k < N; ++k) {
+        int kk = k <= N / 2 ? k : k - N;
+        for (int l = 0; l < N; ++l) {
+            int ll = l <= N / 2 ? l : l - N;
+            response[k * N + l] = mtf_response(mtf, std::sqrt(double(kk * kk + ll * ll)) / (N * pitch_mm));
+        }
+        for (int m = 0; m < N; ++m) cosines[k * N + m] = std::cos(2.0 * M_PI * double((long long)k * m % N) / N);
+    }
+    for (int k = 0; k < N; ++k)
+        for (int l = 0; l < N; ++l)
+            for (int n = 0; n < N; ++n) partial[k * N + n] += response[k * N + l] * cosines[l * N + n];
+    for (int m = 0; m < N; ++m)
+        for (int k = 0; k < N; ++k)
+            for (int n = 0; n < N; ++n) h[m * N + n] += cosines[k * N + m] * partial[k * N + n];
+    for (double& v : h) v /= double(N) * N;
+    return h;
+}
+
+// The kernel keeps all but this fraction of its absolute weight; the design grid stops
+// growing at kMaxGrid (a 127 px radius), where an MTF still high at Nyquist rings.
+constexpr double kTailWeight = 1e-4;
+constexpr int kMaxGrid = 256;
+
+ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um) {
+    ScatterKernel kernel;
+    if (mtf_deviation_to_nyquist(mtf, pixel_pitch_um) < kMtfNoOpTolerance) {
+        kernel.taps = {1.0f};
+        return kernel;
+    }
+    double pitch_mm = pixel_pitch_um / 1000.0;
+    for (int N = 32;; N *= 2) {
+        std::vector<double> h = periodic_kernel(mtf, pitch_mm, N);
+        auto tap = [&](int x, int y) { return h[((y + N) % N) * N + (x + N) % N]; };
+        // Weight outside each radius r, from the outermost ring inwards.
+        double total = 0;
+        for (double v : h) total += std::abs(v);
+        std::vector<double> ring(N / 2 + 1, 0.0);
+        for (int y = -N / 2 + 1; y < N / 2; ++y)
+            for (int x = -N / 2 + 1; x < N / 2; ++x) ring[std::max(std::abs(x), std::abs(y))] += std::abs(tap(x, y));
+        int radius = N / 2 - 1;
+        for (double outside = 0; radius > 0 && outside + ring[radius] < kTailWeight * total; --radius) outside += ring[radius];
+        if (radius >= N / 4 && N < kMaxGrid) continue;  // the PSF wraps around this grid: use a larger one
+        kernel.radius = radius;
+        int side = 2 * radius + 1;
+        kernel.taps.resize(side * side);
+        double sum = 0;
+        for (int y = -radius; y <= radius; ++y)
+            for (int x = -radius; x <= radius; ++x) sum += tap(x, y);
+        for (int y = -radius; y <= radius; ++y)
+            for (int x = -radius; x <= radius; ++x)
+                kernel.taps[(y + radius) * side + (x + radius)] = float(tap(x, y) / sum);
+        return kernel;
+    }
+}
+
+void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads) {
+    const int r = kernel.radius, side = 2 * r + 1;
+    const Window& w = dst.window;
+    parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
+        for (int y = y_begin; y < y_end; ++y) {
+            float* out = dst.row(y);
+            for (int x = w.x0; x < w.x1; ++x) {
+                double acc = 0;
+                for (int dy = -r; dy <= r; ++dy) {
+                    const float* in = src.row(std::clamp(y + dy, frame.y0, frame.y1 - 1));
+                    const float* k = &kernel.taps[(dy + r) * side + r];
+                    for (int dx = -r; dx <= r; ++dx)
+                        acc += double(k[dx]) * in[std::clamp(x + dx, frame.x0, frame.x1 - 1) - src.window.x0];
+                }
+                out[x - w.x0] = float(acc);
+            }
+        }
+    });
+}
+
+}  // namespace darkroom

@@ -1,0 +1,38 @@
+// Internal scattering: the emulsion's MTF applied to the exposure as a convolution.
+//
+// The kernel is designed from the MTF at the pixel pitch: the inverse DFT of MTF(|f|)
+// sampled on an N x N frequency grid (f in cycles/mm), truncated where its tail holds
+// less than 1e-4 of its weight and normalised to unit sum (MTF(0) = 1: scattering moves
+// light, it does not absorb it). Its discrete frequency response therefore equals the
+// MTF at the grid frequencies up to Nyquist.
+#pragma once
+
+#include <vector>
+
+#include "core/curve.h"
+#include "core/image.h"
+
+namespace darkroom {
+
+// The MTF between and beyond its samples: linear between, and past the last sample the
+// log-response continues its last slope (never rising), since data sheets stop early.
+double mtf_response(const Curve& mtf, double cycles_per_mm);
+
+struct ScatterKernel {
+    int radius = 0;            // taps span [-radius, radius] in x and y
+    std::vector<float> taps;   // (2r+1)^2, row-major
+    bool is_identity() const { return radius == 0; }
+};
+
+// Largest |MTF(f) - 1| for f up to the diagonal Nyquist frequency of this pitch: below
+// kMtfNoOpTolerance the stage cannot visibly change the image and is skipped.
+constexpr double kMtfNoOpTolerance = 1e-4;
+double mtf_deviation_to_nyquist(const Curve& mtf, double pixel_pitch_um);
+
+ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um);
+
+// dst = src convolved with the kernel, for dst.window. Reads src with coordinates clamped
+// to `frame`; src.window must cover (dst.window grown by the radius) intersected with frame.
+void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads);
+
+}  // namespace darkroom

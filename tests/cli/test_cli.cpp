@@ -1,0 +1,133 @@
+// The darkroom program run as a user runs it: exit codes, messages, outputs.
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+    int exit_code;
+    std::string output;  // stdout and stderr together
+};
+
+const fs::path kTmp = DARKROOM_TEST_TMP;
+
+Result darkroom(const std::string& args) {
+    fs::create_directories(kTmp);
+    fs::path log = kTmp / "last_output.txt";
+    std::string cmd = std::string(DARKROOM_EXE) + " " + args + " > " + log.string() + " 2>&1";
+    int status = std::system(cmd.c_str());
+    std::ifstream in(log);
+    std::stringstream text;
+    text << in.rdbuf();
+    return {WEXITSTATUS(status), text.str()};
+}
+
+std::string make_input(const std::string& name, int w = 64, int h = 48) {
+    fs::create_directories(kTmp);
+    std::string path = (kTmp / name).string();
+    OIIO::ImageBuf buf(OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::FLOAT));
+    const float top[3] = {0.02f, 0.05f, 0.1f}, bottom[3] = {1.5f, 0.9f, 0.3f};
+    OIIO::ImageBufAlgo::fill(buf, top, bottom);
+    REQUIRE(buf.write(path));
+    return path;
+}
+
+std::vector<float> pixels(const std::string& path, OIIO::ImageSpec* spec = nullptr) {
+    OIIO::ImageBuf buf(path);
+    REQUIRE(buf.read(0, 0, true, OIIO::TypeDesc::FLOAT));
+    if (spec) *spec = buf.spec();
+    std::vector<float> out(buf.spec().image_pixels() * buf.nchannels());
+    buf.get_pixels(buf.roi(), OIIO::TypeDesc::FLOAT, out.data());
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("develop writes an output image", "[cli]") {
+    std::string in = make_input("in.exr"), out = (kTmp / "out.exr").string();
+    fs::remove(out);
+    Result r = darkroom("develop " + in + " -o " + out + " --film kodak-tri-x-400 -v");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("grain") && Catch::Contains("enlarger"));
+    CHECK(pixels(out).size() == 64 * 48 * 3);
+}
+
+TEST_CASE("a window renders the same pixels as that window of the full frame", "[cli][determinism]") {
+    std::string in = make_input("in.exr", 80, 60), full = (kTmp / "full.exr").string(),
+                part = (kTmp / "part.exr").string();
+    const std::string look = " --seed 5 --frame 12 --frame-width-mm 4 --print-width-mm 30";
+    REQUIRE(darkroom("develop " + in + " -o " + full + look + " --threads 1").exit_code == 0);
+    REQUIRE(darkroom("develop " + in + " -o " + part + look + " --threads 2 --window 17,9,40,30").exit_code == 0);
+    OIIO::ImageSpec spec;
+    std::vector<float> f = pixels(full), p = pixels(part, &spec);
+    CHECK(spec.x == 17);
+    CHECK(spec.y == 9);
+    CHECK(spec.full_width == 80);
+    for (int y = 0; y < 30; ++y)
+        for (int x = 0; x < 40; ++x)
+            for (int c = 0; c < 3; ++c) REQUIRE(p[(y * 40 + x) * 3 + c] == f[((y + 9) * 80 + x + 17) * 3 + c]);
+}
+
+TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[cli][bad-input]") {
+    std::string in = make_input("in.exr"), out = (kTmp / "never.exr").string();
+    fs::remove(out);
+    struct Case {
+        std::string args, message;
+    };
+    for (const Case& c : std::vector<Case>{
+             {"develop /nonexistent.exr -o " + out, "does not exist"},
+             {"develop " + in + " -o " + out + " --film no-such-film", "unknown stock 'no-such-film'"},
+             {"develop " + in + " -o " + out + " --exposure lots", "--exposure"},
+             {"develop " + in + " -o " + out + " --output slide", "--output"},
+             {"develop " + in + " -o " + out + " --window 60,40,10,10", "not inside"},
+             {"develop " + in + " -o " + out + " --window 1,2,3", "--window"},
+             {"develop " + in + " -o " + out + " --paper none", "--paper none"},
+             {"develop " + in + " -o " + in, "refusing to overwrite the input"},
+             {"develop " + in + " -o /nonexistent-dir/x.exr", "cannot write"},
+             {"develop " + in + " -o " + out + " --film " + (kTmp / "missing.json").string(), "cannot open"},
+             {"frobnicate", "frobnicate"},
+         }) {
+        Result r = darkroom(c.args);
+        INFO(c.args << "\n" << r.output);
+        CHECK(r.exit_code != 0);
+        CHECK_THAT(r.output, Catch::Contains(c.message));
+    }
+    CHECK_FALSE(fs::exists(out));
+}
+
+TEST_CASE("a corrupt image and a bad stock file are reported, and leave no output", "[cli][bad-input]") {
+    std::string bad_image = (kTmp / "corrupt.exr").string(), bad_stock = (kTmp / "bad-stock.json").string();
+    std::ofstream(bad_image) << "this is not an EXR file";
+    std::ofstream(bad_stock) << R"({"format": "darkroom-stock", "version": 1, "id": "x", "name": "x", "kind": "negative"})";
+    std::string out = (kTmp / "never2.exr").string();
+    fs::remove(out);
+    Result r = darkroom("develop " + bad_image + " -o " + out);
+    CHECK(r.exit_code != 0);
+    CHECK_THAT(r.output, Catch::Contains("corrupt.exr"));
+    r = darkroom("develop " + make_input("in.exr") + " -o " + out + " --film " + bad_stock);
+    CHECK(r.exit_code != 0);
+    CHECK_THAT(r.output, Catch::Contains("bad-stock.json: field 'iso_speed': missing"));
+    CHECK_FALSE(fs::exists(out));
+    for (auto& entry : fs::directory_iterator(kTmp))
+        CHECK(entry.path().filename().string().rfind(".darkroom-tmp", 0) == std::string::npos);
+}
+
+TEST_CASE("stocks lists the presets and demo renders without an input", "[cli]") {
+    Result r = darkroom("stocks --json");
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("kodak-tri-x-400") && Catch::Contains("\"kind\": \"paper\""));
+    fs::path dir = kTmp / "demo";
+    fs::remove_all(dir);
+    r = darkroom("demo -o " + dir.string());
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    for (const char* f : {"scene.exr", "print.exr", "print.png", "negative.png"}) CHECK(fs::exists(dir / f));
+}

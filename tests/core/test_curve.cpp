@@ -1,0 +1,52 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "core/curve.h"
+
+using namespace darkroom;
+
+TEST_CASE("curves interpolate linearly between samples and hold their ends", "[curve]") {
+    Curve c = make_curve({0, 1, 3}, {0.2, 1.2, 2.2}, "c");
+    CHECK(c(0.5) == Approx(0.7));
+    CHECK(c(2.0) == Approx(1.7));
+    CHECK(c(-5) == Approx(0.2));
+    CHECK(c(10) == Approx(2.2));
+    CHECK(c(std::nan("")) == Approx(0.2));
+    CHECK(c(-INFINITY) == Approx(0.2));
+    CHECK(c(INFINITY) == Approx(2.2));
+}
+
+TEST_CASE("unsorted samples are sorted and duplicate x merged", "[curve]") {
+    Curve c = make_curve({3, 0, 1, 1}, {2.2, 0.2, 1.0, 1.4}, "c");
+    REQUIRE(c.x == std::vector<double>{0, 1, 3});
+    CHECK(c.y[1] == Approx(1.2));
+}
+
+TEST_CASE("degenerate curves: a single sample is constant and bad samples are rejected", "[curve]") {
+    Curve one = make_curve({1.0}, {0.7}, "c");
+    CHECK(one(-3) == 0.7);
+    CHECK(one(9) == 0.7);
+    CHECK_THROWS_WITH(make_curve({}, {}, "density_curve"), Catch::Contains("density_curve") && Catch::Contains("no samples"));
+    CHECK_THROWS_WITH(make_curve({0, NAN}, {1, 2}, "c"), Catch::Contains("not a finite number"));
+    CHECK_THROWS_WITH(make_curve({0, 1}, {1}, "c"), Catch::Contains("2 x values but 1 y values"));
+}
+
+TEST_CASE("first_x_at finds the first crossing of a non-monotonic curve", "[curve]") {
+    Curve c = make_curve({0, 1, 2, 3}, {0, 2, 1, 3}, "c");
+    double at;
+    REQUIRE(c.first_x_at(1.0, &at));
+    CHECK(at == Approx(0.5));
+    CHECK_FALSE(c.first_x_at(5.0, &at));
+}
+
+TEST_CASE("parametric curve: speed point, straight-line slope and limits", "[curve]") {
+    ParametricCurve p{0.6, 0.25, 2.4, 0.1, 0.15};
+    const double speed_log_h = std::log10(0.8 / 400.0);
+    Curve c = sample_parametric_curve(p, speed_log_h, 0.1, speed_log_h - 3, speed_log_h + 8);
+    CHECK(c(speed_log_h) == Approx(0.35).margin(1e-3));  // 0.1 over base+fog at the ISO speed point
+    CHECK(c(speed_log_h - 3) == Approx(0.25).margin(1e-3));
+    CHECK(c(speed_log_h + 8) == Approx(2.4).margin(1e-3));
+    // In the middle of the straight part the slope is gamma.
+    double mid = speed_log_h + 0.5 * (2.15 / 0.6);
+    CHECK((c(mid + 0.1) - c(mid - 0.1)) / 0.2 == Approx(0.6).epsilon(0.01));
+}

@@ -1,0 +1,159 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+
+#include "core/demo_scene.h"
+#include "core/develop.h"
+#include "test_support.h"
+
+using namespace darkroom;
+
+namespace {
+
+Image render(const Stock& film, const Stock* paper, const DevelopSettings& s, const Image& in, int threads = 1,
+             Window window = {}) {
+    Plan plan = Plan::compile(film, paper, s, {in.window.width(), in.window.height()});
+    Image out(window.empty() ? in.window : window, 3);
+    plan.run(in.view(), out.view(), threads);
+    return out;
+}
+
+DevelopSettings density_settings() {
+    DevelopSettings s;
+    s.output = OutputMode::density;
+    return s;
+}
+
+}  // namespace
+
+TEST_CASE("at 0 EV scene-linear 0.18 receives the ISO mid-grey exposure", "[develop]") {
+    Stock film = test::test_film();
+    DevelopSettings s = density_settings();
+    s.grain = false;
+    Image grey(8, 8, 3, 0.18f);
+    Image d = render(film, nullptr, s, grey);
+    double expected_h = 0.65 * 12.5 / film.iso_speed;
+    CHECK(d.at(4, 4)[0] == Approx(film.layers[0].density_curve(std::log10(expected_h))).margin(1e-5));
+    s.exposure_ev = 1.0;  // one stop more doubles H
+    Image d1 = render(film, nullptr, s, grey);
+    CHECK(d1.at(4, 4)[0] == Approx(film.layers[0].density_curve(std::log10(2 * expected_h))).margin(1e-5));
+}
+
+TEST_CASE("lux-seconds input is the exposure itself", "[develop]") {
+    Stock film = test::test_film();
+    DevelopSettings s = density_settings();
+    s.input_units = InputUnits::lux_seconds;
+    s.grain = false;
+    for (double h : {1e-4, 3e-3, 0.05, 2.0}) {
+        Image in(6, 6, 3, float(h));
+        CHECK(render(film, nullptr, s, in).at(3, 3)[0] == Approx(film.layers[0].density_curve(std::log10(h))).margin(1e-5));
+    }
+}
+
+TEST_CASE("negative output is the transmittance of the density output", "[develop]") {
+    Stock film = test::test_film();
+    Image scene = demo_scene(96, 64);
+    DevelopSettings s = density_settings();
+    Image d = render(film, nullptr, s, scene);
+    s.output = OutputMode::negative;
+    Image t = render(film, nullptr, s, scene);
+    for (size_t i = 0; i < d.pixels.size(); ++i) REQUIRE(t.pixels[i] == Approx(std::pow(10.0, -d.pixels[i])).epsilon(1e-6));
+}
+
+TEST_CASE("mid grey prints at 18 % reflectance with the automatic print exposure", "[develop]") {
+    Stock film = test::test_film(), paper = test::test_paper();
+    DevelopSettings s;
+    s.grain = false;
+    Image grey(8, 8, 3, 0.18f);
+    CHECK(render(film, &paper, s, grey).at(4, 4)[0] == Approx(0.18).epsilon(0.01));
+    // More print exposure: a darker print; more camera exposure: a denser negative, a lighter print.
+    s.print_exposure_ev = 1.0;
+    CHECK(render(film, &paper, s, grey).at(4, 4)[0] < 0.17);
+    s.print_exposure_ev = 0.0;
+    s.exposure_ev = 1.0;
+    CHECK(render(film, &paper, s, grey).at(4, 4)[0] > 0.19);
+}
+
+TEST_CASE("same settings give identical pixels for any thread count and window", "[develop][determinism]") {
+    Stock film = test::test_film(), paper = test::test_paper();
+    Image scene = demo_scene(160, 120);
+    DevelopSettings s;
+    s.seed = 11;
+    s.frame = 3;
+    s.frame_width_mm = 3.0;  // ~19 um pixels: the MTF kernel has a real radius
+    s.print_width_mm = 20.0;
+    for (OutputMode mode : {OutputMode::print, OutputMode::negative}) {
+        s.output = mode;
+        Image one = render(film, &paper, s, scene, 1);
+        Image many = render(film, &paper, s, scene, 7);
+        REQUIRE(one.pixels == many.pixels);
+        for (Window w : {Window{0, 0, 37, 29}, Window{50, 41, 160, 120}, Window{77, 3, 78, 4}}) {
+            Image part = render(film, &paper, s, scene, 2, w);
+            for (int y = w.y0; y < w.y1; ++y)
+                for (int x = w.x0; x < w.x1; ++x)
+                    for (int c = 0; c < 3; ++c) REQUIRE(part.at(x, y)[c] == one.at(x, y)[c]);
+        }
+    }
+    // Another frame or seed gives other grain.
+    s.output = OutputMode::negative;
+    Image frame3 = render(film, &paper, s, scene);
+    s.frame = 4;
+    CHECK(render(film, &paper, s, scene).pixels != frame3.pixels);
+    s.frame = 3;
+    s.seed = 12;
+    CHECK(render(film, &paper, s, scene).pixels != frame3.pixels);
+}
+
+TEST_CASE("a skipped stage gives the pixels of running it with its neutral value", "[develop]") {
+    Image scene = demo_scene(64, 48);
+    DevelopSettings s = density_settings();
+    s.frame_width_mm = 2.0;
+    Stock film = test::test_film();
+    Stock zero_grain = parse_stock_json(test::test_film_json(R"({"rms_granularity": 0, "grain_size_um": 1.5})"), "z");
+    s.grain = false;
+    Image off = render(film, nullptr, s, scene);
+    s.grain = true;
+    CHECK(render(zero_grain, nullptr, s, scene).pixels == off.pixels);
+
+    Stock flat_mtf = film;
+    flat_mtf.layers[0].mtf = make_curve({0, 1000}, {1, 1}, "flat");
+    s.grain = false;
+    s.mtf = false;
+    Image no_mtf = render(film, nullptr, s, scene);
+    s.mtf = true;
+    CHECK(render(flat_mtf, nullptr, s, scene).pixels == no_mtf.pixels);
+}
+
+TEST_CASE("non-finite and negative pixels have a defined treatment and finite output", "[develop][stability]") {
+    Stock film = test::test_film(), paper = test::test_paper();
+    const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+    Image in(7, 1, 3);
+    const float values[7] = {nan, inf, -inf, -1.0f, 0.0f, 1e-38f, 3e38f};
+    for (int x = 0; x < 7; ++x)
+        for (int c = 0; c < 3; ++c) in.at(x, 0)[c] = values[x];
+    for (OutputMode mode : {OutputMode::print, OutputMode::negative, OutputMode::density}) {
+        DevelopSettings s;
+        s.output = mode;
+        Image out = render(film, &paper, s, in);
+        for (float v : out.pixels) REQUIRE(std::isfinite(v));
+        if (mode == OutputMode::density) {
+            s.grain = false;
+            s.mtf = false;  // keep each pixel's treatment apart from its neighbours'
+            Image clean = render(film, &paper, s, in);
+            // NaN, -Inf and negatives count as no light: base+fog density.
+            for (int x : {0, 2, 3, 4}) CHECK(clean.at(x, 0)[0] == Approx(film.layers[0].density_curve.y_min()).margin(1e-3));
+            // +Inf is the brightest light: the shoulder.
+            CHECK(clean.at(1, 0)[0] == Approx(film.layers[0].density_curve.y_max()).margin(1e-3));
+        }
+    }
+}
+
+TEST_CASE("bad settings are rejected with the reason", "[develop]") {
+    Stock film = test::test_film(), paper = test::test_paper();
+    DevelopSettings s;
+    CHECK_THROWS_WITH(Plan::compile(film, nullptr, s, {8, 8}), Catch::Contains("print output needs a paper"));
+    CHECK_THROWS_WITH(Plan::compile(paper, nullptr, density_settings(), {8, 8}), Catch::Contains("not a film"));
+    CHECK_THROWS_WITH(Plan::compile(film, &paper, s, {0, 8}), Catch::Contains("empty"));
+    s.exposure_ev = NAN;
+    CHECK_THROWS_WITH(Plan::compile(film, &paper, s, {8, 8}), Catch::Contains("exposure"));
+}

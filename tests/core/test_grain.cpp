@@ -1,0 +1,68 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "core/stages/grain.h"
+
+using namespace darkroom;
+
+static double std_dev(const std::vector<double>& v) {
+    double mean = 0, var = 0;
+    for (double x : v) mean += x / v.size();
+    for (double x : v) var += (x - mean) * (x - mean) / (v.size() - 1);
+    return std::sqrt(var);
+}
+
+TEST_CASE("the aperture integral reduces to Selwyn's law for point-like grain", "[grain]") {
+    // sigma^2 A = W0 with A = pi d^2 / 4 (seed paper eq. 8, G = sigma sqrt(2A)).
+    for (double d : {24.0, 48.0, 96.0})
+        CHECK(aperture_rms_per_unit_noise(0.0, d) == Approx(std::sqrt(4.0 / (M_PI * d * d))).epsilon(0.002));
+    // Larger grain clumps average less within the same aperture.
+    CHECK(aperture_rms_per_unit_noise(5.0, 48.0) < aperture_rms_per_unit_noise(0.0, 48.0));
+    // Far larger than the aperture, the reading is the field's own variance: 1/(4 pi s^2).
+    CHECK(aperture_rms_per_unit_noise(500.0, 48.0) == Approx(std::sqrt(1.0 / (4 * M_PI * 500.0 * 500.0))).epsilon(0.02));
+}
+
+TEST_CASE("grain on a uniform patch reproduces the RMS granularity through a 48 um aperture", "[grain]") {
+    GrainSpec spec{0.015, 1.5, 1.0 / 3.0};
+    const double pitch_um = 2.0, d_min = 0.2;
+    GrainModel g = design_grain(spec, d_min, pitch_um, NoiseKey{3, 0, 0});
+    Plane d(Window{0, 0, 1200, 1200}, float(d_min + 1.0));
+    apply_grain(d, g, 2);
+
+    std::vector<double> pixels(d.pixels.begin(), d.pixels.end());
+    CHECK(std_dev(pixels) == Approx(g.pixel_sigma_at_unit_density()).epsilon(0.02));
+
+    // Mean density over disjoint 48 um apertures (24 px across).
+    std::vector<double> readings;
+    for (int cy = 12; cy + 12 < 1200; cy += 24)
+        for (int cx = 12; cx + 12 < 1200; cx += 24) {
+            double sum = 0;
+            int n = 0;
+            for (int y = cy - 12; y <= cy + 12; ++y)
+                for (int x = cx - 12; x <= cx + 12; ++x)
+                    if (std::hypot(x - cx, y - cy) <= 12.0) sum += d.at(x, y), ++n;
+            readings.push_back(sum / n);
+        }
+    CHECK(std_dev(readings) == Approx(spec.rms_granularity).epsilon(0.08));
+}
+
+TEST_CASE("granularity scales with net density to the given exponent", "[grain]") {
+    GrainSpec spec{0.02, 0.0, 1.0 / 3.0};
+    GrainModel g = design_grain(spec, 0.1, 5.0, NoiseKey{1, 0, 0});
+    Plane at1(Window{0, 0, 400, 400}, 1.1f), at8(Window{0, 0, 400, 400}, 8.1f), at0(Window{0, 0, 400, 400}, 0.1f);
+    apply_grain(at1, g, 1);
+    apply_grain(at8, g, 1);
+    apply_grain(at0, g, 1);
+    std::vector<double> a(at1.pixels.begin(), at1.pixels.end()), b(at8.pixels.begin(), at8.pixels.end());
+    CHECK(std_dev(b) / std_dev(a) == Approx(2.0).epsilon(0.01));  // 8^(1/3)
+    for (float v : at0.pixels) CHECK(v == 0.1f);                   // no silver, no grain
+}
+
+TEST_CASE("grain is the same for any window of the frame", "[grain][determinism]") {
+    GrainModel g = design_grain(GrainSpec{0.02, 3.0, 0.5}, 0.0, 2.0, NoiseKey{9, 4, 2});
+    Plane full(Window{0, 0, 64, 48}, 1.0f), part(Window{13, 7, 41, 30}, 1.0f);
+    apply_grain(full, g, 3);
+    apply_grain(part, g, 1);
+    for (int y = 7; y < 30; ++y)
+        for (int x = 13; x < 41; ++x) REQUIRE(part.at(x, y) == full.at(x, y));
+}

@@ -1,0 +1,61 @@
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "core/stages/scatter.h"
+#include "test_support.h"
+
+using namespace darkroom;
+
+// Response of the discrete kernel to a sine along x, as a sine target measures it.
+static double kernel_response(const ScatterKernel& k, double cycles_per_px) {
+    int side = 2 * k.radius + 1;
+    double re = 0;
+    for (int y = -k.radius; y <= k.radius; ++y)
+        for (int x = -k.radius; x <= k.radius; ++x)
+            re += k.taps[(y + k.radius) * side + x + k.radius] * std::cos(2 * M_PI * cycles_per_px * x);
+    return re;
+}
+
+TEST_CASE("the scatter kernel's response to a sine target follows the MTF", "[scatter]") {
+    const Curve mtf = test::test_film().layers[0].mtf;
+    const double pitch_um = 2.0;
+    ScatterKernel k = design_scatter_kernel(mtf, pitch_um);
+    REQUIRE(k.radius > 0);
+    double sum = 0;
+    for (float t : k.taps) sum += t;
+    CHECK(sum == Approx(1.0).margin(1e-6));
+    for (double f : {5.0, 10.0, 20.0, 40.0, 60.0, 80.0, 120.0, 200.0}) {
+        INFO("frequency " << f << " cycles/mm");
+        CHECK(kernel_response(k, f * pitch_um / 1000.0) == Approx(mtf_response(mtf, f)).margin(0.01));
+    }
+}
+
+TEST_CASE("scattering a sine image reduces its modulation by the MTF", "[scatter]") {
+    const Curve mtf = test::test_film().layers[0].mtf;
+    const double pitch_um = 2.5, f = 40.0;  // 10 pixels per cycle
+    ScatterKernel k = design_scatter_kernel(mtf, pitch_um);
+    Window frame{0, 0, 200, 40};
+    Plane src(frame), dst(Window{50, 10, 150, 30});
+    for (int y = 0; y < 40; ++y)
+        for (int x = 0; x < 200; ++x) src.at(x, y) = float(1.0 + 0.5 * std::sin(2 * M_PI * (x + 0.5) / 10.0));  // peaks on pixels
+    scatter(src, dst, k, frame, 2);
+    double amplitude = 0;
+    for (int x = 50; x < 150; ++x) amplitude = std::max(amplitude, std::abs(dst.at(x, 20) - 1.0));
+    CHECK(amplitude / 0.5 == Approx(mtf_response(mtf, f)).margin(0.01));
+}
+
+TEST_CASE("an MTF flat to Nyquist designs no kernel", "[scatter]") {
+    const Curve mtf = test::test_film().layers[0].mtf;
+    CHECK(mtf_deviation_to_nyquist(mtf, 2.0) > 0.1);
+    // At 100 um pixels Nyquist is 5 cycles/mm, where this MTF is still about 0.985: not flat.
+    CHECK_FALSE(design_scatter_kernel(mtf, 100.0).is_identity());
+    Curve flat = make_curve({0, 100}, {1.0, 1.0}, "flat");
+    CHECK(design_scatter_kernel(flat, 1.0).is_identity());
+}
+
+TEST_CASE("MTF extrapolation beyond the last sample never rises", "[scatter]") {
+    Curve mtf = make_curve({0, 50, 100}, {1.0, 0.6, 0.3}, "m");
+    CHECK(mtf_response(mtf, 150) == Approx(0.15).margin(1e-9));  // log-linear: halves every 50
+    Curve rising = make_curve({0, 50, 100}, {1.0, 0.6, 0.7}, "m");
+    CHECK(mtf_response(rising, 400) == Approx(0.7));
+}

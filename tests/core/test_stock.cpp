@@ -1,0 +1,79 @@
+#include <catch2/catch.hpp>
+
+#include "core/stock.h"
+#include "test_support.h"
+
+using namespace darkroom;
+
+TEST_CASE("a stock file parses and round-trips through JSON", "[stock]") {
+    Stock s = test::test_film();
+    CHECK(s.id == "test-film");
+    REQUIRE(s.layers.size() == 1);
+    Stock again = parse_stock_json(stock_to_json(s), "round trip");
+    CHECK(again.iso_speed == s.iso_speed);
+    CHECK(again.layers[0].density_curve.y == s.layers[0].density_curve.y);
+    CHECK(again.layers[0].grain.rms_granularity == s.layers[0].grain.rms_granularity);
+}
+
+TEST_CASE("bad stock files name the file, the field and the problem", "[stock]") {
+    auto error_of = [](const std::string& json) {
+        try {
+            parse_stock_json(json, "my.json");
+        } catch (const StockError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    std::string good = test::test_film_json();
+    auto replace = [&](const std::string& from, const std::string& to) {
+        std::string s = good;
+        REQUIRE(s.find(from) != std::string::npos);
+        return s.replace(s.find(from), from.size(), to);
+    };
+    CHECK_THAT(error_of("{not json"), Catch::Contains("my.json") && Catch::Contains("not valid JSON"));
+    CHECK_THAT(error_of(replace("\"iso_speed\": 200", "\"iso_speed\": \"fast\"")),
+               Catch::Contains("my.json: field 'iso_speed': expected a number"));
+    CHECK_THAT(error_of(replace("\"iso_speed\": 200", "\"iso_speed\": -5")),
+               Catch::Contains("field 'iso_speed'") && Catch::Contains("outside"));
+    CHECK_THAT(error_of(replace("\"rms_granularity\": 0.012, ", "")),
+               Catch::Contains("field 'layers[0].grain.rms_granularity': missing"));
+    CHECK_THAT(error_of(replace("\"version\": 1", "\"version\": 7")),
+               Catch::Contains("field 'version'") && Catch::Contains("not supported"));
+    CHECK_THAT(error_of(replace("panchromatic", "infrared")),
+               Catch::Contains("layers[0].spectral_sensitivity.emulsion") && Catch::Contains("unknown emulsion"));
+    CHECK_THAT(error_of(replace("\"response\": [1.0, 0.97", "\"response\": [1.0")),
+               Catch::Contains("layers[0].mtf") && Catch::Contains("7 values but 'response' has 6"));
+    CHECK_THAT(error_of(replace("\"d_max\": 2.6", "\"d_max\": 0.3")),
+               Catch::Contains("layers[0].density_curve.parametric.d_max"));
+    CHECK_THAT(error_of(replace("\"kind\": \"negative\"", "\"kind\": \"slide\"")),
+               Catch::Contains("field 'kind'") && Catch::Contains("unknown kind"));
+}
+
+TEST_CASE("sampled curves and spectral tables are accepted unsorted", "[stock]") {
+    std::string s = test::test_film_json();
+    s.replace(s.find("{\"parametric\""), s.find("}}", s.find("{\"parametric\"")) + 2 - s.find("{\"parametric\""),
+              R"({"log_h": [0, -2, -1, 1], "density": [1.8, 0.3, 1.0, 2.4]})");
+    s.replace(s.find("{\"emulsion\": \"panchromatic\"}"), 28,
+              R"({"nm": [700, 400, 550], "log10_sensitivity": [-1, 0, -0.5]})");
+    Stock st = parse_stock_json(s, "sampled");
+    CHECK(st.layers[0].density_curve(-1.5) == Approx(0.65));
+    CHECK(st.layers[0].sensitivity[wavelength_index(400)] == Approx(1.0));
+}
+
+TEST_CASE("unknown stock ids list the built-in ones", "[stock]") {
+    CHECK_THROWS_WITH(find_stock("no-such-film"), Catch::Contains("unknown stock 'no-such-film'") &&
+                                                      Catch::Contains("built-in:"));
+    CHECK_THROWS_WITH(find_stock("/nonexistent/stock.json"), Catch::Contains("cannot open"));
+}
+
+TEST_CASE("built-in presets parse and cite their sources", "[stock]") {
+    REQUIRE(builtin_stocks().size() >= 5);
+    int films = 0, papers = 0;
+    for (const Stock& s : builtin_stocks()) {
+        INFO(s.id);
+        CHECK_FALSE(s.sources.empty());
+        (s.kind == StockKind::paper ? papers : films)++;
+    }
+    CHECK(films >= 3);
+    CHECK(papers >= 2);
+}
