@@ -130,33 +130,34 @@ SensitometryReport measure_stock(const Stock& stock, const SensitometryOptions& 
         }
 
         // MTF: sine-modulated exposure around mid-scale, read back through the inverse
-        // H&D curve (effective exposure), 1 um pixels; the response is the modulation ratio.
+        // H&D curve (effective exposure), 2 um pixels; the response is the modulation ratio.
         const double mid_log_h = log_h_at_density(layer.density_curve, 0.5 * (fog + density.back()));
-        const int width = 4096, rows = 1;
+        const int width = 2048, rows = 1;
+        const double sine_pitch_um = 2.0;
         auto response_at = [&](double f) {
             Image target(width, rows, 3);
             const double modulation = 0.1, h0 = std::pow(10.0, mid_log_h);
             for (int x = 0; x < width; ++x) {
-                double v = h0 * (1.0 + modulation * std::sin(2 * M_PI * f * (x + 0.5) / 1000.0));
+                double v = h0 * (1.0 + modulation * std::sin(2 * M_PI * f * (x + 0.5) * sine_pitch_um / 1000.0));
                 for (int c = 0; c < 3; ++c) target.at(x, 0)[c] = float(v);
             }
-            Image d = develop_density(material, target, 1.0, false, true, o);
+            Image d = develop_density(material, target, sine_pitch_um, false, true, o);
             // Whole periods in the middle half, away from the clamped edges.
-            int period_count = std::max(1, int(std::floor(f * (width / 2) / 1000.0)));
-            int n = int(std::lround(period_count * 1000.0 / f));
+            int period_count = std::max(1, int(std::floor(f * (width / 2) * sine_pitch_um / 1000.0)));
+            int n = int(std::lround(period_count * 1000.0 / (f * sine_pitch_um)));
             int x0 = width / 4;
             std::complex<double> acc = 0;
             double mean = 0;
             for (int x = x0; x < x0 + n; ++x) mean += std::pow(10.0, log_h_at_density(layer.density_curve, d.at(x, 0)[0])) / n;
             for (int x = x0; x < x0 + n; ++x) {
                 double e = std::pow(10.0, log_h_at_density(layer.density_curve, d.at(x, 0)[0])) - mean;
-                acc += e * std::polar(1.0, -2 * M_PI * f * (x + 0.5) / 1000.0);
+                acc += e * std::polar(1.0, -2 * M_PI * f * (x + 0.5) * sine_pitch_um / 1000.0);
             }
             return 2.0 * std::abs(acc) / n / (modulation * mean);
         };
         double declared_mtf50 = mtf50_cycles_per_mm(layer.mtf);
         double f_lo = 0.5 * declared_mtf50, f_hi = 2.0 * declared_mtf50;
-        for (int i = 0; i < 24; ++i) {
+        for (int i = 0; i < 12; ++i) {
             double mid = std::sqrt(f_lo * f_hi);
             (response_at(mid) > 0.5 ? f_lo : f_hi) = mid;
         }
