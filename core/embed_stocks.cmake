@@ -1,4 +1,5 @@
-# Writes OUTPUT: a C++ source holding each JSON file in INPUTS as a raw string literal.
+# Writes OUTPUT: a C++ source holding each JSON file of STOCK_DIR as a raw string literal.
+file(GLOB INPUTS ${STOCK_DIR}/*.json)
 list(SORT INPUTS)
 set(body "")
 foreach(file ${INPUTS})

@@ -23,15 +23,24 @@ double mtf_deviation_to_nyquist(const Curve& mtf, double pixel_pitch_um) {
     return worst;
 }
 
-// Kernel on an N x N periodic grid: h[m][n] = 1/N^2 sum_k sum_l MTF(f_kl) cos(2pi(km+ln)/N),
-// evaluated as two passes of 1D cosine sums (the MTF grid is symmetric).
+// Kernel on an N x N periodic grid: h[m][n] = 1/N^2 sum_k sum_l H(f_kl) cos(2pi(km+ln)/N),
+// evaluated as two passes of 1D cosine sums (the grid is symmetric). H is the MTF
+// periodised over the sampling frequency, H(f) = sum_j MTF(f + j/pitch), so h is the
+// continuous PSF sampled at pixel centres: compact even where the MTF is still high at
+// Nyquist, where a band-limited design would ring across the whole grid.
 static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, int N) {
-    std::vector<double> response(N * N), cosines(N * N), partial(N * N, 0.0), h(N * N, 0.0);
+    const double sampling = 1.0 / pitch_mm;  // cycles/mm
+    int alias_orders = 0;                      // replicas beyond which the MTF is negligible
+    while (alias_orders < 32 && mtf_response(mtf, (alias_orders + 0.5) * sampling) > 1e-5) ++alias_orders;
+    std::vector<double> response(N * N, 0.0), cosines(N * N), partial(N * N, 0.0), h(N * N, 0.0);
     for (int k = 0; k < N; ++k) {
         int kk = k <= N / 2 ? k : k - N;
         for (int l = 0; l < N; ++l) {
             int ll = l <= N / 2 ? l : l - N;
-            response[k * N + l] = mtf_response(mtf, std::sqrt(double(kk * kk + ll * ll)) / (N * pitch_mm));
+            for (int j1 = -alias_orders; j1 <= alias_orders; ++j1)
+                for (int j2 = -alias_orders; j2 <= alias_orders; ++j2)
+                    response[k * N + l] += mtf_response(mtf, std::hypot(double(kk) / (N * pitch_mm) + j1 * sampling,
+                                                                        double(ll) / (N * pitch_mm) + j2 * sampling));
         }
         for (int m = 0; m < N; ++m) cosines[k * N + m] = std::cos(2.0 * M_PI * double((long long)k * m % N) / N);
     }

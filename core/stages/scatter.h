@@ -1,10 +1,10 @@
 // Internal scattering: the emulsion's MTF applied to the exposure as a convolution.
 //
-// The kernel is designed from the MTF at the pixel pitch: the inverse DFT of MTF(|f|)
-// sampled on an N x N frequency grid (f in cycles/mm), truncated where its tail holds
-// less than 1e-4 of its weight and normalised to unit sum (MTF(0) = 1: scattering moves
-// light, it does not absorb it). Its discrete frequency response therefore equals the
-// MTF at the grid frequencies up to Nyquist.
+// The kernel is the point spread function sampled at pixel centres: the inverse DFT of
+// the MTF (f in cycles/mm) periodised over the sampling frequency, truncated where its
+// tail holds less than 1e-4 of its weight and normalised to unit sum (MTF(0) = 1:
+// scattering moves light, it does not absorb it). Where the PSF is well sampled its
+// frequency response is the MTF up to Nyquist.
 #pragma once
 
 #include <vector>

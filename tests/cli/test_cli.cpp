@@ -20,7 +20,7 @@ const fs::path kTmp = DARKROOM_TEST_TMP;
 
 Result darkroom(const std::string& args) {
     fs::create_directories(kTmp);
-    fs::path log = kTmp / "last_output.txt";
+    fs::path log = kTmp / ("output-" + std::to_string(std::hash<std::string>{}(args)) + ".txt");
     std::string cmd = std::string(DARKROOM_EXE) + " " + args + " > " + log.string() + " 2>&1";
     int status = std::system(cmd.c_str());
     std::ifstream in(log);
@@ -51,7 +51,7 @@ std::vector<float> pixels(const std::string& path, OIIO::ImageSpec* spec = nullp
 }  // namespace
 
 TEST_CASE("develop writes an output image", "[cli]") {
-    std::string in = make_input("in.exr"), out = (kTmp / "out.exr").string();
+    std::string in = make_input("develop-in.exr"), out = (kTmp / "out.exr").string();
     fs::remove(out);
     Result r = darkroom("develop " + in + " -o " + out + " --film kodak-tri-x-400 -v");
     INFO(r.output);
@@ -61,7 +61,7 @@ TEST_CASE("develop writes an output image", "[cli]") {
 }
 
 TEST_CASE("a window renders the same pixels as that window of the full frame", "[cli][determinism]") {
-    std::string in = make_input("in.exr", 80, 60), full = (kTmp / "full.exr").string(),
+    std::string in = make_input("window-in.exr", 80, 60), full = (kTmp / "full.exr").string(),
                 part = (kTmp / "part.exr").string();
     const std::string look = " --seed 5 --frame 12 --frame-width-mm 4 --print-width-mm 30";
     REQUIRE(darkroom("develop " + in + " -o " + full + look + " --threads 1").exit_code == 0);
@@ -77,7 +77,7 @@ TEST_CASE("a window renders the same pixels as that window of the full frame", "
 }
 
 TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[cli][bad-input]") {
-    std::string in = make_input("in.exr"), out = (kTmp / "never.exr").string();
+    std::string in = make_input("bad-in.exr"), out = (kTmp / "never.exr").string();
     fs::remove(out);
     struct Case {
         std::string args, message;
@@ -93,7 +93,7 @@ TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[c
              {"develop " + in + " -o " + in, "refusing to overwrite the input"},
              {"develop " + in + " -o /nonexistent-dir/x.exr", "cannot write"},
              {"develop " + in + " -o " + out + " --film " + (kTmp / "missing.json").string(), "cannot open"},
-             {"frobnicate", "frobnicate"},
+             {"frobnicate", "subcommand is required"},
          }) {
         Result r = darkroom(c.args);
         INFO(c.args << "\n" << r.output);
@@ -112,7 +112,7 @@ TEST_CASE("a corrupt image and a bad stock file are reported, and leave no outpu
     Result r = darkroom("develop " + bad_image + " -o " + out);
     CHECK(r.exit_code != 0);
     CHECK_THAT(r.output, Catch::Contains("corrupt.exr"));
-    r = darkroom("develop " + make_input("in.exr") + " -o " + out + " --film " + bad_stock);
+    r = darkroom("develop " + make_input("corrupt-test-in.exr") + " -o " + out + " --film " + bad_stock);
     CHECK(r.exit_code != 0);
     CHECK_THAT(r.output, Catch::Contains("bad-stock.json: field 'iso_speed': missing"));
     CHECK_FALSE(fs::exists(out));
