@@ -38,15 +38,20 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         std::string where = std::string(role) + " layer " + layer.name;
         m.rgb_weights.push_back(rgb_exposure_weights(layer.sensitivity, scene_light));
         if (!s.mtf) {
+            m.scatter.push_back(ScatterKernel{0, {1.0f}});
             skipped.push_back("scatter (" + where + "): MTF turned off");
         } else {
             double deviation = mtf_deviation_to_nyquist(layer.mtf, m.pixel_pitch_um);
+            ScatterKernel kernel = design_scatter_kernel(layer.mtf, m.pixel_pitch_um);
+            m.scatter.push_back(kernel);
             if (deviation < kMtfNoOpTolerance)
                 skipped.push_back("scatter (" + where + "): MTF within " + fmt(deviation, 2) + " of 1 up to Nyquist at " +
                                   fmt(m.pixel_pitch_um) + " um pitch");
-            else
-                m.scatter.push_back(design_scatter_kernel(layer.mtf, m.pixel_pitch_um));
+            else if (kernel.is_identity())
+                skipped.push_back("scatter (" + where + "): the point spread function is within one pixel at " +
+                                  fmt(m.pixel_pitch_um) + " um pitch");
         }
+        m.grain.push_back(std::nullopt);
         GrainModel g = design_grain(layer.grain, layer.density_curve.y_min(), m.pixel_pitch_um,
                                     NoiseKey{s.seed, s.frame, stream_base + uint32_t(i)});
         if (!s.grain)
@@ -56,7 +61,7 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
                               " D per pixel is below " + fmt(GrainModel::kNoOpSigma, 2) + " at " +
                               fmt(m.pixel_pitch_um) + " um pitch");
         else
-            m.grain.push_back(g);
+            m.grain.back() = g;
     }
     return m;
 }
@@ -67,7 +72,7 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
     std::vector<Plane> density;
     for (size_t i = 0; i < exposure.size(); ++i) {
         Plane d(out);
-        if (!m.scatter.empty()) {
+        if (!m.scatter[i].is_identity()) {
             scatter(exposure[i], d, m.scatter[i], frame, threads);
         } else {
             for (int y = out.y0; y < out.y1; ++y)
@@ -75,7 +80,7 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
         }
         const Curve& curve = m.stock.layers[i].density_curve;
         for (float& v : d.pixels) v = float(curve(std::log10(double(v))));
-        if (!m.grain.empty()) apply_grain(d, m.grain[i], threads);
+        if (m.grain[i]) apply_grain(d, *m.grain[i], threads);
         density.push_back(std::move(d));
     }
     return density;
@@ -204,14 +209,14 @@ std::vector<std::string> Plan::describe() const {
             const auto& w = m.rgb_weights[i];
             lines.push_back("  spectral sensitivity (" + l.name + "): exposure = " + fmt(w[0]) + " R + " + fmt(w[1]) +
                             " G + " + fmt(w[2]) + " B");
-            if (!m.scatter.empty())
+            if (!m.scatter[i].is_identity())
                 lines.push_back("  scatter (" + l.name + "): MTF kernel radius " + std::to_string(m.scatter[i].radius) +
                                 " px");
             lines.push_back("  develop (" + l.name + "): H&D curve, D " + fmt(l.density_curve.y_min()) + " to " +
                             fmt(l.density_curve.y_max()));
-            if (!m.grain.empty())
-                lines.push_back("  grain (" + l.name + "): " + fmt(m.grain[i].pixel_sigma_at_unit_density()) +
-                                " D per pixel at net density 1, filter radius " + std::to_string(m.grain[i].radius) +
+            if (m.grain[i])
+                lines.push_back("  grain (" + l.name + "): " + fmt(m.grain[i]->pixel_sigma_at_unit_density()) +
+                                " D per pixel at net density 1, filter radius " + std::to_string(m.grain[i]->radius) +
                                 " px");
         }
     };

@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -56,8 +57,8 @@ struct MaterialStages {
     Stock stock;
     double pixel_pitch_um = 0;
     std::vector<std::array<double, 3>> rgb_weights;  // per layer: exposure per unit RGB
-    std::vector<ScatterKernel> scatter;              // per layer; empty when skipped
-    std::vector<GrainModel> grain;                   // per layer; empty when skipped
+    std::vector<ScatterKernel> scatter;              // per layer; identity when skipped
+    std::vector<std::optional<GrainModel>> grain;    // per layer; none when skipped
     int halo_px() const;
 };
 

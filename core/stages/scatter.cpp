@@ -56,7 +56,7 @@ static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, in
 
 // The kernel keeps all but this fraction of its absolute weight; the design grid stops
 // growing at kMaxGrid (a 127 px radius), where an MTF still high at Nyquist rings.
-constexpr double kTailWeight = 1e-4;
+constexpr double kTailWeight = 1e-3;
 constexpr int kMaxGrid = 256;
 
 ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um) {

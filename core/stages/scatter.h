@@ -2,7 +2,7 @@
 //
 // The kernel is the point spread function sampled at pixel centres: the inverse DFT of
 // the MTF (f in cycles/mm) periodised over the sampling frequency, truncated where its
-// tail holds less than 1e-4 of its weight and normalised to unit sum (MTF(0) = 1:
+// tail holds less than 1e-3 of its weight and normalised to unit sum (MTF(0) = 1:
 // scattering moves light, it does not absorb it). Where the PSF is well sampled its
 // frequency response is the MTF up to Nyquist.
 #pragma once
