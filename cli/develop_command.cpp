@@ -25,6 +25,9 @@ void run_develop(const DevelopOptions& o) {
                             std::to_string(o.window[2]) + "," + std::to_string(o.window[3]) + " is not inside the " +
                             std::to_string(frame.width) + "x" + std::to_string(frame.height) + " frame");
     }
+    if (o.look.settings.output == OutputMode::density && !is_float_format(o.output))
+        throw UserError("--output density writes float densities: give a float format such as .exr or .tif, not '" +
+                        o.output + "'");
     Plan plan = compile_look(o.look, frame);
     Image out(out_window, in.pixels.channels >= 4 ? 4 : 3);
     plan.run(in.pixels.view(), out.view(), o.look.threads);

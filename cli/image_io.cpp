@@ -30,14 +30,18 @@ static bool same_file(const std::string& a, const std::string& b) {
     return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
 }
 
+bool is_float_format(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower((unsigned char)c));
+    return ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".hdr";
+}
+
 void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
                  const std::string& protected_input) {
     if (!protected_input.empty() && same_file(path, protected_input))
         throw UserError("refusing to overwrite the input '" + path + "' with the output");
     fs::path target(path);
-    std::string ext = target.extension().string();
-    for (char& c : ext) c = char(std::tolower((unsigned char)c));
-    bool wants_float = ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".hdr";
+    bool wants_float = is_float_format(path);
 
     OIIO::ImageSpec spec(image.window.width(), image.window.height(), image.channels,
                          wants_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT16);

@@ -21,6 +21,9 @@ struct LoadedImage {
 
 LoadedImage read_image(const std::string& path);
 
+// Whether the file's format (by its extension) stores float pixels: .exr, .tif, .hdr.
+bool is_float_format(const std::string& path);
+
 // Writes to a temporary file beside `path`, then renames it over `path`, so a failed or
 // interrupted write never leaves a partial file. Refuses to overwrite `protected_input`.
 // Pixel type: float for .exr/.tif/.hdr, else the format's default (8/16-bit).

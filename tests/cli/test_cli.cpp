@@ -94,6 +94,7 @@ TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[c
              {"develop " + in + " -o /nonexistent-dir/x.exr", "cannot write"},
              {"develop " + in + " -o " + out + " --film " + (kTmp / "missing.json").string(), "cannot open"},
              {"frobnicate", "subcommand is required"},
+             {"develop " + in + " -o " + (kTmp / "d.png").string() + " --output density", "float"},
          }) {
         Result r = darkroom(c.args);
         INFO(c.args << "\n" << r.output);
