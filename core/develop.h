@@ -14,6 +14,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -26,7 +27,15 @@
 
 namespace darkroom {
 
-enum class OutputMode { print, negative, density };
+// What a develop run writes (channels 0-2):
+//  print     the print's colour, linear Rec.709 (D65), as viewed under the paper's illuminant
+//  negative  the negative's transmittance per channel (10^-density)
+//  density   the developed diffuse density per layer, as the data sheet's curves give it
+//  scan      the negative as a film scanner writes it: Cineon-style log code values / 1023
+//            (95 at the layer's base+fog, 0.002 density per code value)
+//  texture   the input, scene-linear, with the film's grain, MTF and halation applied and
+//            its tone and colour unchanged on average
+enum class OutputMode { print, negative, density, scan, texture };
 enum class InputUnits { scene_linear, lux_seconds };
 
 struct DevelopSettings {
@@ -36,6 +45,20 @@ struct DevelopSettings {
     InputUnits input_units = InputUnits::scene_linear;
     bool grain = true;
     bool mtf = true;
+    // Halation: multiplies each film layer's halation strength (0 = off).
+    double halation = 1.0;
+    // Per channel (R, G, B; a single-layer stock uses the first): multiplies the layer's RMS
+    // granularity and grain size; a finite density_exponent replaces the stock's.
+    std::array<double, 3> grain_amount{1.0, 1.0, 1.0};
+    std::array<double, 3> grain_size{1.0, 1.0, 1.0};
+    std::array<double, 3> grain_density_exponent{NAN, NAN, NAN};
+    // Printer lights in points for the red, green and blue paper layers: 25 is the automatic
+    // light (a scene mid grey prints neutral at the paper's aim density); one point adds
+    // 0.025 log10 exposure to that layer, so more red light gives more cyan dye.
+    std::array<double, 3> printer_lights{25.0, 25.0, 25.0};
+    // Enlarger colour filtration in CC units (density x 100) of yellow, magenta and cyan
+    // filters in the lamp's light, on top of the printer lights.
+    std::array<double, 3> filtration_ymc{0.0, 0.0, 0.0};
     uint64_t seed = 0;
     int frame = 0;
     double frame_width_mm = 0.0;  // width of the film frame; 0 = the film stock's format
