@@ -12,8 +12,10 @@ namespace darkroom {
 namespace {
 
 constexpr double kMaxInput = 1e30;
-// Reflection density of an 18 % grey: where the automatic print exposure puts mid grey.
-const double kPrintAimDensity = std::log10(1.0 / 0.18);
+constexpr double kLn10 = 2.302585092994046;
+// The scan output: Cineon-style 10-bit printing-density code values (Kodak Cineon: 0.002
+// density per code value, base+fog at code 95), written as code / 1023.
+constexpr double kScanBaseCode = 95.0, kScanDensityPerCode = 0.002, kScanFullCode = 1023.0;
 
 std::string fmt(double v, int precision = 4) {
     std::ostringstream s;
@@ -27,16 +29,36 @@ double sanitize(float v) {
     return std::clamp(double(v), -kMaxInput, kMaxInput);
 }
 
+// The stock's grain for a layer with the user's per-channel overrides (channel = layer).
+GrainSpec layer_grain(const GrainSpec& stock, const DevelopSettings& s, size_t channel) {
+    GrainSpec g = stock;
+    g.rms_granularity *= s.grain_amount[channel];
+    g.grain_size_um *= s.grain_size[channel];
+    if (std::isfinite(s.grain_density_exponent[channel])) g.density_exponent = s.grain_density_exponent[channel];
+    return g;
+}
+
 MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width_px, const DevelopSettings& s,
                             uint32_t stream_base, const char* role, std::vector<std::string>& skipped) {
     MaterialStages m;
     m.stock = stock;
     m.pixel_pitch_um = width_mm * 1000.0 / frame_width_px;
-    const Spectrum scene_light = illuminant_d65();
+    const std::string pitch = " at " + fmt(m.pixel_pitch_um) + " um pitch";
     for (size_t i = 0; i < stock.layers.size(); ++i) {
         const Layer& layer = stock.layers[i];
         std::string where = std::string(role) + " layer " + layer.name;
-        m.rgb_weights.push_back(rgb_exposure_weights(layer.sensitivity, scene_light));
+        m.rgb_weights.push_back(rgb_exposure_weights(layer.sensitivity, stock.exposure_illuminant));
+
+        HalationKernel halation = design_halation(layer.halation.strength * s.halation, layer.halation.radius_um,
+                                                  m.pixel_pitch_um);
+        if (!halation.is_noop())
+            m.halation.push_back(halation);
+        else {
+            m.halation.push_back(HalationKernel{});
+            if (layer.halation.strength > 0)
+                skipped.push_back("halation (" + where + "): " + (s.halation == 0 ? "turned off" : "below 1e-5"));
+        }
+
         if (!s.mtf) {
             m.scatter.push_back(ScatterKernel{0, {1.0f}});
             skipped.push_back("scatter (" + where + "): MTF turned off");
@@ -45,39 +67,53 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
             ScatterKernel kernel = design_scatter_kernel(layer.mtf, m.pixel_pitch_um);
             m.scatter.push_back(kernel);
             if (deviation < kMtfNoOpTolerance)
-                skipped.push_back("scatter (" + where + "): MTF within " + fmt(deviation, 2) + " of 1 up to Nyquist at " +
-                                  fmt(m.pixel_pitch_um) + " um pitch");
+                skipped.push_back("scatter (" + where + "): MTF within " + fmt(deviation, 2) + " of 1 up to Nyquist" +
+                                  pitch);
             else if (kernel.is_identity())
-                skipped.push_back("scatter (" + where + "): the point spread function is within one pixel at " +
-                                  fmt(m.pixel_pitch_um) + " um pitch");
+                skipped.push_back("scatter (" + where + "): the point spread function is within one pixel" + pitch);
         }
+
         m.grain.push_back(std::nullopt);
-        GrainModel g = design_grain(layer.grain, layer.density_curve.y_min(), m.pixel_pitch_um,
+        GrainModel g = design_grain(layer_grain(layer.grain, s, i), layer.density_curve.y_min(), m.pixel_pitch_um,
                                     NoiseKey{s.seed, s.frame, stream_base + uint32_t(i)});
         if (!s.grain)
             skipped.push_back("grain (" + where + "): grain turned off");
         else if (g.is_noop())
             skipped.push_back("grain (" + where + "): " + fmt(g.pixel_sigma_at_unit_density(), 2) +
-                              " D per pixel is below " + fmt(GrainModel::kNoOpSigma, 2) + " at " +
-                              fmt(m.pixel_pitch_um) + " um pitch");
+                              " D per pixel is below " + fmt(GrainModel::kNoOpSigma, 2) + pitch);
         else
             m.grain.back() = g;
     }
     return m;
 }
 
+// Halation then scatter of one layer's exposure (on its window) into `out`.
+Plane spread_exposure(const MaterialStages& m, size_t layer, const Plane& exposure, const Window& out,
+                      const Window& frame, int threads) {
+    const Plane* source = &exposure;
+    Plane halated;
+    const HalationKernel& halation = m.halation[layer];
+    if (!halation.is_noop()) {
+        halated = Plane(out.grown(m.scatter[layer].radius).intersected(frame));
+        apply_halation(exposure, halated, halation, frame, threads);
+        source = &halated;
+    }
+    Plane spread(out);
+    if (!m.scatter[layer].is_identity()) {
+        scatter(*source, spread, m.scatter[layer], frame, threads);
+    } else {
+        for (int y = out.y0; y < out.y1; ++y)
+            std::copy_n(source->row(y) + (out.x0 - source->window.x0), out.width(), spread.row(y));
+    }
+    return spread;
+}
+
 // One material: exposure planes (one per layer) on their window -> density planes on `out`.
-std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> exposure, const Window& out,
+std::vector<Plane> develop_material(const MaterialStages& m, const std::vector<Plane>& exposure, const Window& out,
                                     const Window& frame, int threads) {
     std::vector<Plane> density;
     for (size_t i = 0; i < exposure.size(); ++i) {
-        Plane d(out);
-        if (!m.scatter[i].is_identity()) {
-            scatter(exposure[i], d, m.scatter[i], frame, threads);
-        } else {
-            for (int y = out.y0; y < out.y1; ++y)
-                std::copy_n(exposure[i].row(y) + (out.x0 - exposure[i].window.x0), out.width(), d.row(y));
-        }
+        Plane d = spread_exposure(m, i, exposure[i], out, frame, threads);
         const Curve& curve = m.stock.layers[i].density_curve;
         for (float& v : d.pixels) v = float(curve(std::log10(double(v))));
         if (m.grain[i]) apply_grain(d, *m.grain[i], threads);
@@ -86,13 +122,54 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
     return density;
 }
 
+// Applies f(layer densities, result) to every pixel of `window`, result planes of `channels`.
+template <typename F>
+std::vector<Plane> per_pixel(const std::vector<Plane>& in, const Window& window, size_t channels, int threads, F f) {
+    std::vector<Plane> out(channels, Plane(window));
+    parallel_for(window.y0, window.y1, threads, [&](int y0, int y1) {
+        double values[3], result[3];
+        for (int y = y0; y < y1; ++y)
+            for (int x = window.x0; x < window.x1; ++x) {
+                for (size_t l = 0; l < in.size(); ++l) values[l] = in[l].at(x, y);
+                f(values, result);
+                for (size_t c = 0; c < channels; ++c) out[c].at(x, y) = float(result[c]);
+            }
+    });
+    return out;
+}
+
+void check_setting(bool ok, const std::string& problem) {
+    if (!ok) throw std::invalid_argument(problem);
+}
+
+void validate(const DevelopSettings& s) {
+    for (double v : {s.exposure_ev, s.print_exposure_ev})
+        check_setting(std::isfinite(v) && std::abs(v) <= 64, "exposure must be within +-64 EV");
+    for (double v : {s.frame_width_mm, s.print_width_mm})
+        check_setting(std::isfinite(v) && v >= 0 && v <= 1e4, "frame and print widths must be 0-10000 mm");
+    check_setting(std::isfinite(s.halation) && s.halation >= 0 && s.halation <= 100, "halation must be 0-100");
+    for (int c = 0; c < 3; ++c) {
+        check_setting(std::isfinite(s.grain_amount[c]) && s.grain_amount[c] >= 0 && s.grain_amount[c] <= 100,
+                      "grain amount must be 0-100");
+        check_setting(std::isfinite(s.grain_size[c]) && s.grain_size[c] >= 0 && s.grain_size[c] <= 100,
+                      "grain size must be 0-100");
+        double e = s.grain_density_exponent[c];
+        check_setting(std::isnan(e) || (e >= 0 && e <= 4), "grain response (density exponent) must be 0-4");
+        check_setting(std::isfinite(s.printer_lights[c]) && std::abs(s.printer_lights[c] - 25) <= 200,
+                      "printer lights must be within 25 +-200 points");
+        check_setting(std::isfinite(s.filtration_ymc[c]) && s.filtration_ymc[c] >= 0 && s.filtration_ymc[c] <= 1000,
+                      "filtration must be 0-1000 CC");
+    }
+}
+
 }  // namespace
 
 double mid_grey_exposure_lux_s(double iso_speed) { return 0.65 * 12.5 / iso_speed; }
 
 int MaterialStages::halo_px() const {
     int r = 0;
-    for (const ScatterKernel& k : scatter) r = std::max(r, k.radius);
+    for (size_t i = 0; i < scatter.size(); ++i)
+        r = std::max(r, scatter[i].radius + (halation[i].is_noop() ? 0 : halation[i].radius));
     return r;
 }
 
@@ -101,14 +178,12 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     if (frame.width <= 0 || frame.height <= 0)
         throw std::invalid_argument("frame size " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
                                     " is empty");
-    if (film.kind != StockKind::negative) throw std::invalid_argument("'" + film.id + "' is not a film stock");
-    if (paper && paper->kind != StockKind::paper) throw std::invalid_argument("'" + paper->id + "' is not a paper");
+    if (film.kind != StockKind::negative) throw std::invalid_argument("'" + film.id + "' is not a film stock (it is a paper or print film)");
+    if (paper && paper->kind == StockKind::negative)
+        throw std::invalid_argument("'" + paper->id + "' is a camera film, not a paper or print film");
     if (settings.output == OutputMode::print && !paper)
-        throw std::invalid_argument("print output needs a paper (or choose the negative or density output)");
-    for (double v : {settings.exposure_ev, settings.print_exposure_ev})
-        if (!std::isfinite(v) || std::abs(v) > 64) throw std::invalid_argument("exposure must be within +-64 EV");
-    for (double v : {settings.frame_width_mm, settings.print_width_mm})
-        if (!std::isfinite(v) || v < 0 || v > 1e4) throw std::invalid_argument("frame and print widths must be 0-10000 mm");
+        throw std::invalid_argument("print output needs a paper (or choose the negative, density, scan or texture output)");
+    validate(settings);
 
     Plan p;
     p.settings_ = settings;
@@ -120,40 +195,24 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
                                  : mid_grey_exposure_lux_s(film.iso_speed) / 0.18 * std::exp2(settings.exposure_ev);
 
     if (settings.output == OutputMode::print) {
-        p.prints_ = true;
         double print_width_mm = settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm;
         p.paper_stages_ = build_stages(*paper, print_width_mm, frame.width, settings, 16, "paper", p.skipped_);
-        // Automatic print exposure: the negative of a mid grey exposed at 0 EV prints at the aim density.
-        const Curve& paper_curve = paper->layers[0].density_curve;
-        double log_h_aim;
-        if (!paper_curve.first_x_at(kPrintAimDensity, &log_h_aim))
-            throw std::invalid_argument("paper '" + paper->id + "' never reaches the print aim density " +
-                                        fmt(kPrintAimDensity));
-        double grey_density = film.layers[0].density_curve(std::log10(mid_grey_exposure_lux_s(film.iso_speed)));
-        p.enlarger_exposure_lux_s_ = std::pow(10.0, log_h_aim + grey_density) * std::exp2(settings.print_exposure_ev);
+        p.print_ = PrintExposure::design(film, *paper,
+                                         {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
+                                          settings.filtration_ymc, settings.print_exposure_ev});
     } else if (paper) {
-        p.skipped_.push_back("print: the " + std::string(settings.output == OutputMode::negative ? "negative" : "density") +
-                             " output stops at the negative");
+        p.skipped_.push_back("print: the output stops at the negative");
     }
     return p;
 }
 
 Window Plan::input_window(const Window& output) const {
-    int halo = film_stages_.halo_px() + (prints_ ? paper_stages_.halo_px() : 0);
+    int halo = film_stages_.halo_px() + (print_ ? paper_stages_.halo_px() : 0);
     return output.grown(halo).intersected(frame_);
 }
 
-void Plan::run(const ConstImageView& in, const ImageView& out, int threads) const {
-    const Window out_window = out.window.intersected(frame_);
-    if (out_window.empty()) return;
-    if (!in.window.contains(input_window(out_window)))
-        throw std::invalid_argument("the input image does not cover the window and its halo");
-    if (in.channels < 1 || out.channels < 3) throw std::invalid_argument("need 1+ input channels and 3+ output channels");
-
-    const Window film_out = out_window.grown(prints_ ? paper_stages_.halo_px() : 0).intersected(frame_);
+std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& film_out, int threads) const {
     const Window film_in = film_out.grown(film_stages_.halo_px()).intersected(frame_);
-
-    // Expose: input -> exposure in lux-seconds per film layer.
     std::vector<Plane> exposure;
     for (const auto& w : film_stages_.rgb_weights) {
         Plane h(film_in);
@@ -169,26 +228,94 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads) cons
         });
         exposure.push_back(std::move(h));
     }
-    std::vector<Plane> film_density = develop_material(film_stages_, std::move(exposure), film_out, frame_, threads);
+    return develop_material(film_stages_, exposure, film_out, frame_, threads);
+}
 
-    // Convert, or print: light through the (spectrally neutral) silver negative onto the paper.
+std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window& out, int threads) const {
+    const PrintExposure& enlarger = *print_;
+    std::vector<Plane> paper_exposure =
+        per_pixel(negative, negative[0].window, enlarger.paper_layers(), threads, [&](const double* d, double* h) {
+            enlarger.expose(d, h);
+            for (int j = 0; j < enlarger.paper_layers(); ++j) h[j] = std::clamp(h[j], 0.0, kMaxInput);
+        });
+    std::vector<Plane> paper_density = develop_material(paper_stages_, paper_exposure, out, frame_, threads);
+    const Stock& paper = paper_stages_.stock;
+    return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view_print(paper, d, rgb); });
+}
+
+// Texture: each channel c is treated as the exposure of film layer c (a single-layer film
+// serves all three), spread by halation (normalised, so it moves light without adding
+// any) and the MTF, and multiplied by the grain's exposure fluctuation
+//   exp(k g - k^2 sigma^2 / 2),  k = ln 10 / gamma,
+// g the density grain at the pixel's developed density (standard deviation sigma) and
+// gamma the curve's slope at mid grey: a log-normal factor of mean exactly 1, so a flat
+// patch keeps its mean. Negative input values keep their sign.
+std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, int threads) const {
+    const MaterialStages& m = film_stages_;
+    const Window film_in = out.grown(m.halo_px()).intersected(frame_);
+    const double mid_grey_log_h = std::log10(0.18 * film_exposure_scale_);
     std::vector<Plane> result;
-    if (!prints_) {
-        result = std::move(film_density);
-        if (settings_.output == OutputMode::negative)
-            for (Plane& d : result)
-                for (float& v : d.pixels) v = float(std::pow(10.0, -double(v)));
+    std::vector<std::optional<Plane>> fields(m.stock.layers.size());
+    for (int c = 0; c < 3; ++c) {
+        size_t layer = m.stock.layers.size() == 3 ? size_t(c) : 0;
+        Plane h(film_in);
+        for (int y = film_in.y0; y < film_in.y1; ++y)
+            for (int x = film_in.x0; x < film_in.x1; ++x)
+                h.at(x, y) = float(sanitize(in.at(x, y)[std::min(c, in.channels - 1)]) * film_exposure_scale_);
+        Plane spread = spread_exposure(m, layer, h, out, frame_, threads);
+        const float normalise = float(1.0 / (1.0 + (m.halation[layer].is_noop() ? 0.0 : m.halation[layer].strength)));
+        const auto& grain = m.grain[layer];
+        if (grain && !fields[layer]) fields[layer] = grain_field(*grain, out, threads);
+        const Curve& curve = m.stock.layers[layer].density_curve;
+        double gamma = std::max(0.05, curve(mid_grey_log_h + 0.5) - curve(mid_grey_log_h - 0.5));
+        double k = kLn10 / gamma;
+        parallel_for(out.y0, out.y1, threads, [&](int y0, int y1) {
+            for (int y = y0; y < y1; ++y)
+                for (int x = out.x0; x < out.x1; ++x) {
+                    double exposure = double(spread.at(x, y)) * normalise;
+                    double factor = 1.0;
+                    if (grain) {
+                        double density = curve(std::log10(std::max(exposure, 1e-30)));
+                        double sigma = grain_sigma_at(*grain, density);
+                        double g = sigma / grain->pixel_sigma_at_unit_density() * grain->sigma_per_pixel *
+                                   fields[layer]->at(x, y);
+                        factor = std::exp(k * g - 0.5 * k * k * sigma * sigma);
+                    }
+                    spread.at(x, y) = float(exposure / film_exposure_scale_ * factor);
+                }
+        });
+        result.push_back(std::move(spread));
+    }
+    return result;
+}
+
+void Plan::run(const ConstImageView& in, const ImageView& out, int threads) const {
+    const Window out_window = out.window.intersected(frame_);
+    if (out_window.empty()) return;
+    if (!in.window.contains(input_window(out_window)))
+        throw std::invalid_argument("the input image does not cover the window and its halo");
+    if (in.channels < 1 || out.channels < 3) throw std::invalid_argument("need 1+ input channels and 3+ output channels");
+
+    std::vector<Plane> result;
+    if (settings_.output == OutputMode::texture) {
+        result = texture(in, out_window, threads);
+    } else if (print_) {
+        const Window film_out = out_window.grown(paper_stages_.halo_px()).intersected(frame_);
+        result = print(develop_film(in, film_out, threads), out_window, threads);
     } else {
-        Plane paper_exposure(film_out);
-        for (size_t i = 0; i < paper_exposure.pixels.size(); ++i)
-            paper_exposure.pixels[i] = float(enlarger_exposure_lux_s_ * std::pow(10.0, -double(film_density[0].pixels[i])));
-        std::vector<Plane> planes(paper_stages_.stock.layers.size(), paper_exposure);
-        result = develop_material(paper_stages_, std::move(planes), out_window, frame_, threads);
-        for (Plane& d : result)
-            for (float& v : d.pixels) v = float(std::pow(10.0, -double(v)));
+        result = develop_film(in, out_window, threads);
+        for (size_t l = 0; l < result.size(); ++l) {
+            double d_min = film_stages_.stock.layers[l].density_curve.y_min();
+            for (float& v : result[l].pixels) {
+                if (settings_.output == OutputMode::negative)
+                    v = float(std::pow(10.0, -double(v)));
+                else if (settings_.output == OutputMode::scan)
+                    v = float((kScanBaseCode + (double(v) - d_min) / kScanDensityPerCode) / kScanFullCode);
+            }
+        }
     }
 
-    // Black-and-white: one layer written to all three channels.
+    // A single-layer result is written to all three channels.
     bool copy_alpha = in.channels >= 4 && out.channels >= 4;
     parallel_for(out_window.y0, out_window.y1, threads, [&](int y0, int y1) {
         for (int y = y0; y < y1; ++y)
@@ -202,13 +329,17 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads) cons
 
 std::vector<std::string> Plan::describe() const {
     std::vector<std::string> lines;
-    auto material = [&](const MaterialStages& m, const char* role) {
+    auto material = [&](const MaterialStages& m, const char* role, bool exposed_by_scene) {
         lines.push_back(std::string(role) + " " + m.stock.id + ": pixel pitch " + fmt(m.pixel_pitch_um) + " um");
         for (size_t i = 0; i < m.stock.layers.size(); ++i) {
             const Layer& l = m.stock.layers[i];
             const auto& w = m.rgb_weights[i];
-            lines.push_back("  spectral sensitivity (" + l.name + "): exposure = " + fmt(w[0]) + " R + " + fmt(w[1]) +
-                            " G + " + fmt(w[2]) + " B");
+            if (exposed_by_scene)
+                lines.push_back("  spectral sensitivity (" + l.name + ", " + m.stock.exposure_illuminant_name +
+                                "): exposure = " + fmt(w[0]) + " R + " + fmt(w[1]) + " G + " + fmt(w[2]) + " B");
+            if (!m.halation[i].is_noop())
+                lines.push_back("  halation (" + l.name + "): " + fmt(m.halation[i].strength) + " of the exposure, " +
+                                "radius " + std::to_string(m.halation[i].radius) + " px");
             if (!m.scatter[i].is_identity())
                 lines.push_back("  scatter (" + l.name + "): MTF kernel radius " + std::to_string(m.scatter[i].radius) +
                                 " px");
@@ -225,16 +356,27 @@ std::vector<std::string> Plan::describe() const {
     else
         lines.push_back("expose: scene-linear 0.18 -> " + fmt(0.18 * film_exposure_scale_) + " lux-s (ISO " +
                         fmt(film_stages_.stock.iso_speed) + ", " + fmt(settings_.exposure_ev) + " EV)");
-    material(film_stages_, "film");
-    if (prints_) {
-        lines.push_back("print: enlarger gives " + fmt(enlarger_exposure_lux_s_) +
-                        " lux-s through clear base (mid grey aimed at D " + fmt(kPrintAimDensity, 3) + ", " +
-                        fmt(settings_.print_exposure_ev) + " EV)");
-        material(paper_stages_, "paper");
-        lines.push_back("convert: reflection density -> reflectance");
-    } else {
-        lines.push_back(settings_.output == OutputMode::negative ? "convert: density -> transmittance"
-                                                                 : "convert: none (diffuse density written)");
+    material(film_stages_, "film", settings_.output != OutputMode::texture);
+    switch (settings_.output) {
+        case OutputMode::print: {
+            const PrintExposure& e = *print_;
+            std::string lights;
+            for (int j = 0; j < e.paper_layers(); ++j)
+                lights += (j ? ", " : "") + fmt(e.light_lux_s()[j]) + " (aim D " + fmt(e.aim_density()[j], 3) + ")";
+            lines.push_back("print: 3200 K enlarger, " +
+                            std::string(e.spectral() ? "spectral transmittance of the dyed negative"
+                                                     : "neutral (silver) negative") +
+                            "; lights through clear base " + lights + " lux-s");
+            material(paper_stages_, "paper", false);
+            lines.push_back("convert: print density -> linear Rec.709 under D65");
+            break;
+        }
+        case OutputMode::negative: lines.push_back("convert: density -> transmittance"); break;
+        case OutputMode::density: lines.push_back("convert: none (diffuse density written)"); break;
+        case OutputMode::scan: lines.push_back("convert: density -> Cineon log code values / 1023"); break;
+        case OutputMode::texture:
+            lines.push_back("convert: texture: grain, MTF and halation applied to the scene-linear input");
+            break;
     }
     for (const std::string& s : skipped_) lines.push_back("skipped " + s);
     return lines;

@@ -1,10 +1,13 @@
 // Developing an image: settings + stocks + frame geometry compile into a Plan, which runs
 // on any window of the frame.
 //
-// The pipeline is the seed paper's, run twice (Geigel & Musgrave 1997, Fig. 5):
-//   film:  expose -> spectral sensitivity -> scatter (MTF) -> develop (H&D) -> grain
-//   print: enlarger light through the negative -> paper: the same five modules
-//   convert: density -> transmittance (negative) or reflectance (print)
+// The pipeline is the seed paper's, run twice (Geigel & Musgrave 1997, Fig. 5), per layer
+// (one for black-and-white, three for colour):
+//   film:  expose -> spectral sensitivity -> halation -> scatter (MTF) -> develop (H&D)
+//          -> grain -> dye (the negative's spectral density)
+//   print: enlarger light through the negative (stages/print.h) -> paper: the same modules
+//   convert: density -> transmittance (negative), log code values (scan) or the print's
+//            colour under its viewing light (print)
 // A stage that cannot change the result is left out of the plan, with the reason.
 //
 // Input pixels are scene-linear RGB in the working space (linear Rec.709 primaries, D65)
@@ -22,6 +25,8 @@
 
 #include "core/image.h"
 #include "core/stages/grain.h"
+#include "core/stages/halation.h"
+#include "core/stages/print.h"
 #include "core/stages/scatter.h"
 #include "core/stock.h"
 
@@ -80,6 +85,7 @@ struct MaterialStages {
     Stock stock;
     double pixel_pitch_um = 0;
     std::vector<std::array<double, 3>> rgb_weights;  // per layer: exposure per unit RGB
+    std::vector<HalationKernel> halation;            // per layer; no-op when skipped
     std::vector<ScatterKernel> scatter;              // per layer; identity when skipped
     std::vector<std::optional<GrainModel>> grain;    // per layer; none when skipped
     int halo_px() const;
@@ -101,15 +107,18 @@ public:
     std::vector<std::string> describe() const;
 
     double film_exposure_scale() const { return film_exposure_scale_; }
-    double enlarger_exposure_lux_s() const { return enlarger_exposure_lux_s_; }
+    const std::optional<PrintExposure>& print_exposure() const { return print_; }
 
 private:
+    std::vector<Plane> develop_film(const ConstImageView& in, const Window& film_out, int threads) const;
+    std::vector<Plane> print(const std::vector<Plane>& negative, const Window& out, int threads) const;
+    std::vector<Plane> texture(const ConstImageView& in, const Window& out, int threads) const;
+
     DevelopSettings settings_;
-    bool prints_ = false;
     Window frame_;
     MaterialStages film_stages_, paper_stages_;
+    std::optional<PrintExposure> print_;     // set when the output is a print
     double film_exposure_scale_ = 1.0;       // lux-seconds per unit of input
-    double enlarger_exposure_lux_s_ = 0.0;   // paper exposure through a clear negative
     std::vector<std::string> skipped_;
 };
 

@@ -1,18 +1,22 @@
 #include "core/stock.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/builtin_stock_data.h"
+#include "core/stock_json.h"
 
 namespace darkroom {
 
 using nlohmann::json;
+using stock_json::FieldReader;
 
 SpeedDefinition speed_definition(StockKind kind) {
-    return kind == StockKind::paper ? SpeedDefinition{1000.0, 0.6} : SpeedDefinition{0.8, 0.1};
+    return kind != StockKind::negative ? SpeedDefinition{1000.0, 0.6} : SpeedDefinition{0.8, 0.1};
 }
 
 double speed_point_log_h(const Stock& stock) {
@@ -20,49 +24,6 @@ double speed_point_log_h(const Stock& stock) {
 }
 
 namespace {
-
-// Reads fields of a JSON document, naming the file and the field path in every error.
-class FieldReader {
-public:
-    FieldReader(std::string origin, std::string path) : origin_(std::move(origin)), path_(std::move(path)) {}
-
-    [[noreturn]] void fail(const std::string& problem) const {
-        throw StockError(origin_ + ": field '" + path_ + "': " + problem);
-    }
-    FieldReader at(const std::string& key) const { return {origin_, path_.empty() ? key : path_ + "." + key}; }
-    FieldReader at(size_t i) const { return {origin_, path_ + "[" + std::to_string(i) + "]"}; }
-
-    const json& field(const json& obj, const std::string& key) const {
-        if (!obj.is_object()) fail("expected an object");
-        auto it = obj.find(key);
-        if (it == obj.end()) at(key).fail("missing");
-        return *it;
-    }
-    double number(const json& v, double min, double max) const {
-        if (!v.is_number()) fail("expected a number, got " + v.dump());
-        double d = v.get<double>();
-        if (!std::isfinite(d) || d < min || d > max) {
-            std::ostringstream s;
-            s << "value " << d << " is outside [" << min << ", " << max << "]";
-            fail(s.str());
-        }
-        return d;
-    }
-    std::string text(const json& v) const {
-        if (!v.is_string()) fail("expected a string, got " + v.dump());
-        return v.get<std::string>();
-    }
-    std::vector<double> numbers(const json& v, double min, double max) const {
-        if (!v.is_array() || v.empty()) fail("expected a non-empty array of numbers");
-        std::vector<double> out;
-        for (size_t i = 0; i < v.size(); ++i) out.push_back(at(i).number(v[i], min, max));
-        return out;
-    }
-    const std::string& path() const { return path_; }
-
-private:
-    std::string origin_, path_;
-};
 
 constexpr double kHuge = 1e30;
 
@@ -80,18 +41,59 @@ Curve read_curve(const FieldReader& r, const json& obj, const char* x_key, const
     }
 }
 
-Spectrum read_sensitivity(const FieldReader& r, const json& v) {
+// The named illuminants a stock may be balanced for: "D50", "D55", "D65", "A", "<K>K".
+Spectrum read_illuminant(const FieldReader& r, const std::string& name) {
+    if (name == "D50") return illuminant_d50();
+    if (name == "D55") return illuminant_d55();
+    if (name == "D65") return illuminant_d65();
+    if (name == "A") return illuminant_a();
+    if (name.size() > 1 && name.back() == 'K') {
+        try {
+            size_t used = 0;
+            double kelvin = std::stod(name.substr(0, name.size() - 1), &used);
+            if (used == name.size() - 1 && kelvin >= 1000 && kelvin <= 25000) return blackbody(kelvin);
+        } catch (const std::exception&) {
+        }
+    }
+    r.fail("unknown illuminant '" + name + "' (known: D50, D55, D65, A, or a blackbody such as 3200K in 1000-25000 K)");
+}
+
+// A spectral function (see the README's stock format): a sum of Gaussians plus a constant,
+// or a table (linear or log10 values, linearly interpolated, 0 outside its wavelengths),
+// or for black-and-white sensitivities an emulsion class. Tables on any wavelength grid
+// are resampled onto the model's 380-780 nm grid.
+Spectrum read_spectrum(const FieldReader& r, const json& v, bool allow_emulsion) {
+    if (!v.is_object()) r.fail("expected an object");
     if (v.contains("emulsion")) {
+        if (!allow_emulsion) r.at("emulsion").fail("an emulsion class only describes a sensitivity");
         std::string type = r.at("emulsion").text(v["emulsion"]);
         if (type == "panchromatic") return emulsion_sensitivity(Emulsion::panchromatic);
         if (type == "orthochromatic") return emulsion_sensitivity(Emulsion::orthochromatic);
         if (type == "blue-sensitive") return emulsion_sensitivity(Emulsion::blue_sensitive);
         r.at("emulsion").fail("unknown emulsion '" + type + "' (known: panchromatic, orthochromatic, blue-sensitive)");
     }
-    auto nm = r.at("nm").numbers(r.field(v, "nm"), 200.0, 1200.0);
-    bool is_log = v.contains("log10_sensitivity");
-    const char* key = is_log ? "log10_sensitivity" : "relative";
-    auto values = r.at(key).numbers(r.field(v, key), is_log ? -30.0 : 0.0, is_log ? 30.0 : kHuge);
+    if (v.contains("gaussians")) {
+        double constant = v.contains("constant") ? r.at("constant").number(v["constant"], -10.0, 10.0) : 0.0;
+        Spectrum s = flat_spectrum(constant);
+        FieldReader rg = r.at("gaussians");
+        const json& list = v["gaussians"];
+        if (!list.is_array() || list.empty()) rg.fail("expected a non-empty array of {nm, sigma_nm, weight}");
+        for (size_t k = 0; k < list.size(); ++k) {
+            FieldReader rk = rg.at(k);
+            double nm = rk.at("nm").number(rk.field(list[k], "nm"), 100.0, 1500.0);
+            double sigma = rk.at("sigma_nm").number(rk.field(list[k], "sigma_nm"), 0.1, 1000.0);
+            double weight = rk.at("weight").number(rk.field(list[k], "weight"), -100.0, 100.0);
+            for (int i = 0; i < kSpectralSamples; ++i) {
+                double u = (wavelength_nm(i) - nm) / sigma;
+                s[i] += weight * std::exp(-0.5 * u * u);
+            }
+        }
+        return s;
+    }
+    auto nm = r.at("nm").numbers(r.field(v, "nm"), 100.0, 1500.0);
+    const char* key = v.contains("log10_sensitivity") ? "log10_sensitivity" : v.contains("relative") ? "relative" : "values";
+    bool is_log = std::string(key) == "log10_sensitivity";
+    auto values = r.at(key).numbers(r.field(v, key), is_log ? -30.0 : -kHuge, is_log ? 30.0 : kHuge);
     if (nm.size() != values.size())
         r.fail("'nm' has " + std::to_string(nm.size()) + " values but '" + key + "' has " +
                std::to_string(values.size()));
@@ -105,41 +107,82 @@ Spectrum read_sensitivity(const FieldReader& r, const json& v) {
     if (c.x_max() < kWavelengthMinNm || c.x_min() > kWavelengthMaxNm)
         r.fail("the wavelengths do not overlap the 380-780 nm grid");
     Spectrum s{};
-    double peak = 0;
     for (int i = 0; i < kSpectralSamples; ++i) {
         double nm_i = wavelength_nm(i);
         s[i] = (nm_i < c.x_min() || nm_i > c.x_max()) ? 0.0 : c(nm_i);
-        peak = std::max(peak, s[i]);
     }
-    if (!(peak > 0)) r.fail("the sensitivity is zero everywhere on 380-780 nm");
-    for (double& x : s) x /= peak;
     return s;
+}
+
+// Scales a spectrum to peak 1; fails if it has no positive value on the grid.
+Spectrum peak_normalised(const FieldReader& r, Spectrum s) {
+    double peak = *std::max_element(s.begin(), s.end());
+    if (!(peak > 0)) r.fail("the spectrum is not positive anywhere on 380-780 nm");
+    for (double& x : s) x = std::max(0.0, x / peak);
+    return s;
+}
+
+// D(x) = d_min + sum_k slope_k width_k ln(1 + exp((x - log_h_k) / width_k)), sampled every
+// 0.01 log H from 6 widths before the first knot to 6 widths past the last.
+Curve read_softplus_curve(const FieldReader& r, const json& v) {
+    double d_min = r.at("d_min").number(r.field(v, "d_min"), 0.0, 10.0);
+    FieldReader rk = r.at("knots");
+    const json& list = r.field(v, "knots");
+    if (!list.is_array() || list.empty()) rk.fail("expected a non-empty array of {log_h, slope, width}");
+    std::vector<std::array<double, 3>> knots;
+    double lo = kHuge, hi = -kHuge;
+    for (size_t k = 0; k < list.size(); ++k) {
+        FieldReader rj = rk.at(k);
+        double x = rj.at("log_h").number(rj.field(list[k], "log_h"), -20.0, 20.0);
+        double slope = rj.at("slope").number(rj.field(list[k], "slope"), -50.0, 50.0);
+        double width = rj.at("width").number(rj.field(list[k], "width"), 0.005, 10.0);
+        knots.push_back({x, slope, width});
+        lo = std::min(lo, x - 6 * width);
+        hi = std::max(hi, x + 6 * width);
+    }
+    std::vector<double> xs, ys;
+    int n = (int)std::ceil((hi - lo) / 0.01);
+    for (int i = 0; i <= n; ++i) {
+        double x = lo + (hi - lo) * i / n, d = d_min;
+        for (const auto& [at, slope, width] : knots) {
+            double u = (x - at) / width;
+            d += slope * width * (u > 30 ? u : std::log1p(std::exp(u)));
+        }
+        if (!ys.empty() && d < ys.back() - 1e-9)
+            r.fail("the curve falls at log H " + std::to_string(x) + ": density must not decrease with exposure");
+        xs.push_back(x);
+        ys.push_back(d);
+    }
+    return make_curve(xs, ys, r.path());
+}
+
+Curve read_density_curve(const FieldReader& rc, const json& dc, const Stock& stock) {
+    if (dc.contains("softplus")) return read_softplus_curve(rc.at("softplus"), dc["softplus"]);
+    if (!dc.contains("parametric")) return read_curve(rc, dc, "log_h", "density", 0.0, 10.0);
+    FieldReader rp = rc.at("parametric");
+    const json& p = dc["parametric"];
+    ParametricCurve pc;
+    pc.gamma = rp.at("gamma").number(rp.field(p, "gamma"), 0.01, 20.0);
+    pc.d_min = rp.at("d_min").number(rp.field(p, "d_min"), 0.0, 10.0);
+    pc.d_max = rp.at("d_max").number(rp.field(p, "d_max"), 0.0, 10.0);
+    pc.toe = rp.at("toe").number(rp.field(p, "toe"), 0.001, 10.0);
+    pc.shoulder = rp.at("shoulder").number(rp.field(p, "shoulder"), 0.001, 10.0);
+    SpeedDefinition sd = speed_definition(stock.kind);
+    if (pc.d_max <= pc.d_min + sd.density_over_fog)
+        rp.at("d_max").fail("must exceed d_min + " + std::to_string(sd.density_over_fog));
+    double hm = speed_point_log_h(stock);
+    return sample_parametric_curve(pc, hm, sd.density_over_fog, hm - 4.0, hm + (pc.d_max - pc.d_min) / pc.gamma + 4.0);
 }
 
 Layer read_layer(const FieldReader& r, const json& v, const Stock& stock) {
     Layer layer;
     layer.name = r.at("name").text(r.field(v, "name"));
-    layer.sensitivity = read_sensitivity(r.at("spectral_sensitivity"), r.field(v, "spectral_sensitivity"));
-
-    FieldReader rc = r.at("density_curve");
-    const json& dc = r.field(v, "density_curve");
-    if (dc.contains("parametric")) {
-        FieldReader rp = rc.at("parametric");
-        const json& p = dc["parametric"];
-        ParametricCurve pc;
-        pc.gamma = rp.at("gamma").number(rp.field(p, "gamma"), 0.01, 20.0);
-        pc.d_min = rp.at("d_min").number(rp.field(p, "d_min"), 0.0, 10.0);
-        pc.d_max = rp.at("d_max").number(rp.field(p, "d_max"), 0.0, 10.0);
-        pc.toe = rp.at("toe").number(rp.field(p, "toe"), 0.001, 10.0);
-        pc.shoulder = rp.at("shoulder").number(rp.field(p, "shoulder"), 0.001, 10.0);
-        SpeedDefinition sd = speed_definition(stock.kind);
-        if (pc.d_max <= pc.d_min + sd.density_over_fog)
-            rp.at("d_max").fail("must exceed d_min + " + std::to_string(sd.density_over_fog));
-        double hm = speed_point_log_h(stock);
-        layer.density_curve = sample_parametric_curve(pc, hm, sd.density_over_fog, hm - 4.0,
-                                                      hm + (pc.d_max - pc.d_min) / pc.gamma + 4.0);
-    } else {
-        layer.density_curve = read_curve(rc, dc, "log_h", "density", 0.0, 10.0);
+    FieldReader rs = r.at("spectral_sensitivity");
+    layer.sensitivity = peak_normalised(rs, read_spectrum(rs, r.field(v, "spectral_sensitivity"), true));
+    layer.density_curve = read_density_curve(r.at("density_curve"), r.field(v, "density_curve"), stock);
+    if (v.contains("dye_density")) {
+        FieldReader rd = r.at("dye_density");
+        layer.dye_density = peak_normalised(rd, read_spectrum(rd, v["dye_density"], false));
     }
 
     FieldReader rm = r.at("mtf");
@@ -152,10 +195,49 @@ Layer read_layer(const FieldReader& r, const json& v, const Stock& stock) {
     layer.grain.grain_size_um = rg.at("grain_size_um").number(rg.field(g, "grain_size_um"), 0.0, 1000.0);
     if (g.contains("density_exponent"))
         layer.grain.density_exponent = rg.at("density_exponent").number(g["density_exponent"], 0.0, 4.0);
+
+    if (v.contains("halation")) {
+        FieldReader rh = r.at("halation");
+        const json& h = v["halation"];
+        layer.halation.strength = rh.at("strength").number(rh.field(h, "strength"), 0.0, 10.0);
+        layer.halation.radius_um = rh.at("radius_um").number(rh.field(h, "radius_um"), 0.0, 1e5);
+    }
     return layer;
 }
 
+const std::map<std::string, StockKind> kKindNames{
+    {"negative", StockKind::negative}, {"paper", StockKind::paper}, {"print-film", StockKind::print_film}};
+
+std::string kind_name(StockKind kind) {
+    for (const auto& [name, k] : kKindNames)
+        if (k == kind) return name;
+    return "negative";
+}
+
+// Colour stocks are three layers that all name their dye; black-and-white ones one layer.
+void check_layers(const FieldReader& r, const json& doc, const Stock& s) {
+    const json& layers = doc["layers"];
+    size_t with_dye = 0;
+    for (const json& l : layers) with_dye += l.contains("dye_density");
+    if (with_dye == 0 && s.layers.size() == 1) return;
+    if (s.layers.size() != 3)
+        r.at("layers").fail("a colour stock needs exactly three layers (red-, green- and blue-sensitive), got " +
+                            std::to_string(s.layers.size()));
+    for (size_t i = 0; i < layers.size(); ++i)
+        if (!layers[i].contains("dye_density"))
+            r.at("layers").at(i).at("dye_density").fail("missing: every layer of a colour stock needs its dye");
+}
+
 }  // namespace
+
+Spectrum spectral_density(const Stock& stock, const double* layer_density) {
+    Spectrum d = stock.base_density;
+    for (size_t l = 0; l < stock.layers.size(); ++l) {
+        double net = layer_density[l] - stock.layers[l].density_curve.y_min();
+        for (int i = 0; i < kSpectralSamples; ++i) d[i] += net * stock.layers[l].dye_density[i];
+    }
+    return d;
+}
 
 Stock parse_stock_json(const std::string& text, const std::string& origin) {
     json doc;
@@ -164,24 +246,23 @@ Stock parse_stock_json(const std::string& text, const std::string& origin) {
     } catch (const json::parse_error& e) {
         throw StockError(origin + ": not valid JSON: " + e.what());
     }
+    if (doc.is_object() && !doc.contains("format") && doc.contains("data") && doc.contains("info"))
+        return import_spektrafilm_profile(text, origin);
     FieldReader r(origin, "");
     if (r.at("format").text(r.field(doc, "format")) != "darkroom-stock")
         r.at("format").fail("expected \"darkroom-stock\"");
     int version = (int)r.at("version").number(r.field(doc, "version"), 0, 1e9);
-    if (version != Stock::kFormatVersion)
-        r.at("version").fail("version " + std::to_string(version) + " is not supported (this build reads " +
+    if (version < 1 || version > Stock::kFormatVersion)
+        r.at("version").fail("version " + std::to_string(version) + " is not supported (this build reads 1 to " +
                              std::to_string(Stock::kFormatVersion) + ")");
     Stock s;
     s.id = r.at("id").text(r.field(doc, "id"));
     if (s.id.empty()) r.at("id").fail("must not be empty");
     s.name = r.at("name").text(r.field(doc, "name"));
     std::string kind = r.at("kind").text(r.field(doc, "kind"));
-    if (kind == "negative")
-        s.kind = StockKind::negative;
-    else if (kind == "paper")
-        s.kind = StockKind::paper;
-    else
-        r.at("kind").fail("unknown kind '" + kind + "' (known: negative, paper)");
+    auto known_kind = kKindNames.find(kind);
+    if (known_kind == kKindNames.end()) r.at("kind").fail("unknown kind '" + kind + "' (known: negative, paper, print-film)");
+    s.kind = known_kind->second;
     if (doc.contains("sources")) {
         const json& src = doc["sources"];
         if (!src.is_array()) r.at("sources").fail("expected an array of strings");
@@ -189,9 +270,25 @@ Stock parse_stock_json(const std::string& text, const std::string& origin) {
     }
     s.iso_speed = r.at("iso_speed").number(r.field(doc, "iso_speed"), 1e-6, 1e9);
     if (doc.contains("frame_width_mm")) s.frame_width_mm = r.at("frame_width_mm").number(doc["frame_width_mm"], 0.1, 1e4);
+    if (doc.contains("exposure_illuminant")) {
+        s.exposure_illuminant_name = r.at("exposure_illuminant").text(doc["exposure_illuminant"]);
+        s.exposure_illuminant = read_illuminant(r.at("exposure_illuminant"), s.exposure_illuminant_name);
+    }
+    if (doc.contains("mid_grey_aim_density"))
+        s.mid_grey_aim_density = r.at("mid_grey_aim_density").number(doc["mid_grey_aim_density"], 0.01, 5.0);
     const json& layers = r.field(doc, "layers");
     if (!layers.is_array() || layers.empty()) r.at("layers").fail("expected a non-empty array of layers");
     for (size_t i = 0; i < layers.size(); ++i) s.layers.push_back(read_layer(r.at("layers").at(i), layers[i], s));
+    check_layers(r, doc, s);
+    if (doc.contains("base_density")) {
+        if (!s.is_colour()) r.at("base_density").fail("only colour stocks have a spectral base density");
+        s.base_density = read_spectrum(r.at("base_density"), doc["base_density"], false);
+    } else {
+        double d_min[3];
+        for (size_t l = 0; l < s.layers.size(); ++l) d_min[l] = s.layers[l].density_curve.y_min();
+        for (size_t l = 0; l < s.layers.size(); ++l)
+            for (int i = 0; i < kSpectralSamples; ++i) s.base_density[i] += d_min[l] * s.layers[l].dye_density[i];
+    }
     return s;
 }
 
@@ -204,25 +301,34 @@ Stock load_stock_file(const std::string& path) {
 }
 
 std::string stock_to_json(const Stock& s) {
-    json doc = {{"format", "darkroom-stock"}, {"version", Stock::kFormatVersion},
-                {"id", s.id},                 {"name", s.name},
-                {"kind", s.kind == StockKind::paper ? "paper" : "negative"},
-                {"sources", s.sources},       {"iso_speed", s.iso_speed},
-                {"frame_width_mm", s.frame_width_mm}};
+    auto table = [](const Spectrum& values) {
+        std::vector<double> nm(values.size());
+        for (int i = 0; i < kSpectralSamples; ++i) nm[i] = wavelength_nm(i);
+        return json{{"nm", nm}, {"values", values}};
+    };
+    json doc = {{"format", "darkroom-stock"},
+                {"version", Stock::kFormatVersion},
+                {"id", s.id},
+                {"name", s.name},
+                {"kind", kind_name(s.kind)},
+                {"sources", s.sources},
+                {"iso_speed", s.iso_speed},
+                {"frame_width_mm", s.frame_width_mm},
+                {"exposure_illuminant", s.exposure_illuminant_name},
+                {"mid_grey_aim_density", s.mid_grey_aim_density}};
+    if (s.is_colour()) doc["base_density"] = table(s.base_density);
     for (const Layer& l : s.layers) {
-        std::vector<double> nm, rel;
-        for (int i = 0; i < kSpectralSamples; ++i) {
-            nm.push_back(wavelength_nm(i));
-            rel.push_back(l.sensitivity[i]);
-        }
-        doc["layers"].push_back({{"name", l.name},
-                                 {"spectral_sensitivity", {{"nm", nm}, {"relative", rel}}},
-                                 {"density_curve", {{"log_h", l.density_curve.x}, {"density", l.density_curve.y}}},
-                                 {"mtf", {{"cycles_per_mm", l.mtf.x}, {"response", l.mtf.y}}},
-                                 {"grain",
-                                  {{"rms_granularity", l.grain.rms_granularity},
-                                   {"grain_size_um", l.grain.grain_size_um},
-                                   {"density_exponent", l.grain.density_exponent}}}});
+        json layer = {{"name", l.name},
+                      {"spectral_sensitivity", table(l.sensitivity)},
+                      {"density_curve", {{"log_h", l.density_curve.x}, {"density", l.density_curve.y}}},
+                      {"mtf", {{"cycles_per_mm", l.mtf.x}, {"response", l.mtf.y}}},
+                      {"grain",
+                       {{"rms_granularity", l.grain.rms_granularity},
+                        {"grain_size_um", l.grain.grain_size_um},
+                        {"density_exponent", l.grain.density_exponent}}},
+                      {"halation", {{"strength", l.halation.strength}, {"radius_um", l.halation.radius_um}}}};
+        if (s.is_colour()) layer["dye_density"] = table(l.dye_density);
+        doc["layers"].push_back(layer);
     }
     return doc.dump(2);
 }

@@ -1,9 +1,12 @@
 // Film and paper stocks: the sensitometric data the model runs on.
 //
-// A stock is a list of emulsion layers (one for black-and-white, three for colour), each
-// with its spectral sensitivity, characteristic (H&D) curve, MTF and granularity, plus
-// the stock's ISO speed. Stocks are data: versioned JSON files (see docs/stock-format.md),
-// with the built-in presets compiled in from core/stocks/*.json.
+// A stock is a list of emulsion layers (one for black-and-white, three for colour: red-,
+// green- and blue-sensitive, in that order), each with its spectral sensitivity,
+// characteristic (H&D) curve, MTF, granularity and halation, and for colour its dye's
+// spectral density; plus the stock's ISO speed, the illuminant it is balanced for and its
+// base density. Stocks are data: versioned JSON files (format in the README, "Stocks"),
+// with the built-in presets compiled in from core/stocks/*.json. Profiles in spektrafilm's
+// JSON format are imported too (import_spektrafilm_profile).
 #pragma once
 
 #include <stdexcept>
@@ -16,8 +19,9 @@
 namespace darkroom {
 
 enum class StockKind {
-    negative,  // camera negative film, read by transmission
-    paper,     // photographic paper, read by reflection
+    negative,    // camera negative film, read by transmission
+    paper,       // photographic paper, read by reflection
+    print_film,  // print film (e.g. Kodak 2383), printed like paper, projected
 };
 
 struct GrainSpec {
@@ -32,16 +36,26 @@ struct GrainSpec {
     double density_exponent = 1.0 / 3.0;
 };
 
+// Light that passes the emulsion, reflects off the film base and exposes it again.
+struct HalationSpec {
+    double strength = 0.0;   // fraction of the layer's exposure added back, spread out
+    double radius_um = 0.0;  // standard deviation of the (Gaussian) spread on the film
+};
+
 struct Layer {
     std::string name;
     Spectrum sensitivity{};  // relative spectral sensitivity, peak 1
     Curve density_curve;     // log10 exposure (lux-seconds) -> diffuse density
+    // Spectral density of the layer's dye per unit of net density (density above the
+    // curve's minimum), peak 1. Black-and-white silver is spectrally flat: all ones.
+    Spectrum dye_density = flat_spectrum(1.0);
     Curve mtf;               // cycles per mm on the material -> modulation response
     GrainSpec grain;
+    HalationSpec halation;
 };
 
 struct Stock {
-    static constexpr int kFormatVersion = 1;
+    static constexpr int kFormatVersion = 2;  // written; versions 1 and 2 are read
 
     std::string id, name;
     StockKind kind = StockKind::negative;
@@ -50,8 +64,24 @@ struct Stock {
     // over base+fog (ISO 6); papers 1000/Hm at 0.6 over base+fog (ISO 6846).
     double iso_speed = 100.0;
     double frame_width_mm = 36.0;  // the format the stock is usually shot or printed on
+    // The light the stock is balanced for: the scene light for films, the printer lamp for
+    // papers and print films. A neutral scene under it exposes every layer equally.
+    std::string exposure_illuminant_name = "D65";
+    Spectrum exposure_illuminant = illuminant_d65();
+    // Papers and print films: the visual density at which a scene mid grey prints, neutral.
+    double mid_grey_aim_density = 0.7447;  // 18 % reflectance
+    // Spectral density of the base plus fog (a colour negative's orange mask). The
+    // material's spectral density is base + sum over layers of net density x dye density.
+    // Black-and-white: flat, the layers' minimum densities.
+    Spectrum base_density = flat_spectrum(0.0);
     std::vector<Layer> layers;
+
+    bool is_colour() const { return layers.size() == 3; }
 };
+
+// The spectral density of a developed material from its layers' densities (one per layer).
+// Per pixel.
+Spectrum spectral_density(const Stock& stock, const double* layer_density);
 
 // The constants of the speed definition for a kind of material (seed paper, eq. 5).
 struct SpeedDefinition {
@@ -67,8 +97,13 @@ struct StockError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
-// Parses a stock from JSON text; `origin` names the file in error messages.
+// Parses a stock from JSON text (darkroom-stock versions 1 and 2, or a spektrafilm
+// profile); `origin` names the file in error messages.
 Stock parse_stock_json(const std::string& text, const std::string& origin);
+// A spektrafilm profile (its JSON: data.wavelengths, log_sensitivity, channel_density,
+// base_density, log_exposure, density_curves). Such profiles hold no MTF and no
+// granularity: the stock gets a flat MTF and no grain, and says so in its sources.
+Stock import_spektrafilm_profile(const std::string& text, const std::string& origin);
 Stock load_stock_file(const std::string& path);
 std::string stock_to_json(const Stock& stock);
 

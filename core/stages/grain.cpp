@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/parallel.h"
+#include "core/stages/filters.h"
 
 namespace darkroom {
 
@@ -41,26 +42,17 @@ GrainModel design_grain(const GrainSpec& spec, double d_min, double pitch_um, No
     double unit_noise_sigma48 = aperture_rms_per_unit_noise(spec.grain_size_um, kGranularityApertureUm);
     g.sigma_per_pixel = spec.rms_granularity / unit_noise_sigma48 / pitch_um;
     // Gaussian of std s/pitch pixels, integrated over each pixel's extent.
-    double s_px = spec.grain_size_um / pitch_um;
-    g.radius = s_px < 1e-3 ? 0 : (int)std::ceil(4.0 * s_px);
-    auto cdf = [&](double x) { return 0.5 * std::erfc(-x / (s_px * std::sqrt(2.0))); };
-    double sum = 0;
-    for (int i = -g.radius; i <= g.radius; ++i) {
-        double w = g.radius == 0 ? 1.0 : cdf(i + 0.5) - cdf(i - 0.5);
-        g.kernel.push_back(float(w));
-        sum += w;
-    }
-    for (float& k : g.kernel) k = float(k / sum);
+    g.kernel = pixel_integrated_gaussian(spec.grain_size_um / pitch_um);
+    g.radius = int(g.kernel.size() / 2);
     return g;
 }
 
-void apply_grain(Plane& density, const GrainModel& g, int threads) {
-    const Window w = density.window;
+Plane grain_field(const GrainModel& g, const Window& w, int threads) {
     const int r = g.radius, side = 2 * r + 1;
     // Horizontal pass over the rows the vertical pass needs, then vertical. Each filtered
     // value is summed in a fixed order from noise at absolute coordinates.
     Window hw{w.x0, w.y0 - r, w.x1, w.y1 + r};
-    Plane horizontal(hw);
+    Plane horizontal(hw), field(w);
     parallel_for(hw.y0, hw.y1, threads, [&](int y_begin, int y_end) {
         std::vector<float> noise(w.width() + 2 * r);
         for (int y = y_begin; y < y_end; ++y) {
@@ -75,12 +67,31 @@ void apply_grain(Plane& density, const GrainModel& g, int threads) {
     });
     parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
         for (int y = y_begin; y < y_end; ++y) {
-            float* d = density.row(y);
+            float* out = field.row(y);
             for (int x = 0; x < w.width(); ++x) {
                 double acc = 0;
                 for (int k = 0; k < side; ++k) acc += double(g.kernel[k]) * horizontal.row(y - r + k)[x];
+                out[x] = float(acc);
+            }
+        }
+    });
+    return field;
+}
+
+double grain_sigma_at(const GrainModel& g, double density) {
+    double net = std::max(0.0, density - g.d_min);
+    return g.pixel_sigma_at_unit_density() * std::pow(net, g.density_exponent);
+}
+
+void apply_grain(Plane& density, const GrainModel& g, int threads) {
+    const Plane field = grain_field(g, density.window, threads);
+    parallel_for(density.window.y0, density.window.y1, threads, [&](int y_begin, int y_end) {
+        for (int y = y_begin; y < y_end; ++y) {
+            float* d = density.row(y);
+            const float* n = field.row(y);
+            for (int x = 0; x < density.window.width(); ++x) {
                 double net = std::max(0.0, double(d[x]) - g.d_min);
-                d[x] = float(d[x] + g.sigma_per_pixel * std::pow(net, g.density_exponent) * acc);
+                d[x] = float(d[x] + g.sigma_per_pixel * std::pow(net, g.density_exponent) * n[x]);
             }
         }
     });

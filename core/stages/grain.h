@@ -43,7 +43,15 @@ struct GrainModel {
 
 GrainModel design_grain(const GrainSpec& spec, double d_min, double pixel_pitch_um, NoiseKey key);
 
-// Adds grain to a density plane (its whole window).
+// The filtered noise field on a window: standard normal noise at absolute pixels,
+// convolved with the grain kernel. Its standard deviation per pixel is sum(kernel^2).
+Plane grain_field(const GrainModel& grain, const Window& window, int threads);
+
+// The standard deviation (density) the grain adds at a developed density. Per pixel.
+double grain_sigma_at(const GrainModel& grain, double density);
+
+// Adds grain to a density plane (its whole window):
+// D += sigma_per_pixel * (D - d_min)^density_exponent * field.
 void apply_grain(Plane& density, const GrainModel& grain, int threads);
 
 }  // namespace darkroom

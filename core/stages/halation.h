@@ -1,0 +1,32 @@
+// Halation: light that crosses the emulsion, reflects off the back of the film base and
+// exposes the emulsion again around where it came in. Modelled per layer as
+//   H' = H + strength * (G_radius * H),
+// G a normalised Gaussian of standard deviation radius_um on the film: the added light
+// is `strength` times the exposure, spread out (the base reflects, it does not absorb, so
+// halation raises the exposure of bright areas' surroundings and of the areas themselves).
+#pragma once
+
+#include <vector>
+
+#include "core/image.h"
+#include "core/stock.h"
+
+namespace darkroom {
+
+struct HalationKernel {
+    double strength = 0;
+    int radius = 0;           // taps span [-radius, radius]
+    std::vector<float> taps;  // 1D Gaussian, integrated over each pixel, unit sum
+    // Below this added fraction the stage cannot change an 8-bit or half-float result.
+    static constexpr double kNoOpStrength = 1e-5;
+    bool is_noop() const { return strength < kNoOpStrength; }
+};
+
+// strength is the stock's, already multiplied by the user's scale.
+HalationKernel design_halation(double strength, double radius_um, double pixel_pitch_um);
+
+// dst = src + strength * gauss(src) on dst.window, reading src with coordinates clamped to
+// `frame`; src.window must cover (dst.window grown by the radius) intersected with frame.
+void apply_halation(const Plane& src, Plane& dst, const HalationKernel& kernel, const Window& frame, int threads);
+
+}  // namespace darkroom

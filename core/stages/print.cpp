@@ -1,0 +1,163 @@
+#include "core/stages/print.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace darkroom {
+
+namespace {
+
+constexpr double kLn10 = 2.302585092994046;
+constexpr double kLogExposurePerPoint = 0.025;
+const Spectrum kEnlargerLamp = blackbody(3200.0);
+
+double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+
+bool is_flat(const Spectrum& s) {
+    for (double v : s)
+        if (v != s[0]) return false;
+    return true;
+}
+
+// The paper layer densities whose print is neutral at visual density `aim` under D65:
+// Newton's method on -log10(rgb) = aim with a finite-difference Jacobian.
+std::array<double, 3> neutral_print_densities(const Stock& paper, double aim) {
+    const int n = int(paper.layers.size());
+    std::array<double, 3> d{};
+    for (int j = 0; j < n; ++j) d[j] = paper.layers[j].density_curve.y_min() + aim;
+    if (n == 1) {
+        d[0] = aim;  // a neutral silver print: its visual density is its density
+        return d;
+    }
+    auto residual = [&](const std::array<double, 3>& at) {
+        double rgb[3];
+        view_print(paper, at.data(), rgb);
+        std::array<double, 3> f;
+        for (int k = 0; k < 3; ++k) f[k] = -std::log10(std::max(rgb[k], 1e-300)) - aim;
+        return f;
+    };
+    for (int iteration = 0; iteration < 100; ++iteration) {
+        std::array<double, 3> f = residual(d);
+        if (std::max({std::abs(f[0]), std::abs(f[1]), std::abs(f[2])}) < 1e-10) return d;
+        double jac[3][3];
+        for (int j = 0; j < 3; ++j) {
+            std::array<double, 3> step = d;
+            step[j] += 1e-6;
+            std::array<double, 3> g = residual(step);
+            for (int k = 0; k < 3; ++k) jac[k][j] = (g[k] - f[k]) / 1e-6;
+        }
+        // Solve jac * delta = f by Cramer's rule (3x3).
+        auto det3 = [](double m[3][3]) {
+            return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                   m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+        };
+        double det = det3(jac);
+        if (!(std::abs(det) > 1e-12)) break;
+        for (int j = 0; j < 3; ++j) {
+            double m[3][3];
+            for (int k = 0; k < 3; ++k)
+                for (int l = 0; l < 3; ++l) m[k][l] = l == j ? f[k] : jac[k][l];
+            d[j] -= std::clamp(det3(m) / det, -0.5, 0.5);
+        }
+    }
+    throw std::invalid_argument("paper '" + paper.id + "': its dyes cannot make a neutral grey of density " +
+                                std::to_string(aim));
+}
+
+}  // namespace
+
+std::array<Spectrum, 3> filtration_densities() {
+    std::array<Spectrum, 3> f;
+    for (int i = 0; i < kSpectralSamples; ++i) {
+        double nm = wavelength_nm(i);
+        f[0][i] = logistic((500.0 - nm) / 8.0);                               // yellow: blue
+        f[1][i] = logistic((nm - 500.0) / 8.0) * logistic((590.0 - nm) / 8.0);  // magenta: green
+        f[2][i] = logistic((nm - 590.0) / 8.0);                               // cyan: red
+    }
+    return f;
+}
+
+PrintExposure PrintExposure::design(const Stock& film, const Stock& paper, const PrintSettings& settings) {
+    PrintExposure p;
+    p.film_layers_ = int(film.layers.size());
+    p.paper_layers_ = int(paper.layers.size());
+    p.film_base_ = film.base_density;
+    p.neutral_negative_ = is_flat(film.base_density);
+    for (int i = 0; i < p.film_layers_; ++i) {
+        p.film_dye_[i] = film.layers[i].dye_density;
+        p.film_d_min_[i] = film.layers[i].density_curve.y_min();
+        p.neutral_negative_ = p.neutral_negative_ && is_flat(p.film_dye_[i]);
+    }
+
+    // The negative of a mid grey: every film layer got the same exposure (neutral light).
+    double grey_density[3];
+    for (int i = 0; i < p.film_layers_; ++i)
+        grey_density[i] = film.layers[i].density_curve(std::log10(settings.mid_grey_film_exposure_lux_s));
+    Spectrum grey_transmittance = spectral_density(film, grey_density);
+    for (double& v : grey_transmittance) v = std::pow(10.0, -v);
+
+    p.aim_density_ = neutral_print_densities(paper, paper.mid_grey_aim_density);
+    const std::array<Spectrum, 3> filters = filtration_densities();
+    double mean_points = (settings.printer_lights[0] + settings.printer_lights[1] + settings.printer_lights[2]) / 3.0;
+    for (int j = 0; j < p.paper_layers_; ++j) {
+        const Layer& layer = paper.layers[j];
+        double norm = 0, grey_exposure = 0;
+        for (int i = 0; i < kSpectralSamples; ++i) norm += kEnlargerLamp[i] * layer.sensitivity[i];
+        for (int i = 0; i < kSpectralSamples; ++i) {
+            p.weighted_light_[j][i] = kEnlargerLamp[i] * layer.sensitivity[i] / norm;
+            grey_exposure += p.weighted_light_[j][i] * grey_transmittance[i];
+        }
+        double log_h_aim;
+        if (!layer.density_curve.first_x_at(p.aim_density_[j], &log_h_aim))
+            throw std::invalid_argument("paper '" + paper.id + "' layer " + layer.name +
+                                        " never reaches the density of a neutral mid grey (" +
+                                        std::to_string(p.aim_density_[j]) + ")");
+        // A single-layer paper has one light: the mean of the three.
+        double points = p.paper_layers_ == 1 ? mean_points : settings.printer_lights[j];
+        p.light_lux_s_[j] = std::pow(10.0, log_h_aim) / grey_exposure *
+                            std::pow(10.0, kLogExposurePerPoint * (points - 25.0)) *
+                            std::exp2(settings.print_exposure_ev);
+        p.neutral_light_[j] = 0;
+        for (int i = 0; i < kSpectralSamples; ++i) {
+            double filtration = settings.filtration_ymc[0] * filters[0][i] + settings.filtration_ymc[1] * filters[1][i] +
+                                settings.filtration_ymc[2] * filters[2][i];
+            p.weighted_light_[j][i] *= p.light_lux_s_[j] * std::pow(10.0, -filtration / 100.0);
+            p.neutral_light_[j] += p.weighted_light_[j][i];
+        }
+    }
+    return p;
+}
+
+void PrintExposure::expose(const double* negative_density, double* paper_exposure) const {
+    if (neutral_negative_) {
+        double t = std::exp(-kLn10 * (film_base_[0] + negative_density[0] - film_d_min_[0]));
+        for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = neutral_light_[j] * t;
+        return;
+    }
+    double net[3];
+    for (int l = 0; l < film_layers_; ++l) net[l] = negative_density[l] - film_d_min_[l];
+    double sum[3] = {0, 0, 0};
+    for (int i = 0; i < kSpectralSamples; ++i) {
+        double d = film_base_[i];
+        for (int l = 0; l < film_layers_; ++l) d += net[l] * film_dye_[l][i];
+        double t = std::exp(-kLn10 * d);
+        for (int j = 0; j < paper_layers_; ++j) sum[j] += weighted_light_[j][i] * t;
+    }
+    for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = sum[j];
+}
+
+void view_print(const Stock& paper, const double* paper_density, double* rgb) {
+    if (!paper.is_colour()) {
+        double r = std::pow(10.0, -paper_density[0]);
+        rgb[0] = rgb[1] = rgb[2] = r;
+        return;
+    }
+    Spectrum reflectance = spectral_density(paper, paper_density);
+    for (double& v : reflectance) v = std::exp(-kLn10 * v);
+    Rgb out = reflectance_to_linear_srgb(reflectance);
+    for (int k = 0; k < 3; ++k) rgb[k] = out[k];
+}
+
+}  // namespace darkroom

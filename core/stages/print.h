@@ -1,0 +1,72 @@
+// Printing: the enlarger's light through the developed negative onto the layers of a
+// paper or print film, and viewing the developed print.
+//
+// The negative's spectral density is D(l) = base(l) + sum_i net_i dye_i(l) (stock.h); its
+// transmittance 10^-D(l) filters the lamp (a 3200 K tungsten blackbody) times the colour
+// filtration F(l). Paper layer j receives
+//   H_j = k_j * sum_l L(l) F(l) 10^-D(l) S_j(l) / sum_l L(l) S_j(l)      (5 nm rectangle rule)
+// with k_j its printer light in lux-seconds through a clear, unfiltered path. The
+// developed print's spectral density gives its reflectance (or a print film's
+// transmittance) R(l) = 10^-Dp(l), viewed under CIE D65 and expressed in linear Rec.709:
+// a perfect white (R = 1) is (1, 1, 1).
+//
+// Automatic printer lights: the dye amounts of a neutral print of visual density
+// `mid_grey_aim_density` (linear Rec.709 (t, t, t), t = 10^-aim) are solved for; each
+// paper layer's light k_j is set so that the negative of a scene mid grey exposed at 0 EV
+// gives that layer exactly its aim density. Printer points then scale k_j by
+// 10^(0.025 (points - 25)); print exposure by 2^EV.
+//
+// Where every dye of the negative (or the paper) is spectrally flat (black-and-white
+// silver), the spectral integral is exactly a scalar and the plan uses that.
+#pragma once
+
+#include <array>
+
+#include "core/spectral.h"
+#include "core/stock.h"
+
+namespace darkroom {
+
+// Idealised Kodak-style colour printing filters, density per CC unit / 100 at each
+// wavelength: yellow absorbs blue, magenta green, cyan red (smooth band edges at about
+// 500 and 590 nm); not any one maker's measured filters.
+std::array<Spectrum, 3> filtration_densities();
+
+struct PrintSettings {
+    double mid_grey_film_exposure_lux_s = 0;   // what a scene mid grey at 0 EV gave the film
+    std::array<double, 3> printer_lights{25.0, 25.0, 25.0};
+    std::array<double, 3> filtration_ymc{0.0, 0.0, 0.0};
+    double print_exposure_ev = 0.0;
+};
+
+class PrintExposure {
+public:
+    // Throws std::invalid_argument when the paper cannot reach its aim density.
+    static PrintExposure design(const Stock& film, const Stock& paper, const PrintSettings& settings);
+
+    // Paper layer exposures (lux-seconds) from the negative's layer densities. Per pixel.
+    void expose(const double* negative_density, double* paper_exposure_lux_s) const;
+
+    int paper_layers() const { return paper_layers_; }
+    bool spectral() const { return !neutral_negative_; }
+    // Paper layer densities of the neutral mid-grey print, and the lights that give it.
+    const std::array<double, 3>& aim_density() const { return aim_density_; }
+    const std::array<double, 3>& light_lux_s() const { return light_lux_s_; }
+
+private:
+    // The negative's spectral density: base + sum_i (D_i - d_min_i) dye_i.
+    Spectrum film_base_{};
+    std::array<Spectrum, 3> film_dye_{};
+    std::array<double, 3> film_d_min_{};
+    int film_layers_ = 1, paper_layers_ = 1;
+    bool neutral_negative_ = true;
+    // Per paper layer: the normalised light L F S_j / sum L S_j times k_j, and its sum.
+    std::array<Spectrum, 3> weighted_light_{};
+    std::array<double, 3> neutral_light_{};
+    std::array<double, 3> aim_density_{}, light_lux_s_{};
+};
+
+// Linear Rec.709 of a developed print from its layer densities. Per pixel.
+void view_print(const Stock& paper, const double* paper_density, double* rgb);
+
+}  // namespace darkroom

@@ -1,0 +1,131 @@
+// Importer for stock profiles in spektrafilm's JSON format (andreavolpato/spektrafilm,
+// profiles v0.3): "info" names the stock and how it was measured; "data" holds on 81
+// wavelengths (380-780 nm, 5 nm) the layers' log10 sensitivities and unmixed dye
+// ("channel") densities and the base density, and on a shared log-exposure axis the
+// three characteristic curves (net of base, red-, green-, blue-sensitive columns).
+// Missing samples (null) at the ends of a spectral table are held from the nearest
+// measured one; null curve samples are left out.
+#include <algorithm>
+#include <cmath>
+
+#include "core/stock.h"
+#include "core/stock_json.h"
+
+namespace darkroom {
+
+using stock_json::FieldReader;
+using stock_json::json;
+
+namespace {
+
+// The illuminants spektrafilm names: daylight, tungsten, and a printer's tungsten-halogen
+// lamp behind a KG3 heat filter (taken as a 3200 K blackbody).
+std::pair<std::string, Spectrum> reference_illuminant(const std::string& name) {
+    if (name == "D50") return {"D50", illuminant_d50()};
+    if (name == "D65") return {"D65", illuminant_d65()};
+    if (name == "D55") return {"D55", illuminant_d55()};
+    return {"3200K", blackbody(3200.0)};
+}
+
+double number_or_nan(const json& v) { return v.is_number() ? v.get<double>() : NAN; }
+
+// One column of an 81 x 3 table, or the whole of an 81 table (column < 0), on our grid.
+Spectrum spectral_column(const FieldReader& r, const json& data, const std::string& key, int column) {
+    const json& table = r.field(data, key);
+    if (!table.is_array() || table.size() != size_t(kSpectralSamples))
+        r.at(key).fail("expected " + std::to_string(kSpectralSamples) + " rows (380-780 nm in 5 nm steps)");
+    Spectrum s;
+    for (int i = 0; i < kSpectralSamples; ++i) {
+        const json& row = table[i];
+        if (column >= 0 && (!row.is_array() || row.size() != 3)) r.at(key).at(i).fail("expected 3 columns (r, g, b)");
+        s[i] = number_or_nan(column >= 0 ? row[column] : row);
+    }
+    int first = 0, last = kSpectralSamples - 1;
+    while (first < kSpectralSamples && !std::isfinite(s[first])) ++first;
+    if (first == kSpectralSamples) r.at(key).fail("no values in column " + std::to_string(column));
+    while (!std::isfinite(s[last])) --last;
+    for (int i = 0; i < kSpectralSamples; ++i) {
+        if (i < first) s[i] = s[first];
+        if (i > last) s[i] = s[last];
+        if (!std::isfinite(s[i])) r.at(key).at(i).fail("a missing value between measured ones");
+    }
+    return s;
+}
+
+}  // namespace
+
+Stock import_spektrafilm_profile(const std::string& text, const std::string& origin) {
+    json doc;
+    try {
+        doc = json::parse(text);
+    } catch (const json::parse_error& e) {
+        throw StockError(origin + ": not valid JSON: " + e.what());
+    }
+    FieldReader r(origin, "");
+    const json& info = r.field(doc, "info");
+    const json& data = r.field(doc, "data");
+    FieldReader ri = r.at("info"), rd = r.at("data");
+
+    Stock s;
+    s.id = ri.at("stock").text(ri.field(info, "stock"));
+    s.name = ri.at("name").text(ri.field(info, "name"));
+    std::string type = ri.at("type").text(ri.field(info, "type"));
+    std::string support = ri.at("support").text(ri.field(info, "support"));
+    std::string stage = info.contains("stage") && info["stage"].is_string() ? info["stage"].get<std::string>() : "";
+    if (type != "negative") ri.at("type").fail("'" + type + "' stocks are not supported (only negative-working ones)");
+    s.kind = support == "paper" ? StockKind::paper : stage == "printing" ? StockKind::print_film : StockKind::negative;
+    s.frame_width_mm = s.kind == StockKind::paper ? 254.0 : 24.89;
+    std::string illuminant = info.contains("reference_illuminant") && info["reference_illuminant"].is_string()
+                                 ? info["reference_illuminant"].get<std::string>()
+                                 : "D55";
+    std::tie(s.exposure_illuminant_name, s.exposure_illuminant) = reference_illuminant(illuminant);
+    s.sources = {"imported from the spektrafilm profile " + origin +
+                     " (unmixed data-sheet curves; the profile has no MTF and no granularity: flat MTF, no grain)",
+                 "ISO speed derived from the green curve by the speed definition of its kind"};
+
+    auto log_h = rd.at("log_exposure").numbers(rd.field(data, "log_exposure"), -20.0, 20.0);
+    const json& curves = rd.field(data, "density_curves");
+    if (!curves.is_array() || curves.size() != log_h.size())
+        rd.at("density_curves").fail("expected one row of 3 densities per log_exposure value (" +
+                                     std::to_string(log_h.size()) + ")");
+    const char* names[3] = {"red", "green", "blue"};
+    for (int c = 0; c < 3; ++c) {
+        Layer layer;
+        layer.name = names[c];
+        Spectrum log_s = spectral_column(rd, data, "log_sensitivity", c);
+        for (int i = 0; i < kSpectralSamples; ++i) layer.sensitivity[i] = std::pow(10.0, log_s[i]);
+        Spectrum dye = spectral_column(rd, data, "channel_density", c);
+        double peak_s = *std::max_element(layer.sensitivity.begin(), layer.sensitivity.end());
+        double peak_d = *std::max_element(dye.begin(), dye.end());
+        if (!(peak_s > 0) || !(peak_d > 0)) rd.fail(std::string("the ") + names[c] + " layer has no sensitivity or dye");
+        for (int i = 0; i < kSpectralSamples; ++i) {
+            layer.sensitivity[i] /= peak_s;
+            layer.dye_density[i] = std::max(0.0, dye[i] / peak_d);
+        }
+        std::vector<double> xs, ys;
+        for (size_t i = 0; i < log_h.size(); ++i) {
+            const json& row = curves[i];
+            double d = row.is_array() && row.size() == 3 ? number_or_nan(row[c]) : NAN;
+            if (std::isfinite(d)) xs.push_back(log_h[i]), ys.push_back(std::max(0.0, d));
+        }
+        try {
+            layer.density_curve = make_curve(xs, ys, origin + ": data.density_curves");
+        } catch (const std::invalid_argument& e) {
+            throw StockError(e.what());
+        }
+        layer.mtf = make_curve({0.0, 1000.0}, {1.0, 1.0}, "flat MTF");
+        s.layers.push_back(layer);
+    }
+    s.base_density = spectral_column(rd, data, "base_density", -1);
+
+    SpeedDefinition sd = speed_definition(s.kind);
+    const Curve& green = s.layers[1].density_curve;
+    double hm_log;
+    if (!green.first_x_at(green.y_min() + sd.density_over_fog, &hm_log))
+        rd.at("density_curves").fail("the green curve never rises " + std::to_string(sd.density_over_fog) +
+                                     " above its minimum, so the stock has no speed");
+    s.iso_speed = sd.k / std::pow(10.0, hm_log);
+    return s;
+}
+
+}  // namespace darkroom

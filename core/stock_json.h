@@ -1,0 +1,60 @@
+// Reading stock files: a JSON field reader whose every error names the file, the field
+// path and the problem. Shared by the darkroom-stock parser and the spektrafilm importer.
+#pragma once
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/stock.h"
+
+namespace darkroom::stock_json {
+
+using nlohmann::json;
+
+// Reads fields of a JSON document, naming the file and the field path in every error.
+class FieldReader {
+public:
+    FieldReader(std::string origin, std::string path) : origin_(std::move(origin)), path_(std::move(path)) {}
+
+    [[noreturn]] void fail(const std::string& problem) const {
+        throw StockError(origin_ + ": field '" + path_ + "': " + problem);
+    }
+    FieldReader at(const std::string& key) const { return {origin_, path_.empty() ? key : path_ + "." + key}; }
+    FieldReader at(size_t i) const { return {origin_, path_ + "[" + std::to_string(i) + "]"}; }
+
+    const json& field(const json& obj, const std::string& key) const {
+        if (!obj.is_object()) fail("expected an object");
+        auto it = obj.find(key);
+        if (it == obj.end()) at(key).fail("missing");
+        return *it;
+    }
+    double number(const json& v, double min, double max) const {
+        if (!v.is_number()) fail("expected a number, got " + v.dump());
+        double d = v.get<double>();
+        if (!std::isfinite(d) || d < min || d > max) {
+            std::ostringstream s;
+            s << "value " << d << " is outside [" << min << ", " << max << "]";
+            fail(s.str());
+        }
+        return d;
+    }
+    std::string text(const json& v) const {
+        if (!v.is_string()) fail("expected a string, got " + v.dump());
+        return v.get<std::string>();
+    }
+    std::vector<double> numbers(const json& v, double min, double max) const {
+        if (!v.is_array() || v.empty()) fail("expected a non-empty array of numbers");
+        std::vector<double> out;
+        for (size_t i = 0; i < v.size(); ++i) out.push_back(at(i).number(v[i], min, max));
+        return out;
+    }
+    const std::string& path() const { return path_; }
+
+private:
+    std::string origin_, path_;
+};
+
+}  // namespace darkroom::stock_json
