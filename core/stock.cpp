@@ -123,7 +123,8 @@ Spectrum peak_normalised(const FieldReader& r, Spectrum s) {
 }
 
 // D(x) = d_min + sum_k slope_k width_k ln(1 + exp((x - log_h_k) / width_k)), sampled every
-// 0.01 log H from 6 widths before the first knot to 6 widths past the last.
+// 0.01 log H from 12 widths before the first knot to 12 widths past the last (where the
+// softplus is within 6e-6 of its asymptote).
 Curve read_softplus_curve(const FieldReader& r, const json& v) {
     double d_min = r.at("d_min").number(r.field(v, "d_min"), 0.0, 10.0);
     FieldReader rk = r.at("knots");
@@ -137,8 +138,8 @@ Curve read_softplus_curve(const FieldReader& r, const json& v) {
         double slope = rj.at("slope").number(rj.field(list[k], "slope"), -50.0, 50.0);
         double width = rj.at("width").number(rj.field(list[k], "width"), 0.005, 10.0);
         knots.push_back({x, slope, width});
-        lo = std::min(lo, x - 6 * width);
-        hi = std::max(hi, x + 6 * width);
+        lo = std::min(lo, x - 12 * width);
+        hi = std::max(hi, x + 12 * width);
     }
     std::vector<double> xs, ys;
     int n = (int)std::ceil((hi - lo) / 0.01);

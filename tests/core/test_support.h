@@ -34,7 +34,52 @@ inline std::string test_paper_json() {
       }]})";
 }
 
+// A three-layer colour negative and a colour paper in format version 2, with Gaussian
+// sensitivities and dyes, an orange mask, halation and grain: shapes like real stocks',
+// numbers chosen for the tests (not any maker's).
+inline std::string test_colour_film_json() {
+    auto layer = [](const char* name, int nm, double d_min, const char* dye, double halation) {
+        return std::string(R"({"name": ")") + name + R"(",
+          "spectral_sensitivity": {"gaussians": [{"nm": )" + std::to_string(nm) + R"(, "sigma_nm": 28, "weight": 1}]},
+          "density_curve": {"softplus": {"d_min": )" + std::to_string(d_min) + R"(, "knots": [
+              {"log_h": -2.6, "slope": 0.6, "width": 0.2}, {"log_h": 1.0, "slope": -0.6, "width": 0.4}]}},
+          "dye_density": )" + dye + R"(,
+          "mtf": {"cycles_per_mm": [0, 20, 40, 80], "response": [1.0, 0.9, 0.7, 0.35]},
+          "grain": {"rms_granularity": 0.008, "grain_size_um": 1.5, "density_exponent": 0.5},
+          "halation": {"strength": )" + std::to_string(halation) + R"(, "radius_um": 60}})";
+    };
+    return R"({"format": "darkroom-stock", "version": 2, "id": "test-colour-film", "name": "Test colour film",
+      "kind": "negative", "iso_speed": 250, "frame_width_mm": 24.89, "exposure_illuminant": "D55",
+      "base_density": {"constant": 0.1, "gaussians": [{"nm": 440, "sigma_nm": 40, "weight": 0.7},
+                                                      {"nm": 520, "sigma_nm": 30, "weight": 0.4}]},
+      "layers": [)" +
+           layer("red", 650, 0.2, R"({"gaussians": [{"nm": 680, "sigma_nm": 55, "weight": 1}, {"nm": 440, "sigma_nm": 40, "weight": 0.1}]})", 0.04) + "," +
+           layer("green", 545, 0.6, R"({"gaussians": [{"nm": 550, "sigma_nm": 40, "weight": 1}, {"nm": 440, "sigma_nm": 30, "weight": 0.15}]})", 0.012) + "," +
+           layer("blue", 450, 0.8, R"({"gaussians": [{"nm": 450, "sigma_nm": 35, "weight": 1}]})", 0.004) + "]}";
+}
+
+inline std::string test_colour_paper_json() {
+    auto layer = [](const char* name, int nm, const char* dye) {
+        return std::string(R"({"name": ")") + name + R"(",
+          "spectral_sensitivity": {"gaussians": [{"nm": )" + std::to_string(nm) + R"(, "sigma_nm": 18, "weight": 1}]},
+          "density_curve": {"softplus": {"d_min": 0.08, "knots": [
+              {"log_h": 0.0, "slope": 2.2, "width": 0.12}, {"log_h": 1.0, "slope": -2.2, "width": 0.12}]}},
+          "dye_density": )" + dye + R"(,
+          "mtf": {"cycles_per_mm": [0, 5, 10, 20], "response": [1.0, 0.9, 0.7, 0.4]},
+          "grain": {"rms_granularity": 0.0, "grain_size_um": 1.0}})";
+    };
+    return R"({"format": "darkroom-stock", "version": 2, "id": "test-colour-paper", "name": "Test colour paper",
+      "kind": "paper", "iso_speed": 100, "frame_width_mm": 254, "exposure_illuminant": "3200K",
+      "mid_grey_aim_density": 0.7447,
+      "layers": [)" +
+           layer("red", 690, R"({"gaussians": [{"nm": 660, "sigma_nm": 45, "weight": 1}]})") + "," +
+           layer("green", 545, R"({"gaussians": [{"nm": 545, "sigma_nm": 38, "weight": 1}]})") + "," +
+           layer("blue", 460, R"({"gaussians": [{"nm": 445, "sigma_nm": 30, "weight": 1}]})") + "]}";
+}
+
 inline Stock test_film() { return parse_stock_json(test_film_json(), "test film"); }
+inline Stock test_colour_film() { return parse_stock_json(test_colour_film_json(), "test colour film"); }
+inline Stock test_colour_paper() { return parse_stock_json(test_colour_paper_json(), "test colour paper"); }
 inline Stock test_paper() { return parse_stock_json(test_paper_json(), "test paper"); }
 
 }  // namespace darkroom::test
