@@ -164,8 +164,6 @@ void validate(const DevelopSettings& s) {
 
 }  // namespace
 
-double mid_grey_exposure_lux_s(double iso_speed) { return 0.65 * 12.5 / iso_speed; }
-
 int MaterialStages::halo_px() const {
     int r = 0;
     for (size_t i = 0; i < scatter.size(); ++i)

@@ -76,10 +76,6 @@ struct FrameGeometry {
     int width = 0, height = 0;
 };
 
-// Exposure (lux-seconds) a scene-linear value of 0.18 receives at 0 EV: ISO 2720's
-// reflected-light meter equation, H = q K / S with K = 12.5 and q = 0.65.
-double mid_grey_exposure_lux_s(double iso_speed);
-
 // One material's run of the pipeline, precomputed.
 struct MaterialStages {
     Stock stock;

@@ -19,6 +19,8 @@ SpeedDefinition speed_definition(StockKind kind) {
     return kind != StockKind::negative ? SpeedDefinition{1000.0, 0.6} : SpeedDefinition{0.8, 0.1};
 }
 
+double mid_grey_exposure_lux_s(double iso_speed) { return 0.65 * 12.5 / iso_speed; }
+
 double speed_point_log_h(const Stock& stock) {
     return std::log10(speed_definition(stock.kind).k / stock.iso_speed);
 }
@@ -277,9 +279,19 @@ Stock parse_stock_json(const std::string& text, const std::string& origin) {
     }
     if (doc.contains("mid_grey_aim_density"))
         s.mid_grey_aim_density = r.at("mid_grey_aim_density").number(doc["mid_grey_aim_density"], 0.01, 5.0);
+    if (doc.contains("density_curve_log_h")) {
+        std::string axis = r.at("density_curve_log_h").text(doc["density_curve_log_h"]);
+        if (axis == "relative-to-mid-grey")
+            s.curve_log_h_offset = std::log10(mid_grey_exposure_lux_s(s.iso_speed));
+        else if (axis != "lux-seconds")
+            r.at("density_curve_log_h").fail("unknown axis '" + axis + "' (known: lux-seconds, relative-to-mid-grey)");
+    }
     const json& layers = r.field(doc, "layers");
     if (!layers.is_array() || layers.empty()) r.at("layers").fail("expected a non-empty array of layers");
-    for (size_t i = 0; i < layers.size(); ++i) s.layers.push_back(read_layer(r.at("layers").at(i), layers[i], s));
+    for (size_t i = 0; i < layers.size(); ++i) {
+        s.layers.push_back(read_layer(r.at("layers").at(i), layers[i], s));
+        for (double& x : s.layers.back().density_curve.x) x += s.curve_log_h_offset;
+    }
     check_layers(r, doc, s);
     if (doc.contains("base_density")) {
         if (!s.is_colour()) r.at("base_density").fail("only colour stocks have a spectral base density");

@@ -74,6 +74,10 @@ struct Stock {
     // material's spectral density is base + sum over layers of net density x dye density.
     // Black-and-white: flat, the layers' minimum densities.
     Spectrum base_density = flat_spectrum(0.0);
+    // Where the data sheet's log H axis starts: 0 for lux-seconds; for sheets that plot log
+    // exposure relative to the normal exposure of a mid grey (Kodak's motion-picture
+    // sheets), log10 of that exposure at the stock's speed, added to every curve's log H.
+    double curve_log_h_offset = 0.0;
     std::vector<Layer> layers;
 
     bool is_colour() const { return layers.size() == 3; }
@@ -89,6 +93,9 @@ struct SpeedDefinition {
     double density_over_fog;        // Hm is the exposure for this density above base+fog
 };
 SpeedDefinition speed_definition(StockKind kind);
+// Exposure (lux-seconds) a scene mid grey (reflectance 0.18) receives at the stock's speed:
+// ISO 2720's reflected-light meter equation, H = q K / S with K = 12.5 and q = 0.65.
+double mid_grey_exposure_lux_s(double iso_speed);
 // log10 of the exposure Hm (lux-seconds) that the stock's ISO speed implies.
 double speed_point_log_h(const Stock& stock);
 

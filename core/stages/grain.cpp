@@ -1,13 +1,17 @@
 #include "core/stages/grain.h"
 
 #include <cmath>
+#include <map>
+#include <mutex>
 
 #include "core/parallel.h"
 #include "core/stages/filters.h"
 
 namespace darkroom {
 
-double aperture_rms_per_unit_noise(double s_um, double d_um) {
+namespace {
+
+double aperture_integral(double s_um, double d_um) {
     // Integrand in u = pi d f: the aperture term [2 J1(u)/u]^2 decays as u^-3, so integrate to
     // u_max and add the tail's mean (4/(pi u^3)) analytically, damped by the grain spectrum.
     const double u_max = 600.0;
@@ -24,6 +28,20 @@ double aperture_rms_per_unit_noise(double s_um, double d_um) {
     double tail = 8.0 / (M_PI * M_PI * M_PI * d_um * d_um * d_um * f_max);
     sum += tail * std::exp(-4.0 * M_PI * M_PI * s_um * s_um * f_max * f_max);
     return std::sqrt(sum);
+}
+
+}  // namespace
+
+// The integral takes about a second (Bessel functions on a fine grid) and every plan of
+// every frame needs it for the same few grain sizes: computed once per (size, aperture).
+double aperture_rms_per_unit_noise(double s_um, double d_um) {
+    static std::mutex mutex;
+    static std::map<std::pair<double, double>, double> cache;
+    std::lock_guard<std::mutex> lock(mutex);
+    auto key = std::make_pair(s_um, d_um);
+    auto it = cache.find(key);
+    if (it == cache.end()) it = cache.emplace(key, aperture_integral(s_um, d_um)).first;
+    return it->second;
 }
 
 bool GrainModel::is_noop() const { return pixel_sigma_at_unit_density() < kNoOpSigma; }
