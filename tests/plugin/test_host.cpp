@@ -134,8 +134,21 @@ const OfxPropertySuiteV1 property_suite = {
 Effect* fx(OfxImageEffectHandle h) { return reinterpret_cast<Effect*>(h); }
 Clip* clip_of(OfxImageClipHandle h) { return reinterpret_cast<Clip*>(h); }
 
+// An image handed to the plugin. Float images are the Frame's own pixels; 8- and 16-bit
+// ones are converted copies, converted back into the Frame on release when written to.
+struct HandedImage {
+    PropertySet props;
+    Frame* frame = nullptr;
+    int bytes_per_sample = 4;
+    bool written = false;  // the Output clip's image
+    std::vector<unsigned char> converted;
+};
 std::mutex images_mutex;
-std::map<PropertySet*, std::unique_ptr<PropertySet>> images_out;  // image property sets handed out
+std::map<PropertySet*, std::unique_ptr<HandedImage>> images_out;
+
+int bytes_per_sample(const std::string& depth) {
+    return depth == kOfxBitDepthByte ? 1 : depth == kOfxBitDepthShort ? 2 : 4;  // half: never read, see tests
+}
 
 // The suites' accessors: check the handle, hand out what it holds.
 template <typename Handle, typename Out, typename Get>
@@ -177,25 +190,52 @@ OfxStatus clip_get_image(OfxImageClipHandle h, OfxTime, const OfxRectD*, OfxProp
     if (!h || !out) return kOfxStatErrBadHandle;
     Clip* clip = clip_of(h);
     if (!clip->image || !clip->props.get_int(kOfxImageClipPropConnected)) return kOfxStatFailed;
-    auto image = std::make_unique<PropertySet>();
-    const Frame& f = *clip->image;
-    image->props[kOfxImagePropData].type = 'p';
-    image->props[kOfxImagePropData].p = {const_cast<float*>(f.pixels.data())};
-    for (int i = 0; i < 4; ++i) image->set(kOfxImagePropBounds, (&f.bounds.x1)[i], i);
-    image->set(kOfxImagePropRowBytes, (int)(f.width() * f.channels * sizeof(float)));
-    image->set(kOfxImageEffectPropPixelDepth, clip->image_depth);
-    image->set(kOfxImageEffectPropComponents,
-               std::string(f.channels == 4 ? kOfxImageComponentRGBA : kOfxImageComponentRGB));
-    image->set(kOfxImageEffectPropPreMultiplication, clip->props.get_string(kOfxImageEffectPropPreMultiplication));
-    image->set(kOfxImagePropPixelAspectRatio, 1.0);
-    *out = image->handle();
+    auto handed = std::make_unique<HandedImage>();
+    Frame& f = *clip->image;
+    handed->frame = &f;
+    handed->written = clip->name == kOfxImageEffectOutputClipName;
+    handed->bytes_per_sample = bytes_per_sample(clip->image_depth);
+    void* data = f.pixels.data();
+    if (handed->bytes_per_sample < 4) {
+        const float top = handed->bytes_per_sample == 1 ? 255.0f : 65535.0f;
+        handed->converted.resize(f.pixels.size() * handed->bytes_per_sample);
+        for (size_t i = 0; i < f.pixels.size(); ++i) {
+            long v = std::lround(std::clamp(f.pixels[i], 0.0f, 1.0f) * top);
+            if (handed->bytes_per_sample == 1)
+                handed->converted[i] = (unsigned char)v;
+            else
+                reinterpret_cast<uint16_t*>(handed->converted.data())[i] = (uint16_t)v;
+        }
+        data = handed->converted.data();
+    }
+    PropertySet& image = handed->props;
+    image.props[kOfxImagePropData].type = 'p';
+    image.props[kOfxImagePropData].p = {data};
+    for (int i = 0; i < 4; ++i) image.set(kOfxImagePropBounds, (&f.bounds.x1)[i], i);
+    image.set(kOfxImagePropRowBytes, f.width() * f.channels * handed->bytes_per_sample);
+    image.set(kOfxImageEffectPropPixelDepth, clip->image_depth);
+    image.set(kOfxImageEffectPropComponents,
+              std::string(f.channels == 4 ? kOfxImageComponentRGBA : kOfxImageComponentRGB));
+    image.set(kOfxImageEffectPropPreMultiplication, clip->props.get_string(kOfxImageEffectPropPreMultiplication));
+    image.set(kOfxImagePropPixelAspectRatio, 1.0);
+    *out = image.handle();
     std::lock_guard<std::mutex> lock(images_mutex);
-    images_out[image.get()] = std::move(image);
+    images_out[&image] = std::move(handed);
     return kOfxStatOK;
 }
 OfxStatus clip_release_image(OfxPropertySetHandle h) {
     std::lock_guard<std::mutex> lock(images_mutex);
-    return images_out.erase(ps(h)) ? kOfxStatOK : kOfxStatErrBadHandle;
+    auto it = images_out.find(ps(h));
+    if (it == images_out.end()) return kOfxStatErrBadHandle;
+    HandedImage& handed = *it->second;
+    if (handed.written && handed.bytes_per_sample < 4) {
+        std::vector<float>& px = handed.frame->pixels;
+        for (size_t i = 0; i < px.size(); ++i)
+            px[i] = handed.bytes_per_sample == 1 ? handed.converted[i] / 255.0f
+                                                 : reinterpret_cast<const uint16_t*>(handed.converted.data())[i] / 65535.0f;
+    }
+    images_out.erase(it);
+    return kOfxStatOK;
 }
 OfxStatus clip_get_rod(OfxImageClipHandle h, OfxTime, OfxRectD* out) {
     if (!h || !out) return kOfxStatErrBadHandle;

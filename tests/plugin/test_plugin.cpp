@@ -263,6 +263,34 @@ TEST_CASE("premultiplied input is unpremultiplied, developed and premultiplied a
         }
 }
 
+TEST_CASE("16-bit and 8-bit images render as the float image does, to their precision", "[plugin]") {
+    const int w = 40, h = 30;
+    auto inst = make_instance();
+    set_common_look(*inst);
+    // A print's reflectance lies in 0-1, so integer images hold it without clipping.
+    inst->set_source(Frame::from_top_down(scene(w, h, 4), w, h, 4), kOfxImageUnPreMultiplied);
+    RenderResult reference = inst->render(2, {0, 0, w, h});
+    REQUIRE(reference.status == kOfxStatOK);
+    auto [depth, tolerance] = GENERATE(table<std::string, float>({{kOfxBitDepthShort, 2e-3f}, {kOfxBitDepthByte, 0.1f}}));
+    INFO(depth);
+    inst->set_source_depth(depth);
+    RenderResult r = inst->render(2, {0, 0, w, h});
+    INFO(inst->effect().persistent_message);
+    REQUIRE(r.status == kOfxStatOK);
+    // The input is quantised too (scene values above 1 clip), so only pixels whose input
+    // was inside 0-1 compare; their difference is bounded by the quantisation steps.
+    const Frame input = Frame::from_top_down(scene(w, h, 4), w, h, 4);
+    long compared = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const float* in = input.at(x, y);
+            if (std::max({in[0], in[1], in[2]}) > 1.0f) continue;
+            ++compared;
+            for (int c = 0; c < 4; ++c) REQUIRE(std::abs(r.output.at(x, y)[c] - reference.output.at(x, y)[c]) <= tolerance);
+        }
+    CHECK(compared > w * h / 2);
+}
+
 TEST_CASE("grain depends on the frame and the seed, never on the order frames are rendered in", "[plugin][determinism]") {
     const int w = 48, h = 40;
     Frame source = Frame::from_top_down(scene(w, h, 4), w, h, 4);
