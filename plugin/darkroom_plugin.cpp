@@ -162,6 +162,51 @@ public:
         if (suites.effect->clipGetImage(clip, time, nullptr, &handle_) != kOfxStatOK || !handle_)
             throw RenderError(std::string("the host gave no image for the ") + clip_name + " clip at time " +
                               std::to_string(time));
+        try {
+            describe_image(clip_name);
+        } catch (...) {
+            suites.effect->clipReleaseImage(handle_);
+            throw;
+        }
+    }
+    ~HostImage() {
+        if (handle_) suites.effect->clipReleaseImage(handle_);
+    }
+    HostImage(const HostImage&) = delete;
+    HostImage& operator=(const HostImage&) = delete;
+
+    const OfxRectI& bounds() const { return bounds_; }
+    int channels() const { return channels_; }
+    bool premultiplied() const { return premultiplied_; }
+    bool holds(int x, int y) const { return x >= bounds_.x1 && x < bounds_.x2 && y >= bounds_.y1 && y < bounds_.y2; }
+    // Pixel (x, y) in OFX pixel coordinates, as floats (8- and 16-bit values scaled to 0-1).
+    void read(int x, int y, float* px) const {
+        const unsigned char* p = address(x, y);
+        for (int c = 0; c < channels_; ++c) {
+            switch (depth_) {
+                case Depth::float32: px[c] = reinterpret_cast<const float*>(p)[c]; break;
+                case Depth::ushort: px[c] = reinterpret_cast<const uint16_t*>(p)[c] / 65535.0f; break;
+                case Depth::byte: px[c] = p[c] / 255.0f; break;
+            }
+        }
+    }
+    void write(int x, int y, const float* px) const {
+        unsigned char* p = address(x, y);
+        for (int c = 0; c < channels_; ++c) {
+            switch (depth_) {
+                case Depth::float32: reinterpret_cast<float*>(p)[c] = px[c]; break;
+                case Depth::ushort:
+                    reinterpret_cast<uint16_t*>(p)[c] = (uint16_t)std::lround(std::clamp(px[c], 0.0f, 1.0f) * 65535.0f);
+                    break;
+                case Depth::byte: p[c] = (unsigned char)std::lround(std::clamp(px[c], 0.0f, 1.0f) * 255.0f); break;
+            }
+        }
+    }
+
+
+private:
+    // Reads the image's layout; throws RenderError for one the plugin cannot render.
+    void describe_image(const char* clip_name) {
         Props p(handle_);
         data_ = static_cast<unsigned char*>(p.get_pointer(kOfxImagePropData));
         row_bytes_ = p.get_int(kOfxImagePropRowBytes);
@@ -189,42 +234,7 @@ public:
         if (!data_ || bounds_.x2 < bounds_.x1 || bounds_.y2 < bounds_.y1)
             throw RenderError(std::string("the host's ") + clip_name + " image has no pixels or bounds " + rect_text(bounds_));
     }
-    ~HostImage() {
-        if (handle_) suites.effect->clipReleaseImage(handle_);
-    }
-    HostImage(const HostImage&) = delete;
-    HostImage& operator=(const HostImage&) = delete;
 
-    const OfxRectI& bounds() const { return bounds_; }
-    int channels() const { return channels_; }
-    bool premultiplied() const { return premultiplied_; }
-    bool holds(int x, int y) const { return x >= bounds_.x1 && x < bounds_.x2 && y >= bounds_.y1 && y < bounds_.y2; }
-
-    // Pixel (x, y) in OFX pixel coordinates, as floats (8- and 16-bit values scaled to 0-1).
-    void read(int x, int y, float* px) const {
-        const unsigned char* p = address(x, y);
-        for (int c = 0; c < channels_; ++c) {
-            switch (depth_) {
-                case Depth::float32: px[c] = reinterpret_cast<const float*>(p)[c]; break;
-                case Depth::ushort: px[c] = reinterpret_cast<const uint16_t*>(p)[c] / 65535.0f; break;
-                case Depth::byte: px[c] = p[c] / 255.0f; break;
-            }
-        }
-    }
-    void write(int x, int y, const float* px) const {
-        unsigned char* p = address(x, y);
-        for (int c = 0; c < channels_; ++c) {
-            switch (depth_) {
-                case Depth::float32: reinterpret_cast<float*>(p)[c] = px[c]; break;
-                case Depth::ushort:
-                    reinterpret_cast<uint16_t*>(p)[c] = (uint16_t)std::lround(std::clamp(px[c], 0.0f, 1.0f) * 65535.0f);
-                    break;
-                case Depth::byte: p[c] = (unsigned char)std::lround(std::clamp(px[c], 0.0f, 1.0f) * 255.0f); break;
-            }
-        }
-    }
-
-private:
     unsigned char* address(int x, int y) const {
         size_t bytes = depth_ == Depth::float32 ? 4 : depth_ == Depth::ushort ? 2 : 1;
         return data_ + (std::ptrdiff_t)(y - bounds_.y1) * row_bytes_ + (std::ptrdiff_t)(x - bounds_.x1) * channels_ * bytes;

@@ -441,6 +441,10 @@ OfxRectI intersect(const OfxRectI& a, const OfxRectI& b) {
 
 void set_cpu_count(unsigned n) { cpu_count = n; }
 long outstanding_allocations() { return allocations; }
+long outstanding_images() {
+    std::lock_guard<std::mutex> lock(images_mutex);
+    return (long)images_out.size();
+}
 
 // --- Frames ---------------------------------------------------------------------------------
 

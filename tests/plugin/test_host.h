@@ -159,7 +159,9 @@ private:
 
 // Host settings the tests change.
 void set_cpu_count(unsigned n);
-// Memory the plugin allocated through the memory suite and has not freed.
+// Memory the plugin allocated through the memory suite and has not freed, and images it
+// fetched and has not released.
 long outstanding_allocations();
+long outstanding_images();
 
 }  // namespace testhost

@@ -201,6 +201,7 @@ TEST_CASE("tiles equal the full frame bit for bit, whatever the thread count", "
     CHECK(same_bits(full.output, tiles.output));
     set_cpu_count(4);
     CHECK(outstanding_allocations() == 0);
+    CHECK(outstanding_images() == 0);
 }
 
 TEST_CASE("render scale 0.5 renders the half-resolution frame with the same physical sizes", "[plugin][cli]") {
@@ -363,6 +364,7 @@ TEST_CASE("abort stops a render", "[plugin]") {
     CHECK(inst->render(1, {0, 0, w, h}).status == kOfxStatOK);
     set_cpu_count(4);
     CHECK(outstanding_allocations() == 0);
+    CHECK(outstanding_images() == 0);
 }
 
 TEST_CASE("bad parameter values are rejected with a message naming them", "[plugin][bad-input]") {
@@ -421,6 +423,7 @@ TEST_CASE("bad parameter values are rejected with a message naming them", "[plug
     CHECK_THAT(inst->effect().persistent_message, Catch::Contains(expected));
     CHECK(count_value(r.output, -7.0f) == (long)r.output.pixels.size());
     CHECK(outstanding_allocations() == 0);
+    CHECK(outstanding_images() == 0);
 
     // A usable setting renders again and clears the message.
     auto fixed = make_instance();
@@ -464,4 +467,5 @@ TEST_CASE("bad input fails with a message, never a crash", "[plugin][bad-input]"
     CHECK(r.status == kOfxStatFailed);
     CHECK_THAT(inst->effect().persistent_message, Catch::Contains(expected));
     CHECK(outstanding_allocations() == 0);
+    CHECK(outstanding_images() == 0);
 }
