@@ -296,11 +296,14 @@ void define_parameters(OfxParamSetHandle params) {
     define_double(params, kHalation, "Halation", "Multiplies each film layer's halation strength (0 = off)", optics, 1,
                   0, 10, 0, 4);
     define_bool(params, kMtf, "MTF", "Internal scattering in the emulsion (the stock's MTF)", optics, true);
+    // The format does not change during a shot.
     define_double(params, kFrameWidth, "Frame width (mm)",
                   "Width of the film frame; with the image width it sets the pixel pitch (0 = the stock's format)",
-                  optics, 0, 0, 10000, 0, 70);
+                  optics, 0, 0, 10000, 0, 70)
+        .set(kOfxParamPropAnimates, 0);
     define_double(params, kPrintWidth, "Print width (mm)", "Width of the print (0 = the paper's format)", optics, 0, 0,
-                  10000, 0, 500);
+                  10000, 0, 500)
+        .set(kOfxParamPropAnimates, 0);
 
     const char* colour = "colourGroup";
     define_group(params, colour, "Colour management (OCIO)", false);

@@ -156,6 +156,15 @@ TEST_CASE("describe declares the contexts, depths, clips and parameters", "[plug
     CHECK(ctx.params.find("film")->props.get_int(kOfxParamPropAnimates) == 0);
     const auto& outputs = ctx.params.find("output")->props.props.at(kOfxParamPropChoiceOption).s;
     CHECK(outputs == std::vector<std::string>{"Print", "Negative", "Density", "Scan", "Texture"});
+
+    // The general context has the same clips and parameters.
+    Effect general;
+    general.props = plugin.descriptor().props;
+    PropertySet in;
+    in.set(kOfxImageEffectPropContext, std::string(kOfxImageEffectContextGeneral));
+    REQUIRE(plugin.call(kOfxImageEffectActionDescribeInContext, &general, &in, nullptr) == kOfxStatOK);
+    CHECK(general.clips.size() == 2);
+    CHECK(general.params.params.size() == ctx.params.params.size());
 }
 
 TEST_CASE("a full frame equals darkroom develop with the same settings", "[plugin][cli]") {
