@@ -213,6 +213,21 @@ TEST_CASE("tiles equal the full frame bit for bit, whatever the thread count", "
     CHECK(outstanding_images() == 0);
 }
 
+TEST_CASE("a frame whose region of definition is not at the origin develops the same pixels", "[plugin]") {
+    const int w = 40, h = 30;
+    Frame at_origin = Frame::from_top_down(scene(w, h, 4), w, h, 4), moved = at_origin;
+    moved.bounds = {-13, 21, w - 13, h + 21};
+    auto inst = make_instance();
+    set_common_look(*inst);
+    inst->set_source(at_origin);
+    RenderResult a = inst->render(5, at_origin.bounds);
+    inst->set_source(moved);
+    RenderResult b = inst->render_tiles(5, moved.bounds, 16, 12);
+    REQUIRE(a.status == kOfxStatOK);
+    REQUIRE(b.status == kOfxStatOK);
+    CHECK(same_bits(a.output, b.output));
+}
+
 TEST_CASE("render scale 0.5 renders the half-resolution frame with the same physical sizes", "[plugin][cli]") {
     const int w = 96, h = 64;
     std::vector<float> half = scene(w / 2, h / 2, 3);
