@@ -449,12 +449,15 @@ TEST_CASE("bad parameter values are rejected with a message naming them", "[plug
     CHECK(outstanding_allocations() == 0);
     CHECK(outstanding_images() == 0);
 
-    // A usable setting renders again and clears the message.
-    auto fixed = make_instance();
-    fixed->effect().persistent_message = "stale";
-    fixed->set_source(Frame::from_top_down(scene(w, h, 4), w, h, 4));
-    CHECK(fixed->render(1, {0, 0, w, h}).status == kOfxStatOK);
-    CHECK(fixed->effect().persistent_message.empty());
+    // Corrected, it renders and the message goes.
+    inst->set_double("exposure", 0);
+    inst->set_double3("grainAmount", 1, 1, 1);
+    inst->set_int("film", inst->choice_index("film", "Tri-X"));
+    inst->set_int("paper", inst->choice_index("paper", "grade 2"));
+    inst->set_string("inputColorspace", "scene_linear");
+    inst->set_string("ocioConfig", "");
+    CHECK(inst->render(1, {0, 0, w, h}).status == kOfxStatOK);
+    CHECK(inst->effect().persistent_message.empty());
 }
 
 TEST_CASE("bad input fails with a message, never a crash", "[plugin][bad-input]") {
