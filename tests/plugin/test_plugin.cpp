@@ -263,7 +263,7 @@ TEST_CASE("render scale 0.5 renders the half-resolution frame with the same phys
     CHECK(roi_half.y2 <= h);
 }
 
-TEST_CASE("premultiplied input is unpremultiplied, developed and premultiplied again; alpha passes through",
+TEST_CASE("premultiplied input is unpremultiplied, developed and premultiplied again, and alpha passes through",
           "[plugin]") {
     const int w = 40, h = 30;
     std::vector<float> straight = scene(w, h, 4), premultiplied = straight;
