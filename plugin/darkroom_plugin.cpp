@@ -1,0 +1,670 @@
+// Darkroom as an OpenFX image effect: the host's pixels and parameters in, core's Plan
+// over them, the host's pixels out. No film physics here.
+//
+// File order: constants and geometry, the instance (plan and colour caches), the render
+// (fetch images, read parameters, dispatch row bands on the host's threads), the other
+// actions, describe, and the two exported entry points.
+//
+// Coordinates: OFX pixel coordinates have their origin at the bottom left; core's frames
+// are top-down from (0, 0) like the files the CLI reads. The frame is the Source clip's
+// region of definition at the render scale, and row y of core is OFX row (frame top - 1 - y),
+// so grain keyed by core's absolute pixel coordinates is the grain `darkroom develop` gives.
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <new>
+#include <sstream>
+
+#include "core/develop.h"
+#include "core/stock.h"
+#include "ocio/transform.h"
+#include "plugin/ofx_abi.h"
+#include "plugin/ofx_host.h"
+#include "plugin/parameters.h"
+
+namespace darkroom::ofx {
+
+namespace {
+
+constexpr const char* kPluginIdentifier = "org.darkroom.Darkroom";
+constexpr unsigned kVersionMajor = 0, kVersionMinor = 1;
+// Frames beyond this many pixels a side are refused (a render window this size is a host bug
+// or a typo, and would ask for tens of gigabytes of working memory).
+constexpr int kMaxFrameSidePx = 1 << 16;
+constexpr long long kMaxFramePixels = 1LL << 30;
+// Rows per band: enough that the scatter halo recomputed per band costs little, few enough
+// that an abort is noticed quickly.
+constexpr int kMinBandRows = 32;
+
+// --- Geometry -------------------------------------------------------------------------
+
+// The frame in OFX pixel coordinates at a render scale: the Source's region of definition.
+OfxRectI frame_pixels(const OfxRectD& rod, OfxPointD scale, double pixel_aspect) {
+    return {(int)std::floor(rod.x1 * scale.x / pixel_aspect), (int)std::floor(rod.y1 * scale.y),
+            (int)std::ceil(rod.x2 * scale.x / pixel_aspect), (int)std::ceil(rod.y2 * scale.y)};
+}
+
+Window to_core(const OfxRectI& r, const OfxRectI& frame) {
+    return {r.x1 - frame.x1, frame.y2 - r.y2, r.x2 - frame.x1, frame.y2 - r.y1};
+}
+
+OfxRectI to_ofx(const Window& w, const OfxRectI& frame) {
+    return {w.x0 + frame.x1, frame.y2 - w.y1, w.x1 + frame.x1, frame.y2 - w.y0};
+}
+
+std::string rect_text(const OfxRectI& r) {
+    return "(" + std::to_string(r.x1) + ", " + std::to_string(r.y1) + ") - (" + std::to_string(r.x2) + ", " +
+           std::to_string(r.y2) + ")";
+}
+
+// A failure the user must see, already worded.
+struct RenderError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+// --- The instance ---------------------------------------------------------------------
+
+struct Instance {
+    std::mutex mutex;
+    // Compiled plans by their inputs; a render and its region-of-interest query share one.
+    std::map<std::string, std::shared_ptr<const Plan>> plans;
+    std::map<std::string, std::shared_ptr<const ocio::ColorConverter>> converters;
+};
+
+Instance& instance_of(OfxImageEffectHandle effect) {
+    auto* inst = static_cast<Instance*>(effect_props(effect).get_pointer(kOfxPropInstanceData));
+    if (!inst) throw HostError(kOfxStatErrBadHandle, "the instance has no Darkroom data");
+    return *inst;
+}
+
+// A stock file's identity includes its modification time, so an edited file is reloaded.
+std::string stock_key(const std::string& path_or_id, bool from_file) {
+    if (!from_file) return path_or_id;
+    std::error_code ec;
+    auto t = std::filesystem::last_write_time(path_or_id, ec);
+    return path_or_id + "@" + (ec ? std::string("?") : std::to_string(t.time_since_epoch().count()));
+}
+
+Stock load_stock(const std::string& path_or_id, bool from_file) {
+    return from_file ? load_stock_file(path_or_id) : find_stock(path_or_id);
+}
+
+std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, const FrameGeometry& frame) {
+    const DevelopSettings& s = n.develop;
+    std::ostringstream key;
+    key.precision(17);
+    key << stock_key(n.film, n.film_from_file) << '|' << stock_key(n.paper, n.paper_from_file) << '|' << frame.width
+        << 'x' << frame.height << '|' << s.exposure_ev << ',' << s.print_exposure_ev << ',' << int(s.output) << ','
+        << int(s.input_units) << ',' << s.grain << ',' << s.mtf << ',' << s.halation << ',' << s.seed << ','
+        << s.frame << ',' << s.frame_width_mm << ',' << s.print_width_mm;
+    for (int c = 0; c < 3; ++c)
+        key << ',' << s.grain_amount[c] << ',' << s.grain_size[c] << ',' << s.grain_density_exponent[c] << ','
+            << s.printer_lights[c] << ',' << s.filtration_ymc[c];
+    {
+        std::lock_guard<std::mutex> lock(inst.mutex);
+        auto it = inst.plans.find(key.str());
+        if (it != inst.plans.end()) return it->second;
+    }
+    Stock film = load_stock(n.film, n.film_from_file);
+    Stock paper = n.paper.empty() ? Stock{} : load_stock(n.paper, n.paper_from_file);
+    auto plan = std::make_shared<const Plan>(Plan::compile(film, n.paper.empty() ? nullptr : &paper, s, frame));
+    std::lock_guard<std::mutex> lock(inst.mutex);
+    // Plans of other frames and settings are dropped once a few accumulate (each holds
+    // kernels and tables, not images, so a handful is cheap).
+    if (inst.plans.size() >= 8) inst.plans.clear();
+    inst.plans.emplace(key.str(), plan);
+    return plan;
+}
+
+std::shared_ptr<const ocio::ColorConverter> converter_for(Instance& inst, const std::string& config_path) {
+    const char* env = std::getenv("OCIO");
+    std::string key = config_path + "|" + (env ? env : "");
+    std::lock_guard<std::mutex> lock(inst.mutex);
+    auto it = inst.converters.find(key);
+    if (it != inst.converters.end()) return it->second;
+    auto converter = std::make_shared<const ocio::ColorConverter>(
+        ocio::resolve_config(config_path, "the OCIO config parameter"));
+    inst.converters.emplace(key, converter);
+    return converter;
+}
+
+// The conversions a render applies: input space -> working space, working -> output space
+// (none for the density and scan outputs, which are data).
+struct Colour {
+    ocio::ConversionPtr in, out;
+};
+
+Colour colour_for(Instance& inst, const NodeSettings& n) {
+    auto converter = converter_for(inst, n.ocio_config);
+    Colour c;
+    c.in = converter->to_working(n.input_space);
+    OutputMode mode = n.develop.output;
+    if (mode != OutputMode::density && mode != OutputMode::scan) c.out = converter->from_working(n.output_space);
+    return c;
+}
+
+// --- Host images ----------------------------------------------------------------------
+
+enum class Depth { byte, ushort, float32 };
+
+// An image fetched from a clip, released when it goes out of scope.
+class HostImage {
+public:
+    HostImage(OfxImageClipHandle clip, OfxTime time, const char* clip_name) {
+        if (suites.effect->clipGetImage(clip, time, nullptr, &handle_) != kOfxStatOK || !handle_)
+            throw RenderError(std::string("the host gave no image for the ") + clip_name + " clip at time " +
+                              std::to_string(time));
+        try {
+            describe_image(clip_name);
+        } catch (...) {
+            suites.effect->clipReleaseImage(handle_);
+            throw;
+        }
+    }
+    ~HostImage() {
+        if (handle_) suites.effect->clipReleaseImage(handle_);
+    }
+    HostImage(const HostImage&) = delete;
+    HostImage& operator=(const HostImage&) = delete;
+
+    const OfxRectI& bounds() const { return bounds_; }
+    int channels() const { return channels_; }
+    bool premultiplied() const { return premultiplied_; }
+    bool holds(int x, int y) const { return x >= bounds_.x1 && x < bounds_.x2 && y >= bounds_.y1 && y < bounds_.y2; }
+    // Pixel (x, y) in OFX pixel coordinates, as floats (8- and 16-bit values scaled to 0-1).
+    void read(int x, int y, float* px) const {
+        const unsigned char* p = address(x, y);
+        for (int c = 0; c < channels_; ++c) {
+            switch (depth_) {
+                case Depth::float32: px[c] = reinterpret_cast<const float*>(p)[c]; break;
+                case Depth::ushort: px[c] = reinterpret_cast<const uint16_t*>(p)[c] / 65535.0f; break;
+                case Depth::byte: px[c] = p[c] / 255.0f; break;
+            }
+        }
+    }
+    void write(int x, int y, const float* px) const {
+        unsigned char* p = address(x, y);
+        for (int c = 0; c < channels_; ++c) {
+            switch (depth_) {
+                case Depth::float32: reinterpret_cast<float*>(p)[c] = px[c]; break;
+                case Depth::ushort:
+                    reinterpret_cast<uint16_t*>(p)[c] = (uint16_t)std::lround(std::clamp(px[c], 0.0f, 1.0f) * 65535.0f);
+                    break;
+                case Depth::byte: p[c] = (unsigned char)std::lround(std::clamp(px[c], 0.0f, 1.0f) * 255.0f); break;
+            }
+        }
+    }
+
+
+private:
+    // Reads the image's layout; throws RenderError for one the plugin cannot render.
+    void describe_image(const char* clip_name) {
+        Props p(handle_);
+        data_ = static_cast<unsigned char*>(p.get_pointer(kOfxImagePropData));
+        row_bytes_ = p.get_int(kOfxImagePropRowBytes);
+        bounds_ = {p.get_int(kOfxImagePropBounds, 0), p.get_int(kOfxImagePropBounds, 1),
+                   p.get_int(kOfxImagePropBounds, 2), p.get_int(kOfxImagePropBounds, 3)};
+        std::string depth = p.get_string(kOfxImageEffectPropPixelDepth);
+        if (depth == kOfxBitDepthFloat)
+            depth_ = Depth::float32;
+        else if (depth == kOfxBitDepthShort)
+            depth_ = Depth::ushort;
+        else if (depth == kOfxBitDepthByte)
+            depth_ = Depth::byte;
+        else
+            throw RenderError(std::string("the ") + clip_name + " image has pixel depth '" + depth +
+                              "'; Darkroom renders float, 16-bit and 8-bit images");
+        std::string components = p.get_string(kOfxImageEffectPropComponents);
+        if (components == kOfxImageComponentRGBA)
+            channels_ = 4;
+        else if (components == kOfxImageComponentRGB)
+            channels_ = 3;
+        else
+            throw RenderError(std::string("the ") + clip_name + " image has components '" + components +
+                              "'; Darkroom renders RGBA and RGB images");
+        premultiplied_ = channels_ == 4 && p.get_string_or(kOfxImageEffectPropPreMultiplication, "") == kOfxImagePreMultiplied;
+        if (!data_ || bounds_.x2 < bounds_.x1 || bounds_.y2 < bounds_.y1)
+            throw RenderError(std::string("the host's ") + clip_name + " image has no pixels or bounds " + rect_text(bounds_));
+    }
+
+    unsigned char* address(int x, int y) const {
+        size_t bytes = depth_ == Depth::float32 ? 4 : depth_ == Depth::ushort ? 2 : 1;
+        return data_ + (std::ptrdiff_t)(y - bounds_.y1) * row_bytes_ + (std::ptrdiff_t)(x - bounds_.x1) * channels_ * bytes;
+    }
+
+    OfxPropertySetHandle handle_ = nullptr;
+    unsigned char* data_ = nullptr;
+    int row_bytes_ = 0;
+    OfxRectI bounds_{};
+    Depth depth_ = Depth::float32;
+    int channels_ = 4;
+    bool premultiplied_ = false;
+};
+
+// Working memory from the host's memory suite (so the host can account for it), or the heap.
+class WorkBuffer {
+public:
+    WorkBuffer(OfxImageEffectHandle effect, size_t floats) {
+        if (suites.memory) {
+            void* p = nullptr;
+            if (suites.memory->memoryAlloc(effect, floats * sizeof(float), &p) != kOfxStatOK || !p) throw std::bad_alloc();
+            host_ = static_cast<float*>(p);
+        } else {
+            heap_.resize(floats);
+        }
+    }
+    ~WorkBuffer() {
+        if (host_) suites.memory->memoryFree(host_);
+    }
+    WorkBuffer(const WorkBuffer&) = delete;
+    WorkBuffer& operator=(const WorkBuffer&) = delete;
+    float* data() { return host_ ? host_ : heap_.data(); }
+
+private:
+    float* host_ = nullptr;
+    std::vector<float> heap_;
+};
+
+// --- Render ---------------------------------------------------------------------------
+
+// What the bands of one render share.
+struct BandJob {
+    OfxImageEffectHandle effect;
+    const Plan* plan;
+    ConstImageView input;
+    const ocio::Conversion* output_conversion;  // null: none
+    const HostImage* output;
+    OfxRectI frame;
+    std::vector<Window> bands;  // core coordinates
+    std::atomic<size_t> next{0};
+    std::atomic<bool> stop{false}, aborted{false};
+    std::mutex error_mutex;
+    std::exception_ptr error;
+};
+
+void render_band(BandJob& job, const Window& band) {
+    const int channels = job.output->channels();
+    Image out(band, channels, 1.0f);  // alpha 1 where the input has none
+    job.plan->run(job.input, out.view(), 1);
+    if (job.output_conversion)
+        job.output_conversion->apply({out.pixels.data(), band.width(), band.height(), channels, channels,
+                                      (std::ptrdiff_t)channels * band.width()});
+    const bool premultiply = job.output->premultiplied();
+    for (int y = band.y0; y < band.y1; ++y)
+        for (int x = band.x0; x < band.x1; ++x) {
+            float px[4];
+            std::copy_n(out.at(x, y), channels, px);
+            if (premultiply)
+                for (int c = 0; c < 3; ++c) px[c] *= px[3];
+            job.output->write(x + job.frame.x1, job.frame.y2 - 1 - y, px);
+        }
+}
+
+// One of the host's threads: takes bands until none are left, the host aborts, or a band fails.
+void band_worker(unsigned int, unsigned int, void* arg) {
+    BandJob& job = *static_cast<BandJob*>(arg);
+    for (;;) {
+        if (job.stop) return;
+        size_t i = job.next++;
+        if (i >= job.bands.size()) return;
+        if (suites.effect->abort(job.effect)) {
+            job.aborted = true;
+            job.stop = true;
+            return;
+        }
+        try {
+            render_band(job, job.bands[i]);
+        } catch (...) {
+            std::lock_guard<std::mutex> lock(job.error_mutex);
+            if (!job.error) job.error = std::current_exception();
+            job.stop = true;
+        }
+    }
+}
+
+void run_bands(BandJob& job) {
+    unsigned cpus = 1;
+    if (suites.thread && suites.thread->multiThreadNumCPUs(&cpus) != kOfxStatOK) cpus = 1;
+    unsigned threads = std::max(1u, std::min<unsigned>(cpus, (unsigned)job.bands.size()));
+    // multiThread cannot nest (the host may already be running us on one of its threads).
+    if (threads == 1 || !suites.thread || suites.thread->multiThread(band_worker, threads, &job) != kOfxStatOK)
+        band_worker(0, 1, &job);
+}
+
+FrameGeometry frame_geometry(const OfxRectI& frame) {
+    long long w = (long long)frame.x2 - frame.x1, h = (long long)frame.y2 - frame.y1;
+    if (w <= 0 || h <= 0) throw RenderError("the Source image is empty: its region of definition is " + rect_text(frame));
+    if (w > kMaxFrameSidePx || h > kMaxFrameSidePx || w * h > kMaxFramePixels)
+        throw RenderError("the Source image is " + std::to_string(w) + "x" + std::to_string(h) +
+                          " pixels; Darkroom renders frames up to " + std::to_string(kMaxFrameSidePx) +
+                          " pixels a side and 2^30 pixels in all");
+    return {(int)w, (int)h};
+}
+
+// The Source clip's frame in pixels at `scale`; throws when the clip is not connected.
+OfxRectI source_frame(OfxImageEffectHandle effect, OfxTime time, OfxPointD scale, OfxImageClipHandle* source_out) {
+    OfxImageClipHandle source = clip_handle(effect, kOfxImageEffectSimpleSourceClipName);
+    Props props = clip_props(source);
+    if (!props.get_int_or(kOfxImageClipPropConnected, 1))
+        throw RenderError("nothing is connected to the Source input");
+    OfxRectD rod{};
+    if (suites.effect->clipGetRegionOfDefinition(source, time, &rod) != kOfxStatOK)
+        throw RenderError("the host gave no region of definition for the Source clip");
+    if (source_out) *source_out = source;
+    double pixel_aspect = props.get_double_or(kOfxImagePropPixelAspectRatio, 1.0);
+    if (!(pixel_aspect > 0) || !std::isfinite(pixel_aspect)) pixel_aspect = 1.0;
+    if (!(scale.x > 0 && scale.y > 0 && scale.x <= 1e3 && scale.y <= 1e3))
+        throw RenderError("the host asked for render scale " + std::to_string(scale.x) + " x " + std::to_string(scale.y));
+    return frame_pixels(rod, scale, pixel_aspect);
+}
+
+OfxPointD render_scale(const Props& args) {
+    return {args.get_double_or(kOfxImageEffectPropRenderScale, 1.0, 0), args.get_double_or(kOfxImageEffectPropRenderScale, 1.0, 1)};
+}
+
+OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
+    Instance& inst = instance_of(effect);
+    const OfxTime time = args.get_double(kOfxPropTime);
+    const OfxPointD scale = render_scale(args);
+    const OfxRectI window = {args.get_int(kOfxImageEffectPropRenderWindow, 0), args.get_int(kOfxImageEffectPropRenderWindow, 1),
+                             args.get_int(kOfxImageEffectPropRenderWindow, 2), args.get_int(kOfxImageEffectPropRenderWindow, 3)};
+    if (window.x2 <= window.x1 || window.y2 <= window.y1)
+        throw RenderError("the host asked to render an empty window " + rect_text(window));
+
+    NodeSettings settings = read_parameters(effect, time);
+    OfxImageClipHandle source_clip = nullptr;
+    const OfxRectI frame = source_frame(effect, time, scale, &source_clip);
+    const FrameGeometry geometry = frame_geometry(frame);
+
+    HostImage output(clip_handle(effect, kOfxImageEffectOutputClipName), time, "Output");
+    const OfxRectI& ob = output.bounds();
+    if (window.x1 < ob.x1 || window.y1 < ob.y1 || window.x2 > ob.x2 || window.y2 > ob.y2)
+        throw RenderError("the render window " + rect_text(window) + " is not inside the output image " + rect_text(ob));
+
+    std::shared_ptr<const Plan> plan = plan_for(inst, settings, geometry);
+    Colour colour = colour_for(inst, settings);
+
+    // Pixels of the window outside the frame are black and transparent.
+    const Window frame_core{0, 0, geometry.width, geometry.height};
+    const Window out_core = to_core(window, frame).intersected(frame_core);
+    {
+        const float zero[4] = {0, 0, 0, 0};
+        for (int y = window.y1; y < window.y2; ++y)
+            for (int x = window.x1; x < window.x2; ++x) {
+                int cx = x - frame.x1, cy = frame.y2 - 1 - y;
+                if (cx < out_core.x0 || cx >= out_core.x1 || cy < out_core.y0 || cy >= out_core.y1)
+                    output.write(x, y, zero);
+            }
+    }
+    if (out_core.empty()) {
+        clear_message(effect);
+        return kOfxStatOK;
+    }
+
+    // The input: the window grown by the halo, unpremultiplied, in the working space. The host
+    // supplies at least the region of interest asked for; anything it leaves out is black.
+    HostImage source(source_clip, time, "Source");
+    const Window in_core = plan->input_window(out_core);
+    const int in_channels = source.channels();
+    WorkBuffer in_buffer(effect, (size_t)in_core.pixel_count() * in_channels);
+    ImageView in{in_buffer.data(), in_core, in_channels, in_channels, (std::ptrdiff_t)in_channels * in_core.width()};
+    for (int y = in_core.y0; y < in_core.y1; ++y)
+        for (int x = in_core.x0; x < in_core.x1; ++x) {
+            float* px = in.at(x, y);
+            int ox = x + frame.x1, oy = frame.y2 - 1 - y;
+            if (!source.holds(ox, oy)) {
+                std::fill_n(px, in_channels, 0.0f);
+                continue;
+            }
+            source.read(ox, oy, px);
+            if (source.premultiplied() && px[3] > 0)
+                for (int c = 0; c < 3; ++c) px[c] /= px[3];
+        }
+    colour.in->apply({in.data, in_core.width(), in_core.height(), in_channels, in_channels, in.row_stride});
+
+    BandJob job;
+    job.effect = effect;
+    job.plan = plan.get();
+    job.input = in;
+    job.output_conversion = colour.out ? colour.out.get() : nullptr;
+    job.output = &output;
+    job.frame = frame;
+    unsigned cpus = 1;
+    if (suites.thread) suites.thread->multiThreadNumCPUs(&cpus);
+    int band_rows = std::max(kMinBandRows, out_core.height() / std::max(1, 4 * (int)cpus));
+    for (int y = out_core.y0; y < out_core.y1; y += band_rows)
+        job.bands.push_back({out_core.x0, y, out_core.x1, std::min(out_core.y1, y + band_rows)});
+    run_bands(job);
+    if (job.error) std::rethrow_exception(job.error);
+    // An aborted render is incomplete; the host discards it, so there is nothing to tell the user.
+    if (job.aborted) return kOfxStatFailed;
+    clear_message(effect);
+    return kOfxStatOK;
+}
+
+// --- The other actions ------------------------------------------------------------------
+
+OfxStatus region_of_definition(OfxImageEffectHandle effect, const Props& in_args, const Props& out_args) {
+    OfxImageClipHandle source = clip_handle(effect, kOfxImageEffectSimpleSourceClipName);
+    if (!clip_props(source).get_int_or(kOfxImageClipPropConnected, 1)) return kOfxStatReplyDefault;
+    OfxRectD rod{};
+    if (suites.effect->clipGetRegionOfDefinition(source, in_args.get_double(kOfxPropTime), &rod) != kOfxStatOK)
+        return kOfxStatReplyDefault;
+    out_args.set_doubles(kOfxImageEffectPropRegionOfDefinition, {rod.x1, rod.y1, rod.x2, rod.y2});
+    return kOfxStatOK;
+}
+
+// The Source region each output region needs: grown by the halo of scattering and halation.
+OfxStatus regions_of_interest(OfxImageEffectHandle effect, const Props& in_args, const Props& out_args) {
+    const OfxTime time = in_args.get_double(kOfxPropTime);
+    const OfxPointD scale = render_scale(in_args);
+    OfxRectD region{};
+    for (int i = 0; i < 4; ++i) (&region.x1)[i] = in_args.get_double(kOfxImageEffectPropRegionOfInterest, i);
+    OfxImageClipHandle source = nullptr;
+    const OfxRectI frame = source_frame(effect, time, scale, &source);
+    const double pixel_aspect = clip_props(source).get_double_or(kOfxImagePropPixelAspectRatio, 1.0);
+    const double sx = scale.x / (pixel_aspect > 0 ? pixel_aspect : 1.0), sy = scale.y;
+    const OfxRectI region_px{(int)std::floor(std::max(region.x1 * sx, -1e9)), (int)std::floor(std::max(region.y1 * sy, -1e9)),
+                             (int)std::ceil(std::min(region.x2 * sx, 1e9)), (int)std::ceil(std::min(region.y2 * sy, 1e9))};
+    const FrameGeometry geometry = frame_geometry(frame);
+    const Window out_core = to_core(region_px, frame).intersected({0, 0, geometry.width, geometry.height});
+    if (out_core.empty()) return kOfxStatReplyDefault;
+    auto plan = plan_for(instance_of(effect), read_parameters(effect, time), geometry);
+    const OfxRectI roi = to_ofx(plan->input_window(out_core), frame);
+    out_args.set_doubles((std::string(kOfxImageClipPropRoIPrefix) + kOfxImageEffectSimpleSourceClipName).c_str(),
+                         {roi.x1 / sx, roi.y1 / sy, roi.x2 / sx, roi.y2 / sy});
+    return kOfxStatOK;
+}
+
+// Identity: the texture output with grain, scattering and halation all off returns its input,
+// and so does the whole node when the input and output colour spaces are the same.
+OfxStatus is_identity(OfxImageEffectHandle effect, const Props& in_args, const Props& out_args) {
+    const OfxTime time = in_args.get_double(kOfxPropTime);
+    NodeSettings n = read_parameters(effect, time);
+    const DevelopSettings& s = n.develop;
+    bool no_grain = !s.grain || (s.grain_amount[0] == 0 && s.grain_amount[1] == 0 && s.grain_amount[2] == 0);
+    if (s.output != OutputMode::texture || !no_grain || s.mtf || s.halation != 0) return kOfxStatReplyDefault;
+    auto converter = converter_for(instance_of(effect), n.ocio_config);
+    if (converter->canonical_color_space(n.input_space) != converter->canonical_color_space(n.output_space))
+        return kOfxStatReplyDefault;
+    out_args.set(kOfxPropName, kOfxImageEffectSimpleSourceClipName);
+    out_args.set(kOfxPropTime, time);
+    return kOfxStatOK;
+}
+
+OfxStatus clip_preferences(OfxImageEffectHandle effect, const Props& out_args) {
+    Props source = clip_props(clip_handle(effect, kOfxImageEffectSimpleSourceClipName));
+    std::string components = source.get_string_or(kOfxImageEffectPropComponents, kOfxImageComponentRGBA);
+    if (components != kOfxImageComponentRGB) components = kOfxImageComponentRGBA;
+    out_args.set((std::string(kOfxImageClipPropComponentsPrefix) + kOfxImageEffectOutputClipName).c_str(), components);
+    out_args.set(kOfxImageEffectPropPreMultiplication,
+                 source.get_string_or(kOfxImageEffectPropPreMultiplication,
+                                      components == kOfxImageComponentRGB ? kOfxImageOpaque : kOfxImagePreMultiplied));
+    // Grain changes with the frame unless it is off or static.
+    NodeSettings n = read_parameters(effect, 0.0);
+    const DevelopSettings& s = n.develop;
+    bool grain = s.grain && (s.grain_amount[0] > 0 || s.grain_amount[1] > 0 || s.grain_amount[2] > 0);
+    NodeSettings n1 = read_parameters(effect, 1.0);
+    out_args.set(kOfxImageEffectFrameVarying, grain && n1.develop.frame != s.frame ? 1 : 0);
+    return kOfxStatOK;
+}
+
+OfxStatus create_instance(OfxImageEffectHandle effect) {
+    effect_props(effect).set(kOfxPropInstanceData, static_cast<void*>(new Instance));
+    return kOfxStatOK;
+}
+
+OfxStatus destroy_instance(OfxImageEffectHandle effect) {
+    Props props = effect_props(effect);
+    delete static_cast<Instance*>(props.get_pointer(kOfxPropInstanceData));
+    props.set(kOfxPropInstanceData, static_cast<void*>(nullptr));
+    return kOfxStatOK;
+}
+
+// --- Describe ---------------------------------------------------------------------------
+
+OfxStatus describe(OfxImageEffectHandle effect) {
+    Props p = effect_props(effect);
+    p.set(kOfxPropLabel, "Darkroom");
+    p.set(kOfxImageEffectPluginPropGrouping, "Darkroom");
+    p.set(kOfxPropPluginDescription,
+          "Photographic film and paper development (Geigel & Musgrave 1997, extended to colour): exposure, spectral "
+          "sensitivity, MTF scattering, halation, H&D curves, grain, and the print through an enlarger.");
+    p.set(kOfxImageEffectPropSupportedContexts,
+          std::vector<std::string>{kOfxImageEffectContextFilter, kOfxImageEffectContextGeneral});
+    p.set(kOfxImageEffectPropSupportedPixelDepths,
+          std::vector<std::string>{kOfxBitDepthFloat, kOfxBitDepthShort, kOfxBitDepthByte});
+    p.set(kOfxImageEffectPropSupportsMultipleClipDepths, 0);
+    p.set(kOfxImageEffectPropSupportsTiles, 1);
+    p.set(kOfxImageEffectPropSupportsMultiResolution, 1);
+    p.set(kOfxImageEffectPropTemporalClipAccess, 0);
+    p.set(kOfxImageEffectPluginPropSingleInstance, 0);
+    // Renders of one instance may run at once (plans are shared under a lock); the plugin
+    // splits each render over the host's threads itself.
+    p.set(kOfxImageEffectPluginRenderThreadSafety, kOfxImageEffectRenderFullySafe);
+    p.set(kOfxImageEffectPluginPropHostFrameThreading, 0);
+    return kOfxStatOK;
+}
+
+void define_clip(OfxImageEffectHandle effect, const char* name) {
+    OfxPropertySetHandle h = nullptr;
+    check(suites.effect->clipDefine(effect, name, &h), (std::string("defining clip ") + name).c_str());
+    Props clip(h);
+    clip.set(kOfxImageEffectPropSupportedComponents,
+             std::vector<std::string>{kOfxImageComponentRGBA, kOfxImageComponentRGB});
+    clip.set(kOfxImageEffectPropSupportsTiles, 1);
+}
+
+OfxStatus describe_in_context(OfxImageEffectHandle effect) {
+    define_clip(effect, kOfxImageEffectSimpleSourceClipName);
+    define_clip(effect, kOfxImageEffectOutputClipName);
+    OfxParamSetHandle params = nullptr;
+    check(suites.effect->getParamSet(effect, &params), "getting the parameter set");
+    define_parameters(params);
+    return kOfxStatOK;
+}
+
+OfxStatus load() {
+    if (!suites.host) return kOfxStatErrMissingHostFeature;
+    auto fetch = [](const char* name, int version) { return suites.host->fetchSuite(suites.host->host, name, version); };
+    suites.property = static_cast<const OfxPropertySuiteV1*>(fetch(kOfxPropertySuite, 1));
+    suites.effect = static_cast<const OfxImageEffectSuiteV1*>(fetch(kOfxImageEffectSuite, 1));
+    suites.param = static_cast<const OfxParameterSuiteV1*>(fetch(kOfxParameterSuite, 1));
+    suites.memory = static_cast<const OfxMemorySuiteV1*>(fetch(kOfxMemorySuite, 1));
+    suites.thread = static_cast<const OfxMultiThreadSuiteV1*>(fetch(kOfxMultiThreadSuite, 1));
+    suites.message = static_cast<const OfxMessageSuiteV2*>(fetch(kOfxMessageSuite, 2));
+    suites.persistent_messages = suites.message != nullptr;
+    // A version-1 message suite has the first member only.
+    if (!suites.message) suites.message = static_cast<const OfxMessageSuiteV2*>(fetch(kOfxMessageSuite, 1));
+    if (!suites.property || !suites.effect || !suites.param) return kOfxStatErrMissingHostFeature;
+    return kOfxStatOK;
+}
+
+// Actions that ask a question: when the settings cannot be used, the plugin declines to
+// answer (the host then uses its default) and the render reports the problem.
+bool is_query(const char* action) {
+    return !std::strcmp(action, kOfxImageEffectActionGetRegionOfDefinition) ||
+           !std::strcmp(action, kOfxImageEffectActionGetRegionsOfInterest) ||
+           !std::strcmp(action, kOfxImageEffectActionIsIdentity) ||
+           !std::strcmp(action, kOfxImageEffectActionGetClipPreferences);
+}
+
+OfxStatus dispatch(const char* action, OfxImageEffectHandle effect, OfxPropertySetHandle in_args,
+                   OfxPropertySetHandle out_args) {
+    if (!std::strcmp(action, kOfxActionLoad)) return load();
+    if (!std::strcmp(action, kOfxActionUnload)) return kOfxStatOK;
+    if (!suites.property) return kOfxStatErrMissingHostFeature;  // load failed or was not called
+    if (!std::strcmp(action, kOfxActionDescribe)) return describe(effect);
+    if (!std::strcmp(action, kOfxImageEffectActionDescribeInContext)) return describe_in_context(effect);
+    if (!std::strcmp(action, kOfxActionCreateInstance)) return create_instance(effect);
+    if (!std::strcmp(action, kOfxActionDestroyInstance)) return destroy_instance(effect);
+    if (!std::strcmp(action, kOfxImageEffectActionRender)) return render(effect, Props(in_args));
+    if (!std::strcmp(action, kOfxImageEffectActionGetRegionOfDefinition))
+        return region_of_definition(effect, Props(in_args), Props(out_args));
+    if (!std::strcmp(action, kOfxImageEffectActionGetRegionsOfInterest))
+        return regions_of_interest(effect, Props(in_args), Props(out_args));
+    if (!std::strcmp(action, kOfxImageEffectActionIsIdentity))
+        return is_identity(effect, Props(in_args), Props(out_args));
+    if (!std::strcmp(action, kOfxImageEffectActionGetClipPreferences)) return clip_preferences(effect, Props(out_args));
+    if (!std::strcmp(action, kOfxActionInstanceChanged)) {
+        clear_message(effect);  // the user changed something; the next render judges it afresh
+        return kOfxStatOK;
+    }
+    if (!std::strcmp(action, kOfxActionPurgeCaches)) {
+        Instance& inst = instance_of(effect);
+        std::lock_guard<std::mutex> lock(inst.mutex);
+        inst.plans.clear();
+        inst.converters.clear();
+        return kOfxStatOK;
+    }
+    return kOfxStatReplyDefault;
+}
+
+// Nothing is thrown into the host: every failure becomes a message and a status.
+OfxStatus main_entry(const char* action, const void* handle, OfxPropertySetHandle in_args,
+                     OfxPropertySetHandle out_args) {
+    if (!action) return kOfxStatErrUnknown;
+    auto effect = static_cast<OfxImageEffectHandle>(const_cast<void*>(handle));
+    const bool query = is_query(action);
+    auto fail = [&](const std::string& text, OfxStatus status) {
+        if (query) return kOfxStatReplyDefault;
+        post_error(effect, "Darkroom: " + text);
+        return status;
+    };
+    try {
+        return dispatch(action, effect, in_args, out_args);
+    } catch (const HostError& e) {
+        return fail(e.what(), query ? kOfxStatReplyDefault : e.status);
+    } catch (const std::bad_alloc&) {
+        return fail("out of memory", kOfxStatErrMemory);
+    } catch (const std::exception& e) {
+        // Parameter, stock, colour and render errors: their messages name the problem.
+        return fail(e.what(), kOfxStatFailed);
+    } catch (...) {
+        return fail("unexpected internal error", kOfxStatFailed);
+    }
+}
+
+void set_host(OfxHost* host) { suites.host = host; }
+
+OfxPlugin plugin = {kOfxImageEffectPluginApi, kOfxImageEffectPluginApiVersion, kPluginIdentifier, kVersionMajor,
+                    kVersionMinor, set_host, main_entry};
+
+}  // namespace
+
+}  // namespace darkroom::ofx
+
+// The only symbols the binary exports (see exports.map).
+extern "C" __attribute__((visibility("default"))) OfxPlugin* OfxGetPlugin(int nth) {
+    return nth == 0 ? &darkroom::ofx::plugin : nullptr;
+}
+
+extern "C" __attribute__((visibility("default"))) int OfxGetNumberOfPlugins(void) { return 1; }

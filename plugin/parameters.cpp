@@ -1,0 +1,369 @@
+#include "plugin/parameters.h"
+
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "plugin/ofx_host.h"
+
+namespace darkroom::ofx {
+
+namespace {
+
+// Script names of the parameters (what a host's scripting and saved projects use).
+constexpr const char* kFilm = "film";
+constexpr const char* kFilmFile = "filmFile";
+constexpr const char* kPaper = "paper";
+constexpr const char* kPaperFile = "paperFile";
+constexpr const char* kOutput = "output";
+constexpr const char* kExposure = "exposure";
+constexpr const char* kPrintExposure = "printExposure";
+constexpr const char* kPrinterLights = "printerLights";
+constexpr const char* kFiltration = "filtration";
+constexpr const char* kGrain = "grain";
+constexpr const char* kGrainAmount = "grainAmount";
+constexpr const char* kGrainSize = "grainSize";
+constexpr const char* kGrainResponseOverride = "grainResponseOverride";
+constexpr const char* kGrainResponse = "grainResponse";
+constexpr const char* kSeed = "seed";
+constexpr const char* kStaticGrain = "staticGrain";
+constexpr const char* kHalation = "halation";
+constexpr const char* kMtf = "mtf";
+constexpr const char* kFrameWidth = "frameWidthMm";
+constexpr const char* kPrintWidth = "printWidthMm";
+constexpr const char* kOcioConfig = "ocioConfig";
+constexpr const char* kInputSpace = "inputColorspace";
+constexpr const char* kOutputSpace = "outputColorspace";
+
+constexpr const char* kStockFileOption = "Stock file...";
+constexpr const char* kNoPaperOption = "None (stop at the negative)";
+
+// Output modes in the order of the choice parameter.
+const std::array<std::pair<const char*, OutputMode>, 5> kOutputs{{{"Print", OutputMode::print},
+                                                                  {"Negative", OutputMode::negative},
+                                                                  {"Density", OutputMode::density},
+                                                                  {"Scan", OutputMode::scan},
+                                                                  {"Texture", OutputMode::texture}}};
+
+std::vector<const Stock*> stocks_of_kind(StockKind kind) {
+    std::vector<const Stock*> out;
+    for (const Stock& s : builtin_stocks())
+        if (s.kind == kind) out.push_back(&s);
+    return out;
+}
+
+// Film choice: the built-in films, then a stock file. Paper: built-in papers, none, a file.
+std::vector<std::string> film_options() {
+    std::vector<std::string> options;
+    for (const Stock* s : stocks_of_kind(StockKind::negative)) options.push_back(s->name);
+    options.push_back(kStockFileOption);
+    return options;
+}
+std::vector<std::string> paper_options() {
+    std::vector<std::string> options;
+    for (const Stock* s : stocks_of_kind(StockKind::paper)) options.push_back(s->name);
+    options.push_back(kNoPaperOption);
+    options.push_back(kStockFileOption);
+    return options;
+}
+
+Props define(OfxParamSetHandle params, const char* type, const char* name, const char* label, const char* hint,
+             const char* parent) {
+    OfxPropertySetHandle h = nullptr;
+    check(suites.param->paramDefine(params, type, name, &h), (std::string("defining parameter ") + name).c_str());
+    Props p(h);
+    p.set(kOfxPropLabel, label);
+    p.set(kOfxParamPropScriptName, name);
+    if (hint) p.set(kOfxParamPropHint, hint);
+    if (parent) p.set(kOfxParamPropParent, parent);
+    return p;
+}
+
+void define_group(OfxParamSetHandle params, const char* name, const char* label, bool open) {
+    Props g = define(params, kOfxParamTypeGroup, name, label, nullptr, nullptr);
+    g.set(kOfxParamPropGroupOpen, open ? 1 : 0);
+}
+
+Props define_double(OfxParamSetHandle params, const char* name, const char* label, const char* hint,
+                    const char* parent, double def, double min, double max, double display_min, double display_max) {
+    Props p = define(params, kOfxParamTypeDouble, name, label, hint, parent);
+    p.set(kOfxParamPropDoubleType, kOfxParamDoubleTypePlain);
+    p.set(kOfxParamPropDefault, def);
+    p.set(kOfxParamPropMin, min);
+    p.set(kOfxParamPropMax, max);
+    p.set(kOfxParamPropDisplayMin, display_min);
+    p.set(kOfxParamPropDisplayMax, display_max);
+    p.set(kOfxParamPropAnimates, 1);
+    return p;
+}
+
+// Three values, one per channel or filter; labels name the dimensions.
+Props define_double3(OfxParamSetHandle params, const char* name, const char* label, const char* hint,
+                     const char* parent, double def, double min, double max, double display_min, double display_max,
+                     const std::array<const char*, 3>& dimension_labels) {
+    Props p = define(params, kOfxParamTypeDouble3D, name, label, hint, parent);
+    p.set(kOfxParamPropDoubleType, kOfxParamDoubleTypePlain);
+    for (int i = 0; i < 3; ++i) {
+        p.set(kOfxParamPropDefault, def, i);
+        p.set(kOfxParamPropMin, min, i);
+        p.set(kOfxParamPropMax, max, i);
+        p.set(kOfxParamPropDisplayMin, display_min, i);
+        p.set(kOfxParamPropDisplayMax, display_max, i);
+        p.set(kOfxParamPropDimensionLabel, dimension_labels[i], i);
+    }
+    p.set(kOfxParamPropAnimates, 1);
+    return p;
+}
+
+void define_bool(OfxParamSetHandle params, const char* name, const char* label, const char* hint, const char* parent,
+                 bool def) {
+    Props p = define(params, kOfxParamTypeBoolean, name, label, hint, parent);
+    p.set(kOfxParamPropDefault, def ? 1 : 0);
+    p.set(kOfxParamPropAnimates, 0);
+}
+
+void define_choice(OfxParamSetHandle params, const char* name, const char* label, const char* hint, const char* parent,
+                   const std::vector<std::string>& options, int def) {
+    Props p = define(params, kOfxParamTypeChoice, name, label, hint, parent);
+    p.set(kOfxParamPropChoiceOption, options);
+    p.set(kOfxParamPropDefault, def);
+    p.set(kOfxParamPropAnimates, 0);
+}
+
+void define_string(OfxParamSetHandle params, const char* name, const char* label, const char* hint, const char* parent,
+                   const char* def, bool file_path) {
+    Props p = define(params, kOfxParamTypeString, name, label, hint, parent);
+    p.set(kOfxParamPropDefault, def);
+    p.set(kOfxParamPropStringMode, file_path ? kOfxParamStringIsFilePath : kOfxParamStringIsSingleLine);
+    if (file_path) p.set(kOfxParamPropStringFilePathExists, 1);
+    p.set(kOfxParamPropAnimates, 0);
+}
+
+int index_of_stock(const std::vector<const Stock*>& stocks, const std::string& id) {
+    for (size_t i = 0; i < stocks.size(); ++i)
+        if (stocks[i]->id == id) return (int)i;
+    return 0;
+}
+
+// Reading values from an instance.
+class Reader {
+public:
+    Reader(OfxImageEffectHandle instance, OfxTime time) : time_(time) {
+        check(suites.effect->getParamSet(instance, &params_), "getting the parameter set");
+    }
+
+    double get_double(const char* name) const {
+        double v = 0;
+        check(suites.param->paramGetValueAtTime(handle(name), time_, &v), name);
+        return v;
+    }
+    std::array<double, 3> get_double3(const char* name) const {
+        std::array<double, 3> v{};
+        check(suites.param->paramGetValueAtTime(handle(name), time_, &v[0], &v[1], &v[2]), name);
+        return v;
+    }
+    int get_int(const char* name) const {
+        int v = 0;
+        check(suites.param->paramGetValueAtTime(handle(name), time_, &v), name);
+        return v;
+    }
+    bool get_bool(const char* name) const { return get_int(name) != 0; }
+    std::string get_string(const char* name) const {
+        char* v = nullptr;
+        check(suites.param->paramGetValueAtTime(handle(name), time_, &v), name);
+        return v ? v : "";
+    }
+    // The label the user sees, for messages.
+    std::string label(const char* name) const {
+        OfxPropertySetHandle props = nullptr;
+        OfxParamHandle h = nullptr;
+        if (suites.param->paramGetHandle(params_, name, &h, &props) != kOfxStatOK || !props) return name;
+        return Props(props).get_string_or(kOfxPropLabel, name);
+    }
+
+    // A value that must be finite and within [min, max].
+    double checked(const char* name, double v, double min, double max) const {
+        if (!std::isfinite(v) || v < min || v > max)
+            throw ParameterError(label(name) + " is " + std::to_string(v) + ": it must be a number from " +
+                                 trimmed(min) + " to " + trimmed(max));
+        return v;
+    }
+    double checked_double(const char* name, double min, double max) const { return checked(name, get_double(name), min, max); }
+    std::array<double, 3> checked_double3(const char* name, double min, double max) const {
+        std::array<double, 3> v = get_double3(name);
+        for (double& c : v) checked(name, c, min, max);
+        return v;
+    }
+    int checked_choice(const char* name, int option_count) const {
+        int v = get_int(name);
+        if (v < 0 || v >= option_count)
+            throw ParameterError(label(name) + " is option " + std::to_string(v) + ", which does not exist (0 to " +
+                                 std::to_string(option_count - 1) + ")");
+        return v;
+    }
+
+private:
+    OfxParamHandle handle(const char* name) const {
+        OfxParamHandle h = nullptr;
+        check(suites.param->paramGetHandle(params_, name, &h, nullptr), name);
+        return h;
+    }
+    static std::string trimmed(double v) {
+        std::string s = std::to_string(v);
+        s.erase(s.find_last_not_of('0') + 1);
+        if (!s.empty() && s.back() == '.') s.pop_back();
+        return s;
+    }
+
+    OfxParamSetHandle params_ = nullptr;
+    OfxTime time_;
+};
+
+// The path in a stock-file parameter, which must be given when its choice asks for a file.
+std::string stock_file(const Reader& r, const char* choice, const char* file) {
+    std::string path = r.get_string(file);
+    if (path.empty())
+        throw ParameterError(r.label(choice) + " is set to a stock file, but " + r.label(file) + " is empty");
+    return path;
+}
+
+}  // namespace
+
+void define_parameters(OfxParamSetHandle params) {
+    const char* stocks = "stocksGroup";
+    define_group(params, stocks, "Stocks", true);
+    const auto films = stocks_of_kind(StockKind::negative);
+    const auto papers = stocks_of_kind(StockKind::paper);
+    define_choice(params, kFilm, "Film", "The camera negative: a built-in stock, or a stock file (below)", stocks,
+                  film_options(), index_of_stock(films, "kodak-tri-x-400"));
+    define_string(params, kFilmFile, "Film stock file", "A Darkroom stock file (.json) used when Film is 'Stock file'",
+                  stocks, "", true);
+    define_choice(params, kPaper, "Paper",
+                  "The print paper: a built-in stock, none (only for the negative, density and scan outputs), or a "
+                  "stock file",
+                  stocks, paper_options(), index_of_stock(papers, "vdr-paper-grade-2"));
+    define_string(params, kPaperFile, "Paper stock file", "A Darkroom stock file (.json) used when Paper is 'Stock file'",
+                  stocks, "", true);
+    std::vector<std::string> outputs;
+    for (const auto& o : kOutputs) outputs.push_back(o.first);
+    define_choice(params, kOutput, "Output",
+                  "Print: the print's colour (linear Rec.709). Negative: the negative's transmittance. Density: the "
+                  "developed density per layer. Scan: Cineon-style log code values / 1023. Texture: the input with "
+                  "the film's grain, MTF and halation only",
+                  stocks, outputs, 0);
+
+    const char* exposure = "exposureGroup";
+    define_group(params, exposure, "Exposure and printing", true);
+    define_double(params, kExposure, "Exposure (EV)",
+                  "Camera exposure in stops; at 0 a scene-linear 0.18 gets the mid-grey exposure the film's ISO speed "
+                  "implies",
+                  exposure, 0, -64, 64, -6, 6);
+    define_double(params, kPrintExposure, "Print exposure (EV)", "Print exposure in stops relative to the automatic one",
+                  exposure, 0, -64, 64, -4, 4);
+    define_double3(params, kPrinterLights, "Printer lights",
+                   "Printer points for the red, green and blue light: 25 is the automatic light; one point is 0.025 "
+                   "log exposure, so more red light gives more cyan dye",
+                   exposure, 25, 0, 100, 0, 50, {"R", "G", "B"});
+    define_double3(params, kFiltration, "Filtration (CC)",
+                   "Enlarger filters in colour-compensating units (density x 100) of yellow, magenta and cyan", exposure,
+                   0, 0, 300, 0, 100, {"Y", "M", "C"});
+
+    const char* grain = "grainGroup";
+    define_group(params, grain, "Grain", true);
+    define_bool(params, kGrain, "Grain", "Simulate granularity", grain, true);
+    define_double3(params, kGrainAmount, "Amount",
+                   "Multiplies each layer's RMS granularity (red, green and blue layers; a black-and-white film uses R)",
+                   grain, 1, 0, 10, 0, 3, {"R", "G", "B"});
+    define_double3(params, kGrainSize, "Size", "Multiplies each layer's grain size", grain, 1, 0.05, 20, 0.25, 4,
+                   {"R", "G", "B"});
+    define_bool(params, kGrainResponseOverride, "Override response",
+                "Replace the stock's density exponent of granularity by Response", grain, false);
+    define_double3(params, kGrainResponse, "Response",
+                   "Granularity grows with net density as D^response (the seed paper cites 1/3)", grain, 1.0 / 3.0, 0,
+                   3, 0, 1, {"R", "G", "B"});
+    Props seed = define(params, kOfxParamTypeInteger, kSeed, "Seed",
+                        "Grain seed: the grain is a function of (seed, frame, layer, pixel)", grain);
+    seed.set(kOfxParamPropDefault, 0);
+    seed.set(kOfxParamPropMin, 0);
+    seed.set(kOfxParamPropMax, INT_MAX);
+    seed.set(kOfxParamPropDisplayMin, 0);
+    seed.set(kOfxParamPropDisplayMax, 1000);
+    seed.set(kOfxParamPropAnimates, 0);
+    define_bool(params, kStaticGrain, "Static grain", "The same grain on every frame (frame 0's)", grain, false);
+
+    const char* optics = "opticsGroup";
+    define_group(params, optics, "Optics and format", false);
+    define_double(params, kHalation, "Halation", "Multiplies each film layer's halation strength (0 = off)", optics, 1,
+                  0, 10, 0, 4);
+    define_bool(params, kMtf, "MTF", "Internal scattering in the emulsion (the stock's MTF)", optics, true);
+    // The format does not change during a shot.
+    define_double(params, kFrameWidth, "Frame width (mm)",
+                  "Width of the film frame; with the image width it sets the pixel pitch (0 = the stock's format)",
+                  optics, 0, 0, 10000, 0, 70)
+        .set(kOfxParamPropAnimates, 0);
+    define_double(params, kPrintWidth, "Print width (mm)", "Width of the print (0 = the paper's format)", optics, 0, 0,
+                  10000, 0, 500)
+        .set(kOfxParamPropAnimates, 0);
+
+    const char* colour = "colourGroup";
+    define_group(params, colour, "Colour management (OCIO)", false);
+    define_string(params, kOcioConfig, "OCIO config",
+                  "An OCIO config file; empty uses $OCIO, else Darkroom's embedded config", colour, "", true);
+    define_string(params, kInputSpace, "Input colour space", "The colour space of the input pixels", colour,
+                  "scene_linear", false);
+    define_string(params, kOutputSpace, "Output colour space",
+                  "The colour space of the print, negative and texture outputs (density and scan are data, never "
+                  "converted)",
+                  colour, "scene_linear", false);
+}
+
+NodeSettings read_parameters(OfxImageEffectHandle instance, OfxTime time) {
+    Reader r(instance, time);
+    NodeSettings n;
+    DevelopSettings& s = n.develop;
+
+    const auto films = stocks_of_kind(StockKind::negative);
+    const auto papers = stocks_of_kind(StockKind::paper);
+    int film_option = r.checked_choice(kFilm, (int)films.size() + 1);
+    n.film_from_file = film_option == (int)films.size();
+    n.film = n.film_from_file ? stock_file(r, kFilm, kFilmFile) : films[film_option]->id;
+    s.output = kOutputs[r.checked_choice(kOutput, (int)kOutputs.size())].second;
+    // Only the print output uses a paper.
+    int paper_option = r.checked_choice(kPaper, (int)papers.size() + 2);
+    if (s.output == OutputMode::print) {
+        if (paper_option == (int)papers.size())
+            throw ParameterError("the Print output needs a paper: choose one, or the Negative, Density or Scan output");
+        n.paper_from_file = paper_option == (int)papers.size() + 1;
+        n.paper = n.paper_from_file ? stock_file(r, kPaper, kPaperFile) : papers[paper_option]->id;
+    }
+
+    s.exposure_ev = r.checked_double(kExposure, -64, 64);
+    s.print_exposure_ev = r.checked_double(kPrintExposure, -64, 64);
+    s.printer_lights = r.checked_double3(kPrinterLights, 0, 100);
+    s.filtration_ymc = r.checked_double3(kFiltration, 0, 300);
+
+    s.grain = r.get_bool(kGrain);
+    s.grain_amount = r.checked_double3(kGrainAmount, 0, 10);
+    s.grain_size = r.checked_double3(kGrainSize, 0.05, 20);
+    if (r.get_bool(kGrainResponseOverride)) s.grain_density_exponent = r.checked_double3(kGrainResponse, 0, 3);
+    int seed = r.get_int(kSeed);
+    if (seed < 0) throw ParameterError(r.label(kSeed) + " is " + std::to_string(seed) + ": it must be 0 or more");
+    s.seed = (uint64_t)seed;
+    // Grain belongs to whole frames: a fractional (motion-blur) time uses its nearest frame.
+    if (!std::isfinite(time) || std::abs(time) > 1e9) throw ParameterError("the host asked for time " + std::to_string(time));
+    s.frame = r.get_bool(kStaticGrain) ? 0 : (int)std::lround(time);
+
+    s.halation = r.checked_double(kHalation, 0, 10);
+    s.mtf = r.get_bool(kMtf);
+    s.frame_width_mm = r.checked_double(kFrameWidth, 0, 10000);
+    s.print_width_mm = r.checked_double(kPrintWidth, 0, 10000);
+
+    n.ocio_config = r.get_string(kOcioConfig);
+    n.input_space = r.get_string(kInputSpace);
+    n.output_space = r.get_string(kOutputSpace);
+    if (n.input_space.empty()) throw ParameterError(r.label(kInputSpace) + " is empty: name a colour space of the config");
+    if (n.output_space.empty()) throw ParameterError(r.label(kOutputSpace) + " is empty: name a colour space of the config");
+    return n;
+}
+
+}  // namespace darkroom::ofx

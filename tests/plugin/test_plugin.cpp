@@ -1,0 +1,498 @@
+// The OpenFX bundle, loaded by a test host exactly as a compositing host loads it.
+#include <OpenImageIO/imagebuf.h>
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "tests/plugin/test_host.h"
+
+namespace fs = std::filesystem;
+using namespace testhost;
+
+namespace {
+
+const fs::path kTmp = DARKROOM_TEST_TMP;
+
+// The plugin falls back to $OCIO when its config parameter is empty, as the CLI does; the
+// tests compare with the embedded config, so neither may see a user's $OCIO.
+const bool kNoUserOcio = [] { return unsetenv("OCIO") == 0; }();
+
+std::string run(const std::string& command) {
+    std::string text;
+    FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+    REQUIRE(pipe);
+    char buf[512];
+    while (std::fgets(buf, sizeof buf, pipe)) text += buf;
+    pclose(pipe);
+    return text;
+}
+
+// A scene with smooth gradients and hard edges (so scattering and grain both show), top-down.
+std::vector<float> scene(int w, int h, int channels) {
+    std::vector<float> px((size_t)w * h * channels);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float* p = &px[((size_t)y * w + x) * channels];
+            bool square = x > w / 3 && x < 2 * w / 3 && y > h / 3 && y < 2 * h / 3;
+            p[0] = square ? 2.0f : 0.02f + 0.5f * x / w;
+            p[1] = square ? 1.5f : 0.05f + 0.4f * y / h;
+            p[2] = square ? 0.8f : 0.1f;
+            if (channels == 4) p[3] = 0.25f + 0.75f * (float)(x + y) / (w + h);
+        }
+    return px;
+}
+
+std::string write_exr(const std::string& name, const std::vector<float>& px, int w, int h, int channels) {
+    fs::create_directories(kTmp);
+    std::string path = (kTmp / name).string();
+    OIIO::ImageBuf buf(OIIO::ImageSpec(w, h, channels, OIIO::TypeDesc::FLOAT), const_cast<float*>(px.data()));
+    REQUIRE(buf.write(path));
+    return path;
+}
+
+std::vector<float> read_exr(const std::string& path) {
+    OIIO::ImageBuf buf(path);
+    REQUIRE(buf.read(0, 0, true, OIIO::TypeDesc::FLOAT));
+    std::vector<float> out(buf.spec().image_pixels() * buf.nchannels());
+    buf.get_pixels(buf.roi(), OIIO::TypeDesc::FLOAT, out.data());
+    return out;
+}
+
+// `darkroom develop` on `input`, its output's pixels.
+std::vector<float> develop(const std::string& input, const std::string& flags) {
+    std::string out = (kTmp / ("cli-" + std::to_string(std::hash<std::string>{}(input + flags)) + ".exr")).string();
+    fs::remove(out);
+    std::string log = run(std::string(DARKROOM_EXE) + " develop " + input + " -o " + out + " " + flags);
+    INFO(log);
+    REQUIRE(fs::exists(out));
+    return read_exr(out);
+}
+
+std::unique_ptr<Instance> make_instance() {
+    REQUIRE(kNoUserOcio);
+    auto inst = Plugin::get().create_instance();
+    REQUIRE(inst->create_status() == kOfxStatOK);
+    return inst;
+}
+
+// The settings the CLI comparisons use: a small physical frame so that scattering and grain
+// span several pixels of a small test image.
+void set_common_look(Instance& inst) {
+    inst.set_int("film", inst.choice_index("film", "Tri-X"));
+    inst.set_int("paper", inst.choice_index("paper", "grade 2"));
+    inst.set_int("seed", 5);
+    inst.set_double("frameWidthMm", 4);
+    inst.set_double("printWidthMm", 30);
+    inst.set_double("exposure", 0.5);
+    inst.set_double("printExposure", -0.3);
+}
+const std::string kCommonFlags =
+    "--film kodak-tri-x-400 --paper vdr-paper-grade-2 --seed 5 --frame-width-mm 4 --print-width-mm 30 "
+    "--exposure 0.5 --print-exposure -0.3";
+
+bool same_bits(const Frame& a, const Frame& b) {
+    return a.pixels.size() == b.pixels.size() &&
+           std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
+}
+
+long count_value(const Frame& f, float v) {
+    long n = 0;
+    for (float p : f.pixels) n += p == v;
+    return n;
+}
+
+}  // namespace
+
+TEST_CASE("the bundle exports only the OpenFX entry points and needs no OpenImageIO", "[plugin]") {
+    std::string symbols = run("nm -D --defined-only " DARKROOM_OFX_BUNDLE);
+    std::set<std::string> names;
+    std::istringstream lines(symbols);
+    for (std::string line; std::getline(lines, line);)
+        if (!line.empty()) names.insert(line.substr(line.rfind(' ') + 1));
+    INFO(symbols);
+    CHECK(names == std::set<std::string>{"OfxGetPlugin", "OfxGetNumberOfPlugins"});
+    std::string libraries = run("ldd " DARKROOM_OFX_BUNDLE);
+    INFO(libraries);
+    CHECK(libraries.find("OpenImageIO") == std::string::npos);
+    CHECK(libraries.find("not found") == std::string::npos);
+}
+
+TEST_CASE("describe declares the contexts, depths, clips and parameters", "[plugin]") {
+    Plugin& plugin = Plugin::get();
+    CHECK(std::string(plugin.ofx()->pluginApi) == kOfxImageEffectPluginApi);
+    const PropertySet& p = plugin.descriptor().props;
+    const auto& contexts = p.props.at(kOfxImageEffectPropSupportedContexts).s;
+    CHECK(std::count(contexts.begin(), contexts.end(), kOfxImageEffectContextFilter) == 1);
+    CHECK(std::count(contexts.begin(), contexts.end(), kOfxImageEffectContextGeneral) == 1);
+    const auto& depths = p.props.at(kOfxImageEffectPropSupportedPixelDepths).s;
+    CHECK(std::count(depths.begin(), depths.end(), kOfxBitDepthFloat) == 1);
+    CHECK(p.get_string(kOfxImageEffectPluginRenderThreadSafety) == kOfxImageEffectRenderFullySafe);
+    CHECK(p.get_int(kOfxImageEffectPropSupportsTiles) == 1);
+    CHECK(p.get_int(kOfxImageEffectPropSupportsMultiResolution) == 1);
+
+    Effect& ctx = plugin.context_descriptor();
+    REQUIRE(ctx.clips.count("Source") == 1);
+    REQUIRE(ctx.clips.count("Output") == 1);
+    const auto& components = ctx.clips["Source"]->props.props.at(kOfxImageEffectPropSupportedComponents).s;
+    CHECK(components == std::vector<std::string>{kOfxImageComponentRGBA, kOfxImageComponentRGB});
+    for (const char* name : {"film", "filmFile", "paper", "paperFile", "output", "exposure", "printExposure",
+                             "printerLights", "filtration", "grain", "grainAmount", "grainSize", "grainResponse",
+                             "seed", "staticGrain", "halation", "mtf", "frameWidthMm", "printWidthMm", "ocioConfig",
+                             "inputColorspace", "outputColorspace"}) {
+        INFO(name);
+        Param* param = ctx.params.find(name);
+        REQUIRE(param);
+        // Every parameter sits in a labelled group.
+        CHECK(ctx.params.find(param->props.get_string(kOfxParamPropParent)) != nullptr);
+    }
+    CHECK(ctx.params.find("exposure")->props.get_int(kOfxParamPropAnimates) == 1);
+    CHECK(ctx.params.find("film")->props.get_int(kOfxParamPropAnimates) == 0);
+    const auto& outputs = ctx.params.find("output")->props.props.at(kOfxParamPropChoiceOption).s;
+    CHECK(outputs == std::vector<std::string>{"Print", "Negative", "Density", "Scan", "Texture"});
+
+    // The general context has the same clips and parameters.
+    Effect general;
+    general.props = plugin.descriptor().props;
+    PropertySet in;
+    in.set(kOfxImageEffectPropContext, std::string(kOfxImageEffectContextGeneral));
+    REQUIRE(plugin.call(kOfxImageEffectActionDescribeInContext, &general, &in, nullptr) == kOfxStatOK);
+    CHECK(general.clips.size() == 2);
+    CHECK(general.params.params.size() == ctx.params.params.size());
+}
+
+TEST_CASE("a full frame equals darkroom develop with the same settings", "[plugin][cli]") {
+    const int w = 64, h = 48;
+    std::vector<float> px = scene(w, h, 3);
+    std::string input = write_exr("plugin-scene.exr", px, w, h, 3);
+    auto inst = make_instance();
+    set_common_look(*inst);
+    inst->set_source(Frame::from_top_down(px, w, h, 3), kOfxImageOpaque);
+
+    std::string output = GENERATE(as<std::string>{}, "print", "negative", "density");
+    INFO("output " << output);
+    inst->set_int("output", inst->choice_index("output", output == "print" ? "Print" : output == "negative" ? "Negative" : "Density"));
+    RenderResult r = inst->render(12, {0, 0, w, h});
+    INFO(inst->effect().persistent_message);
+    REQUIRE(r.status == kOfxStatOK);
+    REQUIRE(r.output.channels == 3);
+    std::vector<float> cli = develop(input, kCommonFlags + " --frame 12 --output " + output);
+    std::vector<float> ofx = r.output.to_top_down();
+    REQUIRE(ofx.size() == cli.size());
+    long differing = 0;
+    for (size_t i = 0; i < cli.size(); ++i) differing += ofx[i] != cli[i];
+    CHECK(differing == 0);
+}
+
+TEST_CASE("tiles equal the full frame bit for bit, whatever the thread count", "[plugin][determinism]") {
+    const int w = 80, h = 70;
+    auto inst = make_instance();
+    set_common_look(*inst);
+    inst->set_source(Frame::from_top_down(scene(w, h, 4), w, h, 4));
+    set_cpu_count(1);
+    RenderResult full = inst->render(7, {0, 0, w, h});
+    REQUIRE(full.status == kOfxStatOK);
+    CHECK(count_value(full.output, -7.0f) == 0);
+    // Three row bands of the full frame on the host's threads.
+    set_cpu_count(4);
+    RenderResult threaded = inst->render(7, {0, 0, w, h});
+    REQUIRE(threaded.status == kOfxStatOK);
+    CHECK(same_bits(full.output, threaded.output));
+    set_cpu_count(3);
+    RenderResult tiles = inst->render_tiles(7, {0, 0, w, h}, 23, 17);
+    REQUIRE(tiles.status == kOfxStatOK);
+    CHECK(same_bits(full.output, tiles.output));
+    set_cpu_count(4);
+    CHECK(outstanding_allocations() == 0);
+    CHECK(outstanding_images() == 0);
+}
+
+TEST_CASE("a frame whose region of definition is not at the origin develops the same pixels", "[plugin]") {
+    const int w = 40, h = 30;
+    Frame at_origin = Frame::from_top_down(scene(w, h, 4), w, h, 4), moved = at_origin;
+    moved.bounds = {-13, 21, w - 13, h + 21};
+    auto inst = make_instance();
+    set_common_look(*inst);
+    inst->set_source(at_origin);
+    RenderResult a = inst->render(5, at_origin.bounds);
+    inst->set_source(moved);
+    RenderResult b = inst->render_tiles(5, moved.bounds, 16, 12);
+    REQUIRE(a.status == kOfxStatOK);
+    REQUIRE(b.status == kOfxStatOK);
+    CHECK(same_bits(a.output, b.output));
+}
+
+TEST_CASE("render scale 0.5 renders the half-resolution frame with the same physical sizes", "[plugin][cli]") {
+    const int w = 96, h = 64;
+    std::vector<float> half = scene(w / 2, h / 2, 3);
+    std::string input = write_exr("plugin-half.exr", half, w / 2, h / 2, 3);
+    auto inst = make_instance();
+    set_common_look(*inst);
+    inst->set_source(Frame::from_top_down(half, w / 2, h / 2, 3), kOfxImageOpaque);
+    inst->set_source_rod({0, 0, (double)w, (double)h});  // canonical: the full-resolution frame
+
+    RenderResult r = inst->render(3, {0, 0, w / 2, h / 2}, 0.5);
+    INFO(inst->effect().persistent_message);
+    REQUIRE(r.status == kOfxStatOK);
+    // The frame width in mm is the same, so the pixel pitch doubles: exactly what the CLI
+    // does with the half-size image and the same --frame-width-mm.
+    std::vector<float> cli = develop(input, kCommonFlags + " --frame 3");
+    std::vector<float> ofx = r.output.to_top_down();
+    REQUIRE(ofx.size() == cli.size());
+    CHECK(std::memcmp(ofx.data(), cli.data(), cli.size() * sizeof(float)) == 0);
+
+    // Tiles at scale 0.5 agree with the full frame at scale 0.5.
+    RenderResult tiles = inst->render_tiles(3, {0, 0, w / 2, h / 2}, 13, 11, 0.5);
+    REQUIRE(tiles.status == kOfxStatOK);
+    CHECK(same_bits(r.output, tiles.output));
+
+    // The region of interest is in canonical coordinates: a region at the frame's centre
+    // grows by the same halo in pixels, i.e. twice as many canonical units at scale 0.5.
+    OfxRectD region{40, 30, 50, 34}, roi_full{}, roi_half{};
+    REQUIRE(inst->region_of_interest(3, region, 1.0, &roi_full) == kOfxStatOK);
+    REQUIRE(inst->region_of_interest(3, region, 0.5, &roi_half) == kOfxStatOK);
+    CHECK(roi_full.x1 < region.x1);
+    CHECK(roi_full.x2 > region.x2);
+    CHECK(roi_half.x1 >= 0);
+    CHECK(roi_half.y2 <= h);
+}
+
+TEST_CASE("premultiplied input is unpremultiplied, developed and premultiplied again, and alpha passes through",
+          "[plugin]") {
+    const int w = 40, h = 30;
+    std::vector<float> straight = scene(w, h, 4), premultiplied = straight;
+    for (size_t i = 0; i < premultiplied.size(); i += 4)
+        for (int c = 0; c < 3; ++c) premultiplied[i + c] *= premultiplied[i + 3];
+    auto inst = make_instance();
+    set_common_look(*inst);
+    inst->set_source(Frame::from_top_down(straight, w, h, 4), kOfxImageUnPreMultiplied);
+    RenderResult u = inst->render(1, {0, 0, w, h});
+    inst->set_source(Frame::from_top_down(premultiplied, w, h, 4), kOfxImagePreMultiplied);
+    RenderResult p = inst->render(1, {0, 0, w, h});
+    REQUIRE(u.status == kOfxStatOK);
+    REQUIRE(p.status == kOfxStatOK);
+    const Frame input = Frame::from_top_down(straight, w, h, 4);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const float *a = u.output.at(x, y), *b = p.output.at(x, y), *in = input.at(x, y);
+            REQUIRE(b[3] == in[3]);
+            REQUIRE(a[3] == in[3]);
+            // Unpremultiplying (c a) / a can differ from c in the last bit, hence the tolerance.
+            for (int c = 0; c < 3; ++c) REQUIRE(b[c] == Approx(a[c] * a[3]).epsilon(1e-4).margin(1e-7));
+        }
+}
+
+TEST_CASE("16-bit and 8-bit images render as the float image does, to their precision", "[plugin]") {
+    const int w = 40, h = 30;
+    auto inst = make_instance();
+    set_common_look(*inst);
+    // A print's reflectance lies in 0-1, so integer images hold it without clipping.
+    inst->set_source(Frame::from_top_down(scene(w, h, 4), w, h, 4), kOfxImageUnPreMultiplied);
+    RenderResult reference = inst->render(2, {0, 0, w, h});
+    REQUIRE(reference.status == kOfxStatOK);
+    auto [depth, tolerance] = GENERATE(table<std::string, float>({{kOfxBitDepthShort, 2e-3f}, {kOfxBitDepthByte, 0.1f}}));
+    INFO(depth);
+    inst->set_source_depth(depth);
+    RenderResult r = inst->render(2, {0, 0, w, h});
+    INFO(inst->effect().persistent_message);
+    REQUIRE(r.status == kOfxStatOK);
+    // The input is quantised too (scene values above 1 clip), so only pixels whose input
+    // was inside 0-1 compare; their difference is bounded by the quantisation steps.
+    const Frame input = Frame::from_top_down(scene(w, h, 4), w, h, 4);
+    long compared = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const float* in = input.at(x, y);
+            if (std::max({in[0], in[1], in[2]}) > 1.0f) continue;
+            ++compared;
+            for (int c = 0; c < 4; ++c) REQUIRE(std::abs(r.output.at(x, y)[c] - reference.output.at(x, y)[c]) <= tolerance);
+        }
+    CHECK(compared > w * h / 2);
+}
+
+TEST_CASE("grain depends on the frame and the seed, never on the order frames are rendered in", "[plugin][determinism]") {
+    const int w = 48, h = 40;
+    Frame source = Frame::from_top_down(scene(w, h, 4), w, h, 4);
+    auto a = make_instance(), b = make_instance();
+    for (auto* inst : {a.get(), b.get()}) {
+        set_common_look(*inst);
+        inst->set_source(source);
+    }
+    RenderResult a3 = a->render(3, {0, 0, w, h}), a4 = a->render(4, {0, 0, w, h});
+    RenderResult b4 = b->render(4, {0, 0, w, h}), b3 = b->render(3, {0, 0, w, h});
+    CHECK(same_bits(a3.output, b3.output));
+    CHECK(same_bits(a4.output, b4.output));
+    CHECK_FALSE(same_bits(a3.output, a4.output));
+
+    a->set_int("seed", 6);
+    CHECK_FALSE(same_bits(a->render(3, {0, 0, w, h}).output, a3.output));
+    a->set_int("staticGrain", 1);
+    CHECK(same_bits(a->render(3, {0, 0, w, h}).output, a->render(4, {0, 0, w, h}).output));
+}
+
+TEST_CASE("settings that change nothing are reported as identity", "[plugin]") {
+    auto inst = make_instance();
+    inst->set_source(Frame::from_top_down(scene(16, 16, 4), 16, 16, 4));
+    CHECK(inst->is_identity(1) == kOfxStatReplyDefault);  // the default print
+
+    inst->set_int("output", inst->choice_index("output", "Texture"));
+    inst->set_int("grain", 0);
+    inst->set_int("mtf", 0);
+    inst->set_double("halation", 0);
+    std::string clip;
+    CHECK(inst->is_identity(1, &clip) == kOfxStatOK);
+    CHECK(clip == "Source");
+
+    SECTION("any one film effect makes it a render") {
+        SECTION("grain") { inst->set_int("grain", 1); }
+        SECTION("MTF") { inst->set_int("mtf", 1); }
+        SECTION("halation") { inst->set_double("halation", 0.5); }
+        SECTION("a colour conversion") { inst->set_string("outputColorspace", "ACEScg"); }
+        CHECK(inst->is_identity(1) == kOfxStatReplyDefault);
+    }
+    SECTION("grain switched on at zero amount changes nothing") {
+        inst->set_int("grain", 1);
+        inst->set_double3("grainAmount", 0, 0, 0);
+        CHECK(inst->is_identity(1) == kOfxStatOK);
+    }
+}
+
+TEST_CASE("abort stops a render", "[plugin]") {
+    const int w = 32, h = 256;  // several row bands
+    auto inst = make_instance();
+    set_common_look(*inst);
+    inst->set_source(Frame::from_top_down(scene(w, h, 4), w, h, 4));
+    set_cpu_count(1);
+
+    inst->effect().abort_after = 0;
+    RenderResult none = inst->render(1, {0, 0, w, h});
+    CHECK(none.status == kOfxStatFailed);
+    CHECK(count_value(none.output, -7.0f) == (long)none.output.pixels.size());
+
+    inst->effect().abort_calls = 0;
+    inst->effect().abort_after = 1;
+    RenderResult part = inst->render(1, {0, 0, w, h});
+    CHECK(part.status == kOfxStatFailed);
+    long untouched = count_value(part.output, -7.0f);
+    CHECK(untouched > 0);
+    CHECK(untouched < (long)part.output.pixels.size());
+    CHECK(inst->effect().persistent_message.empty());
+
+    inst->effect().abort_after = -1;
+    CHECK(inst->render(1, {0, 0, w, h}).status == kOfxStatOK);
+    set_cpu_count(4);
+    CHECK(outstanding_allocations() == 0);
+    CHECK(outstanding_images() == 0);
+}
+
+TEST_CASE("bad parameter values are rejected with a message naming them", "[plugin][bad-input]") {
+    const int w = 24, h = 16;
+    auto inst = make_instance();
+    inst->set_source(Frame::from_top_down(scene(w, h, 4), w, h, 4));
+    fs::create_directories(kTmp);
+    const std::string bad_json = (kTmp / "bad-stock.json").string();
+    std::ofstream(bad_json) << "{ \"format\": \"darkroom-stock\", ";
+    std::string expected;
+
+    SECTION("exposure not a number") {
+        inst->set_double("exposure", NAN);
+        expected = "Exposure (EV)";
+    }
+    SECTION("exposure out of range") {
+        inst->set_double("exposure", 1e6);
+        expected = "Exposure (EV)";
+    }
+    SECTION("negative grain amount") {
+        inst->set_double3("grainAmount", 1, -1, 1);
+        expected = "Amount";
+    }
+    SECTION("a film option that does not exist") {
+        inst->set_int("film", 99);
+        expected = "Film";
+    }
+    SECTION("a stock file option with no file") {
+        inst->set_int("film", inst->choice_index("film", "Stock file"));
+        expected = "Film stock file";
+    }
+    SECTION("a stock file that does not exist") {
+        inst->set_int("film", inst->choice_index("film", "Stock file"));
+        inst->set_string("filmFile", "/nonexistent/film.json");
+        expected = "/nonexistent/film.json";
+    }
+    SECTION("a stock file that is not a stock") {
+        inst->set_int("paper", inst->choice_index("paper", "Stock file"));
+        inst->set_string("paperFile", bad_json);
+        expected = bad_json;
+    }
+    SECTION("a print with no paper") {
+        inst->set_int("paper", inst->choice_index("paper", "None"));
+        expected = "needs a paper";
+    }
+    SECTION("an unknown colour space") {
+        inst->set_string("inputColorspace", "no-such-space");
+        expected = "no-such-space";
+    }
+    SECTION("an OCIO config that does not exist") {
+        inst->set_string("ocioConfig", "/nonexistent/config.ocio");
+        expected = "/nonexistent/config.ocio";
+    }
+    RenderResult r = inst->render(1, {0, 0, w, h});
+    CHECK(r.status == kOfxStatFailed);
+    CHECK_THAT(inst->effect().persistent_message, Catch::Contains(expected));
+    CHECK(count_value(r.output, -7.0f) == (long)r.output.pixels.size());
+    CHECK(outstanding_allocations() == 0);
+    CHECK(outstanding_images() == 0);
+
+    // Corrected, it renders and the message goes.
+    inst->set_double("exposure", 0);
+    inst->set_double3("grainAmount", 1, 1, 1);
+    inst->set_int("film", inst->choice_index("film", "Tri-X"));
+    inst->set_int("paper", inst->choice_index("paper", "grade 2"));
+    inst->set_string("inputColorspace", "scene_linear");
+    inst->set_string("ocioConfig", "");
+    CHECK(inst->render(1, {0, 0, w, h}).status == kOfxStatOK);
+    CHECK(inst->effect().persistent_message.empty());
+}
+
+TEST_CASE("bad input fails with a message, never a crash", "[plugin][bad-input]") {
+    const int w = 24, h = 16;
+    auto inst = make_instance();
+    inst->set_source(Frame::from_top_down(scene(w, h, 4), w, h, 4));
+    RenderResult r;
+    std::string expected;
+
+    SECTION("no input") {
+        inst->disconnect_source();
+        r = inst->render(1, {0, 0, w, h});
+        expected = "Source";
+    }
+    SECTION("a zero-size render window") {
+        r = inst->render(1, {5, 5, 5, 9});
+        expected = "empty window";
+    }
+    SECTION("a render window far outside the output image") {
+        OfxRectI output{0, 0, w, h};
+        r = inst->render(1, {-1000000000, -1000000000, 1000000000, 1000000000}, 1.0, &output);
+        expected = "not inside the output image";
+    }
+    SECTION("a huge frame") {
+        inst->set_source_rod({0, 0, 1e7, 1e7});
+        r = inst->render(1, {0, 0, w, h});
+        expected = "pixels a side";
+    }
+    SECTION("an unsupported pixel depth") {
+        inst->set_source_depth(kOfxBitDepthHalf);
+        r = inst->render(1, {0, 0, w, h});
+        expected = "pixel depth";
+    }
+    CHECK(r.status == kOfxStatFailed);
+    CHECK_THAT(inst->effect().persistent_message, Catch::Contains(expected));
+    CHECK(outstanding_allocations() == 0);
+    CHECK(outstanding_images() == 0);
+}
