@@ -215,8 +215,11 @@ void plot(const std::string& path, const std::vector<Chart>& charts) {
 }
 
 void print_profile(const GrainProfile& p) {
-    std::printf("encoding %s%s%s, %d px blocks, %lld grain-only blocks in every channel\n", encoding_name(p.encoding),
-                p.colorspace.empty() ? "" : ", colour space ", p.colorspace.c_str(), p.block_size_px, p.blocks_used);
+    std::printf("encoding %s%s%s", encoding_name(p.encoding), p.colorspace.empty() ? "" : ", colour space ",
+                p.colorspace.c_str());
+    if (p.block_size_px > 0)
+        std::printf(", %d px blocks, %lld grain-only blocks in every channel", p.block_size_px, p.blocks_used);
+    std::printf("\n");
     for (const GrainChannel& ch : p.channels) {
         double lo = *std::min_element(ch.sigma.begin(), ch.sigma.end());
         double hi = *std::max_element(ch.sigma.begin(), ch.sigma.end());

@@ -170,17 +170,29 @@ double sigma_at(const nlohmann::json& channel, double level) {
 }  // namespace
 
 TEST_CASE("grain predict, apply, analyze and compare: a plate's grain carried onto a clean image", "[cli][grain]") {
+    std::string plate;
     const std::string clean = make_patches("grain-clean.exr"), predicted = (kTmp / "predicted.json").string(),
-                      plate = (kTmp / "grain-plate.exr").string(), measured = (kTmp / "measured.json").string(),
+                      measured = (kTmp / "measured.json").string(),
                       cg = (kTmp / "grain-cg.exr").string(), chart = (kTmp / "grain-chart.svg").string();
     Result r = darkroom("grain predict --stock kodak-tri-x-400 --width 2048 -o " + predicted);
     INFO(r.output);
     REQUIRE(r.exit_code == 0);
     CHECK_THAT(r.output, Catch::Contains("kodak-tri-x-400 scanned at 2048 px"));
-    REQUIRE(darkroom("grain apply " + clean + " --profile " + predicted + " -o " + plate + " --seed 1").exit_code == 0);
-    r = darkroom("grain analyze " + plate + " --iscolorspace 'Cineon log' -o " + measured);
+    // A two-frame plate sequence: frames 1 and 2 of the same grain.
+    const std::string sequence = (kTmp / "grain-plate.####.exr").string();
+    for (const char* frame : {"1", "2"})
+        REQUIRE(darkroom("grain apply " + clean + " --profile " + predicted + " -o " + (kTmp / "grain-plate.000").string() +
+                         frame + ".exr --seed 1 --frame " + frame)
+                    .exit_code == 0);
+    plate = (kTmp / "grain-plate.0001.exr").string();
+    const std::string png_chart = (kTmp / "grain-analysis.png").string();
+    r = darkroom("grain analyze " + sequence + " --frames 1-2 --iscolorspace 'Cineon log' -o " + measured +
+                 " --plot " + png_chart);
     INFO(r.output);
     REQUIRE(r.exit_code == 0);
+    OIIO::ImageSpec chart_spec;
+    pixels(png_chart, &chart_spec);
+    CHECK(chart_spec.width == 1280);
     nlohmann::json profile = read_json(measured);
     CHECK(profile["encoding"] == "log");
     CHECK(profile["colorspace"] == "Cineon log");
