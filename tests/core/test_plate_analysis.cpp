@@ -47,7 +47,7 @@ std::string analysis_error(const std::vector<ConstImageView>& frames, GrainAnaly
 
 }  // namespace
 
-TEST_CASE("null test: two seeds of the same grain match; 20 % more grain or 20 % larger grain does not",
+TEST_CASE("null test: two seeds of the same grain match, 20 % more grain or 20 % larger grain does not",
           "[plate][compare]") {
     const Image plate = flat_patches(512, 512, 3, kLo, kHi);
     GrainProfile seed1 = measure(plate, medium_grain(), 1);

@@ -60,7 +60,7 @@ TEST_CASE("a predicted profile follows the film model: D^exponent, Cineon levels
     CHECK(rho_8k > rho_2k);
 }
 
-TEST_CASE("black-and-white stocks predict identical, fully correlated channels; colour layers are independent",
+TEST_CASE("black-and-white stocks predict identical, fully correlated channels, colour layers independent ones",
           "[plate][prediction]") {
     GrainProfile bw = predict_grain_profile(find_stock("kodak-t-max-100"), ScanGeometry{4096, 0});
     REQUIRE(bw.channels.size() == 3);

@@ -62,7 +62,7 @@ TEST_CASE("the response curve interpolates linearly and holds its ends", "[plate
     CHECK(ch.sigma_at(5.0) == 0.03);
 }
 
-TEST_CASE("a white autocorrelation has a flat unit spectrum; a Gaussian one halves at its closed form",
+TEST_CASE("a white autocorrelation has a flat unit spectrum, a Gaussian one halves at its closed form",
           "[plate][profile][spectrum]") {
     GrainChannel white;
     RadialSpectrum flat = radial_power_spectrum(white);
