@@ -14,11 +14,13 @@ constexpr double kRejectionSigmas = 3.5;   // a block further from the curve tha
 // Blocks the autocorrelation is measured on: enough for a stable estimate at bounded cost
 // (fewer in the early passes, which only steer the block selection).
 constexpr int kMaxAutocorrelationBlocks = 256, kEarlyAutocorrelationBlocks = 48;
+// Minimal-residual steps of the fit-bias correction of the autocorrelation per pass.
+constexpr int kEarlySolverSteps = 3, kFinalSolverSteps = 10;
 constexpr int kLargeBlockPx = 64, kSmallBlockPx = 32, kLargeBlockMinCount = 200;
 // Texture and edges differ from grain in their short-range correlation as well as in
 // their variance: each block's own autocorrelation at these lags must be typical.
 constexpr int kShapeLags[][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}, {2, 0}, {0, 2}, {4, 0}, {0, 4}};
-constexpr int kShapeLagCount = 8;
+constexpr int kShapeLagCount = sizeof(kShapeLags) / sizeof(kShapeLags[0]);
 constexpr double kShapeOutlierMads = 5.0;
 
 // Lags |dx|, |dy| <= radius, row-major from (-radius, -radius).
@@ -308,8 +310,8 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
         for (int i = 0; i < nblocks; ++i) s.typical[i] = distance[i] <= limit;
     };
 
-    // The curve through the accepted blocks of each bin with at least `min_blocks` of them.
-    auto fit_curve = [&](int c, int min_blocks) {
+    // The curve through the accepted blocks of each bin that has any.
+    auto fit_curve = [&](int c) {
         ChannelState& s = state[c];
         std::vector<double> level(nbins, 0.0), variance(nbins, 0.0);
         std::vector<int> count(nbins, 0);
@@ -321,7 +323,7 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
             }
         LevelCurve curve;
         for (int k = 0; k < nbins; ++k)
-            if (count[k] >= min_blocks && count[k] > 0) {
+            if (count[k] > 0) {
                 curve.level.push_back(level[k] / count[k]);
                 curve.variance.push_back(variance[k] / count[k]);
             }
@@ -351,7 +353,7 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                     }
                     mark_typical(c, quiet);
                     for (int i = 0; i < nblocks; ++i) s.accepted[i] = quiet[i] && s.typical[i];
-                    s.curve = fit_curve(c, 1);
+                    s.curve = fit_curve(c);
                 } else {
                     mark_typical(c, s.accepted);
                     for (int round = 0; round < 20; ++round) {
@@ -365,7 +367,7 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                             changed |= keep != (bool)s.accepted[i];
                             s.accepted[i] = keep;
                         }
-                        LevelCurve next = fit_curve(c, 1);
+                        LevelCurve next = fit_curve(c);
                         if (next.level.empty()) break;  // nothing is grain-only: reported below
                         s.curve = next;
                         if (!changed) break;
@@ -391,16 +393,35 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                 for (int dy = -lags.radius; dy <= lags.radius; ++dy)
                     for (int dx = -lags.radius; dx <= lags.radius; ++dx)
                         measured[lags.index(dx, dy)] /= used * pair_count(bs, dx, dy);
-                // Undo the surface fit: rho = measured + bias(rho), by fixed-point iteration.
-                for (int iteration = 0; iteration < 3; ++iteration) {
-                    SurfaceFit::Bias b = surface.bias(s.rho, lags);
-                    for (size_t l = 0; l < lags.size(); ++l) s.rho[l] = measured[l] + b.lag_bias[l];
-                    double centre = s.rho[lags.index(0, 0)];
-                    for (double& v : s.rho) v /= centre;
+                // Undo the surface fit: solve rho - bias(rho) = measured (bias is linear in
+                // rho). The fit removes most low-frequency power, so plain fixed-point
+                // iteration converges slowly; minimal-residual steps converge in a few.
+                auto unbiased = [&](const std::vector<double>& x) {
+                    std::vector<double> b = surface.bias(x, lags).lag_bias;
+                    for (size_t l = 0; l < x.size(); ++l) b[l] = x[l] - b[l];
+                    return b;
+                };
+                std::vector<double> residual = unbiased(s.rho);
+                for (size_t l = 0; l < lags.size(); ++l) residual[l] = measured[l] - residual[l];
+                const int steps = pass == 2 ? kFinalSolverSteps : kEarlySolverSteps;
+                for (int step = 0; step < steps; ++step) {
+                    std::vector<double> a_residual = unbiased(residual);
+                    double num = 0, den = 0;
+                    for (size_t l = 0; l < lags.size(); ++l)
+                        num += residual[l] * a_residual[l], den += a_residual[l] * a_residual[l];
+                    if (den <= 0) break;
+                    const double alpha = num / den;
+                    for (size_t l = 0; l < lags.size(); ++l)
+                        s.rho[l] += alpha * residual[l], residual[l] -= alpha * a_residual[l];
                 }
+                const double centre = s.rho[lags.index(0, 0)];
+                for (double& v : s.rho) v /= centre;
             }
         });
     }
+
+    // The final autocorrelation sets the fit's degrees of freedom for the final sigma.
+    for (ChannelState& s : state) s.dof = npx - surface.bias(s.rho, lags).trace;
 
     // Results, and what could not be estimated.
     GrainProfile profile;

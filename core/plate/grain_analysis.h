@@ -1,16 +1,19 @@
 // Measuring a plate's grain: the inverse of grain_synthesis.
 //
-// The plate is cut into square blocks. In each block a least-squares plane (constant and
-// two slopes) stands in for the picture, and the residual is grain plus whatever the
-// plane cannot follow (edges, texture). Blocks are binned by their level; within the
-// response curve a block is kept only while its residual variance is what grain alone
-// would give (within 3.5 standard deviations of a sample variance of that many correlated
-// pixels), so edges and texture drop out. From the kept blocks:
+// The plate is cut into square blocks. In each block a least-squares quadratic surface
+// stands in for the picture (shading, gentle gradients), and the residual is grain plus
+// whatever the surface cannot follow (edges, texture). Blocks are binned by their level;
+// a block is kept only while it looks like grain alone:
+// - its residual variance is within 3.5 standard deviations (those of a sample variance
+//   of that many correlated pixels) of the response curve at its level, and
+// - its own autocorrelation at a few short lags is typical of the kept blocks.
+// From the kept blocks:
 // - sigma per level: residual sum of squares / (N - tr(P R)), the exact expectation of a
-//   plane-fit residual for grain with autocorrelation R (P projects onto the plane);
+//   fit residual for grain with autocorrelation R (P projects onto the surface);
 // - the autocorrelation: residual products at each lag, normalised by sigma^2 and
-//   corrected for the plane fit the same way (a fixed-point iteration);
+//   corrected for the fit the same way (a fixed-point iteration);
 // - the channel correlation: the pooled correlation of the residuals at lag 0.
+// Limits: a plate textured alike everywhere cannot be told from coarse grain this way.
 // Several frames pool their blocks.
 #pragma once
 
