@@ -90,7 +90,7 @@ GrainKernel design_grain_kernel(const GrainChannel& ch) {
                     sum += amplitude[(size_t)v * n + u] * cosine[wrap((long long)u * x + (long long)v * y)];
             full[(size_t)(y + r) * side + x + r] = sum / ((double)n * n);
         }
-    // Energy inside each square radius; keep the smallest holding 99.9 % of it.
+    // Energy inside each square radius; keep the smallest holding 99.999 % of it.
     double total = 0;
     for (double k : full) total += k * k;
     int keep = r;
@@ -98,7 +98,7 @@ GrainKernel design_grain_kernel(const GrainChannel& ch) {
         double inside = 0;
         for (int y = -q; y <= q; ++y)
             for (int x = -q; x <= q; ++x) inside += full[(size_t)(y + r) * side + x + r] * full[(size_t)(y + r) * side + x + r];
-        if (inside >= 0.999 * total) {
+        if (inside >= 0.99999 * total) {
             keep = q;
             break;
         }

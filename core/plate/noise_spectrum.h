@@ -32,7 +32,8 @@ double half_power_frequency(const RadialSpectrum& spectrum);
 double noise_equivalent_area_px2(const GrainChannel& channel);
 
 // The zero-phase filter whose autocorrelation is the channel's: the inverse DFT of
-// sqrt(NPS), cut to the smallest square radius holding 99.9 % of its energy and scaled to
+// sqrt(NPS), cut to the smallest square radius holding 99.999 % of its energy (the tails
+// carry the autocorrelation at long lags) and scaled to
 // unit energy, so filtered unit white noise has unit variance. (2r+1)^2 taps, row-major.
 struct GrainKernel {
     int radius = 0;
