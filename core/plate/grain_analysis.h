@@ -11,7 +11,7 @@
 // - sigma per level: residual sum of squares / (N - tr(P R)), the exact expectation of a
 //   fit residual for grain with autocorrelation R (P projects onto the surface);
 // - the autocorrelation: residual products at each lag, normalised by sigma^2 and
-//   corrected for the fit the same way (a fixed-point iteration);
+//   corrected for the fit the same way (a linear solve, the correction being linear in R);
 // - the channel correlation: the pooled correlation of the residuals at lag 0.
 // Limits: a plate textured alike everywhere cannot be told from coarse grain this way.
 // Several frames pool their blocks.
