@@ -8,7 +8,7 @@ cd "$(dirname "$0")"
 
 PACKAGES=(build-essential cmake ninja-build pkg-config
           libopenimageio-dev openimageio-tools libopencolorio-dev opencolorio-tools libopenexr-dev
-          libglm-dev catch2 nlohmann-json3-dev libcli11-dev libfmt-dev)
+          libglm-dev catch2 nlohmann-json3-dev libcli11-dev libfmt-dev fonts-dejavu-core)
 BUILD_DIR=${BUILD_DIR:-build}
 JOBS=${JOBS:-$(nproc)}
 

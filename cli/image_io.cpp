@@ -25,6 +25,16 @@ LoadedImage read_image(const std::string& path) {
     return out;
 }
 
+// Renames a finished temporary file over the target, removing it if that fails.
+static void move_into_place(const fs::path& temp, const fs::path& target) {
+    std::error_code ec;
+    fs::rename(temp, target, ec);
+    if (ec) {
+        fs::remove(temp, ec);
+        throw UserError("cannot move the finished output to '" + target.string() + "': " + ec.message());
+    }
+}
+
 static bool same_file(const std::string& a, const std::string& b) {
     std::error_code ec;
     return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
@@ -66,12 +76,23 @@ void write_image(const std::string& path, const Image& image, const OIIO::ImageS
         fs::remove(temp, ec);
         throw UserError("cannot write '" + path + "': " + err);
     }
-    std::error_code ec;
-    fs::rename(temp, target, ec);
-    if (ec) {
-        fs::remove(temp, ec);
-        throw UserError("cannot move the finished output to '" + path + "': " + ec.message());
+    move_into_place(temp, target);
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+    fs::path target(path), temp = target.parent_path() / (".darkroom-tmp-" + std::to_string(getpid()) + "-" +
+                                                          target.filename().string());
+    {
+        std::FILE* f = std::fopen(temp.string().c_str(), "wb");
+        if (!f) throw UserError("cannot write '" + path + "'");
+        bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+        ok &= std::fclose(f) == 0;
+        if (!ok) {
+            fs::remove(temp);
+            throw UserError("cannot write '" + path + "'");
+        }
     }
+    move_into_place(temp, target);
 }
 
 }  // namespace darkroom::cli

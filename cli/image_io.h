@@ -30,4 +30,7 @@ bool is_float_format(const std::string& path);
 void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
                  const std::string& protected_input = "");
 
+// Text (JSON, SVG) written the same way: a temporary file beside `path`, then renamed.
+void write_text_file(const std::string& path, const std::string& text);
+
 }  // namespace darkroom::cli

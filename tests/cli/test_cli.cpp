@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -131,4 +132,155 @@ TEST_CASE("stocks lists the presets and demo renders without an input", "[cli]")
     INFO(r.output);
     REQUIRE(r.exit_code == 0);
     for (const char* f : {"scene.exr", "print.exr", "print.png", "negative.png"}) CHECK(fs::exists(dir / f));
+}
+
+// ---- darkroom grain: plate matching ----
+
+namespace {
+
+// Flat 64 px patches of Cineon-range levels, no grain.
+std::string make_patches(const std::string& name, int size = 256) {
+    fs::create_directories(kTmp);
+    std::string path = (kTmp / name).string();
+    OIIO::ImageBuf buf(OIIO::ImageSpec(size, size, 3, OIIO::TypeDesc::FLOAT));
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            float level = 0.15f + 0.1f * float(((x / 64) + 4 * (y / 64)) % 7);
+            const float rgb[3] = {level, level * 0.9f + 0.05f, level * 0.8f + 0.1f};
+            buf.setpixel(x, y, rgb);
+        }
+    REQUIRE(buf.write(path));
+    return path;
+}
+
+nlohmann::json read_json(const std::string& path) {
+    std::ifstream in(path);
+    return nlohmann::json::parse(in);
+}
+
+// Linear interpolation of a profile channel's response curve.
+double sigma_at(const nlohmann::json& channel, double level) {
+    std::vector<double> l = channel["response"]["level"], s = channel["response"]["sigma"];
+    if (level <= l.front()) return s.front();
+    for (size_t i = 1; i < l.size(); ++i)
+        if (level <= l[i]) return s[i - 1] + (s[i] - s[i - 1]) * (level - l[i - 1]) / (l[i] - l[i - 1]);
+    return s.back();
+}
+
+}  // namespace
+
+TEST_CASE("grain predict, apply, analyze and compare: a plate's grain carried onto a clean image", "[cli][grain]") {
+    std::string plate;
+    const std::string clean = make_patches("grain-clean.exr"), predicted = (kTmp / "predicted.json").string(),
+                      measured = (kTmp / "measured.json").string(),
+                      cg = (kTmp / "grain-cg.exr").string(), chart = (kTmp / "grain-chart.svg").string();
+    Result r = darkroom("grain predict --stock kodak-tri-x-400 --width 2048 -o " + predicted);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("kodak-tri-x-400 scanned at 2048 px"));
+    // A two-frame plate sequence: frames 1 and 2 of the same grain.
+    const std::string sequence = (kTmp / "grain-plate.####.exr").string();
+    for (const char* frame : {"1", "2"})
+        REQUIRE(darkroom("grain apply " + clean + " --profile " + predicted + " -o " + (kTmp / "grain-plate.000").string() +
+                         frame + ".exr --seed 1 --frame " + frame)
+                    .exit_code == 0);
+    plate = (kTmp / "grain-plate.0001.exr").string();
+    const std::string png_chart = (kTmp / "grain-analysis.png").string();
+    r = darkroom("grain analyze " + sequence + " --frames 1-2 --iscolorspace 'Cineon log' -o " + measured +
+                 " --plot " + png_chart);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    OIIO::ImageSpec chart_spec;
+    pixels(png_chart, &chart_spec);
+    CHECK(chart_spec.width == 1280);
+    nlohmann::json profile = read_json(measured);
+    CHECK(profile["encoding"] == "log");
+    CHECK(profile["colorspace"] == "Cineon log");
+    CHECK(profile["channel_correlation"][0][1] > 0.95);  // a black-and-white stock: the same grain in R, G, B
+    REQUIRE(darkroom("grain apply " + clean + " --profile " + measured + " -o " + cg + " --seed 2").exit_code == 0);
+    r = darkroom("grain compare " + plate + " " + cg + " --plot " + chart);
+    INFO(r.output);
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("grain matches"));
+    std::ifstream svg(chart);
+    std::stringstream text;
+    text << svg.rdbuf();
+    CHECK_THAT(text.str(), Catch::Contains("<svg") && Catch::Contains("R A") && Catch::Contains("R B"));
+
+    // Twice the grain does not match: exit 4.
+    const std::string doubled = (kTmp / "doubled.json").string();
+    nlohmann::json twice = profile;
+    for (auto& ch : twice["channels"])
+        for (auto& s : ch["response"]["sigma"]) s = 2 * s.get<double>();
+    std::ofstream(doubled) << twice.dump();
+    r = darkroom("grain compare " + measured + " " + doubled);
+    CHECK(r.exit_code == 4);
+    CHECK_THAT(r.output, Catch::Contains("grain does not match"));
+}
+
+TEST_CASE("grain apply to a window of the frame gives that window of the full frame", "[cli][grain][determinism]") {
+    const std::string clean = make_patches("grain-window-clean.exr"), profile = (kTmp / "window-profile.json").string(),
+                      crop = (kTmp / "grain-window-crop.exr").string(), full = (kTmp / "grain-window-full.exr").string(),
+                      part = (kTmp / "grain-window-part.exr").string();
+    REQUIRE(darkroom("grain predict --stock kodak-tri-x-400 --width 4096 -o " + profile).exit_code == 0);
+    OIIO::ImageBuf cropped = OIIO::ImageBufAlgo::cut(OIIO::ImageBuf(clean), OIIO::ROI(40, 140, 30, 130));
+    cropped.specmod().x = 40;  // keep the crop's place in the frame
+    cropped.specmod().y = 30;
+    REQUIRE(cropped.write(crop));
+    REQUIRE(darkroom("grain apply " + clean + " --profile " + profile + " -o " + full + " --threads 1").exit_code == 0);
+    REQUIRE(darkroom("grain apply " + crop + " --profile " + profile + " -o " + part + " --threads 3").exit_code == 0);
+    std::vector<float> f = pixels(full), p = pixels(part);
+    for (int y = 0; y < 100; ++y)
+        for (int x = 0; x < 100; ++x)
+            for (int c = 0; c < 3; ++c) REQUIRE(p[(y * 100 + x) * 3 + c] == f[((y + 30) * 256 + x + 40) * 3 + c]);
+}
+
+TEST_CASE("grain: bad plates and profiles get a message naming the problem", "[cli][grain][bad-input]") {
+    const std::string corrupt = (kTmp / "corrupt-profile.json").string(), out = (kTmp / "never-grain.exr").string();
+    std::ofstream(corrupt) << R"({"format": "darkroom-grain-profile", "version": 1, "encoding": "log", "channels": []})";
+    fs::remove(out);
+    Result r = darkroom("grain apply " + make_patches("grain-bad-clean.exr") + " --profile " + corrupt + " -o " + out);
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("corrupt-profile.json: field 'channels'"));
+    CHECK_FALSE(fs::exists(out));
+
+    r = darkroom("grain analyze " + make_input("grain-tiny.exr", 24, 20) + " -o " + (kTmp / "never.json").string());
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("too small") && Catch::Contains("24x20"));
+    CHECK_FALSE(fs::exists(kTmp / "never.json"));
+
+    r = darkroom("grain analyze " + make_patches("grain-flat-clean.exr") + " -o " + (kTmp / "never.json").string());
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("channel R: no grain"));
+
+    r = darkroom("grain analyze plate.####.exr -o " + (kTmp / "never.json").string());
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("--frames"));
+}
+
+TEST_CASE("grain analyze on real film scans finds grain of a few code values", "[cli][grain][reference]") {
+    const fs::path plate = fs::path(DARKROOM_REFERENCE_DATA) / "plates" / "kodim23.png";
+    if (!fs::exists(plate)) {
+        WARN("reference plate " << plate << " not found: skipped");
+        return;
+    }
+    const std::string profile_path = (kTmp / "kodim23.json").string(), chart = (kTmp / "kodim23.png").string();
+    Result r = darkroom("grain analyze " + plate.string() + " --iscolorspace sRGB --block-size 16 -o " + profile_path +
+                        " --plot " + chart);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    // The reference data's README: Photo CD grain is "about 2-4 code values of 255" (high-pass
+    // std in flat areas) with the chroma smoothed, so the channels are strongly correlated.
+    nlohmann::json p = read_json(profile_path);
+    CHECK(p["encoding"] == "display");
+    for (const auto& ch : p["channels"]) {
+        double mid = sigma_at(ch, 0.5) * 255;
+        CHECK(mid > 1.0);
+        CHECK(mid < 5.0);
+    }
+    CHECK(p["channel_correlation"][0][1] > 0.5);
+    CHECK(p["channel_correlation"][1][2] > 0.5);
+    OIIO::ImageSpec spec;
+    pixels(chart, &spec);
+    CHECK(spec.width == 1280);
 }

@@ -1,0 +1,390 @@
+// darkroom grain analyze|apply|compare|predict: plate matching. Measures a scanned
+// plate's grain per channel (core/plate/grain_analysis.h), puts grain with those
+// statistics on clean images (grain_synthesis.h), checks how well two grains match
+// (grain_compare.h), and predicts a profile from a stock and a scan (grain_prediction.h).
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+
+#include "cli/chart.h"
+#include "cli/commands.h"
+#include "cli/image_io.h"
+#include "core/plate/grain_analysis.h"
+#include "core/plate/grain_compare.h"
+#include "core/plate/grain_prediction.h"
+#include "core/plate/grain_synthesis.h"
+#include "core/plate/noise_spectrum.h"
+
+namespace darkroom::cli {
+
+namespace {
+
+constexpr int kMismatchExitCode = 4;
+
+std::string lower(std::string s) {
+    for (char& c : s) c = char(std::tolower((unsigned char)c));
+    return s;
+}
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// The encoding a colour-space name implies; `fallback` when the name says nothing.
+SignalEncoding encoding_from(const std::string& colorspace, SignalEncoding fallback) {
+    const std::string cs = lower(colorspace);
+    for (const char* log_word : {"log", "cineon", "adx", "acescc", "acescct"})
+        if (cs.find(log_word) != std::string::npos) return SignalEncoding::log;
+    for (const char* display_word : {"srgb", "rec709", "rec.709", "bt.709", "gamma", "display", "output"})
+        if (cs.find(display_word) != std::string::npos) return SignalEncoding::display;
+    for (const char* linear_word : {"linear", "lin_", "scene", "acescg", "aces2065"})
+        if (cs.find(linear_word) != std::string::npos) return SignalEncoding::linear;
+    return fallback;
+}
+
+SignalEncoding parse_encoding(const std::string& name) {
+    if (name == "linear") return SignalEncoding::linear;
+    if (name == "log") return SignalEncoding::log;
+    if (name == "display") return SignalEncoding::display;
+    throw UserError("--encoding must be linear, log or display, not '" + name + "'");
+}
+
+// "1001-1010", "1001,1003,1005" or a mix.
+std::vector<int> parse_frames(const std::string& text) {
+    std::vector<int> frames;
+    size_t start = 0;
+    while (start <= text.size()) {
+        size_t comma = text.find(',', start);
+        std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        try {
+            size_t dash = part.find('-', 1);
+            size_t used = 0;
+            int first = std::stoi(part, &used);
+            int last = first;
+            if (dash != std::string::npos) last = std::stoi(part.substr(dash + 1));
+            else if (used != part.size()) throw std::invalid_argument(part);
+            if (last < first || last - first > 100000) throw std::invalid_argument(part);
+            for (int f = first; f <= last; ++f) frames.push_back(f);
+        } catch (const std::exception&) {
+            throw UserError("--frames: cannot read '" + part + "' (expected e.g. 1001-1010 or 1001,1005)");
+        }
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+    }
+    return frames;
+}
+
+// A path with a frame pattern (#### or %04d) expanded for each frame; others unchanged.
+std::vector<std::string> expand_frames(const std::vector<std::string>& plates, const std::string& frames_text) {
+    std::vector<int> frames = frames_text.empty() ? std::vector<int>{} : parse_frames(frames_text);
+    std::vector<std::string> out;
+    for (const std::string& p : plates) {
+        size_t hash = p.find('#'), percent = p.find('%');
+        if (hash == std::string::npos && percent == std::string::npos) {
+            out.push_back(p);
+            continue;
+        }
+        if (frames.empty()) throw UserError("'" + p + "' has a frame pattern: give the frames with --frames");
+        for (int f : frames) {
+            if (hash != std::string::npos) {
+                size_t run = p.find_first_not_of('#', hash) - hash;
+                char number[32];
+                std::snprintf(number, sizeof number, "%0*d", (int)run, f);
+                out.push_back(p.substr(0, hash) + number + p.substr(hash + run));
+            } else {
+                char path[4096];
+                std::snprintf(path, sizeof path, p.c_str(), f);
+                out.push_back(path);
+            }
+        }
+    }
+    return out;
+}
+
+Window parse_region(const std::vector<int>& r, const Window& frame, const std::string& flag) {
+    if (r.empty()) return frame;
+    Window w{r[0], r[1], r[0] + r[2], r[1] + r[3]};
+    if (w.empty() || !frame.contains(w))
+        throw UserError(flag + " " + std::to_string(r[0]) + "," + std::to_string(r[1]) + "," + std::to_string(r[2]) +
+                        "," + std::to_string(r[3]) + " is not inside the " + std::to_string(frame.width()) + "x" +
+                        std::to_string(frame.height()) + " image");
+    return w;
+}
+
+// Pixels in absolute frame coordinates (the file's data window).
+LoadedImage read_plate(const std::string& path) {
+    LoadedImage in = read_image(path);
+    const int w = in.pixels.window.width(), h = in.pixels.window.height();
+    in.pixels.window = {in.spec.x, in.spec.y, in.spec.x + w, in.spec.y + h};
+    return in;
+}
+
+struct AnalyzeOptions {
+    std::vector<std::string> plates;
+    std::string output, colorspace, encoding, frames, plot;
+    std::vector<int> region;
+    int block_size = 0, levels = 16, min_blocks = 4, threads = 0;
+};
+
+GrainProfile analyze_files(const std::vector<std::string>& paths, const AnalyzeOptions& o, const std::vector<int>& region,
+                           const std::string& region_flag) {
+    std::vector<LoadedImage> images;
+    std::vector<ConstImageView> views;
+    GrainAnalysisSettings settings;
+    settings.block_size_px = o.block_size;
+    settings.level_bins = o.levels;
+    settings.min_blocks_per_level = o.min_blocks;
+    settings.threads = o.threads;
+    settings.colorspace = o.colorspace;
+    for (const std::string& p : paths) images.push_back(read_plate(p));
+    const OIIO::ImageSpec& first = images.front().spec;
+    // Colour channels only: alpha carries no grain.
+    settings.channels = first.alpha_channel >= 0 ? std::min(first.alpha_channel, first.nchannels) : first.nchannels;
+    if (settings.channels == 0) settings.channels = first.nchannels;
+    for (int c = 0; c < settings.channels && c < (int)first.channelnames.size(); ++c)
+        settings.channel_names.push_back(first.channelnames[c]);
+    const bool integer_pixels = !first.format.is_floating_point();
+    settings.encoding = !o.encoding.empty() ? parse_encoding(o.encoding)
+                        : encoding_from(o.colorspace, integer_pixels ? SignalEncoding::display : SignalEncoding::linear);
+    for (size_t i = 0; i < images.size(); ++i) {
+        if (images[i].pixels.channels < settings.channels)
+            throw UserError("'" + paths[i] + "' has " + std::to_string(images[i].pixels.channels) + " channels, '" +
+                            paths[0] + "' " + std::to_string(settings.channels));
+        ConstImageView view = images[i].pixels.view();
+        Window w = parse_region(region, view.window, region_flag);
+        view.data = view.at(w.x0, w.y0);
+        view.window = w;
+        views.push_back(view);
+    }
+    try {
+        GrainProfile profile = analyze_grain(views, settings);
+        profile.sources = paths;
+        return profile;
+    } catch (const GrainAnalysisError& e) {
+        throw UserError(std::string(paths.size() == 1 ? "'" + paths[0] + "'" : "the plates") + ": " + e.what());
+    }
+}
+
+// A profile file (.json) as it is, or an image analysed.
+GrainProfile profile_of(const std::string& path, const AnalyzeOptions& o, const std::vector<int>& region,
+                        const std::string& region_flag) {
+    if (ends_with(lower(path), ".json")) {
+        try {
+            return load_grain_profile_file(path);
+        } catch (const GrainProfileError& e) {
+            throw UserError(e.what());
+        }
+    }
+    return analyze_files({path}, o, region, region_flag);
+}
+
+Chart response_chart(const std::string& title, const std::vector<std::pair<std::string, const GrainProfile*>>& profiles) {
+    Chart chart;
+    chart.title = title;
+    chart.x.label = "signal level (" + std::string(encoding_name(profiles.front().second->encoding)) + ")";
+    chart.y.label = "grain standard deviation";
+    for (size_t k = 0; k < profiles.size(); ++k)
+        for (size_t c = 0; c < profiles[k].second->channels.size(); ++c) {
+            const GrainChannel& ch = profiles[k].second->channels[c];
+            ChartSeries s{ch.name + profiles[k].first, ch.level, ch.sigma, channel_colour(ch.name, (int)c), k > 0};
+            chart.series.push_back(s);
+        }
+    return chart;
+}
+
+Chart spectrum_chart(const std::vector<std::pair<std::string, const GrainProfile*>>& profiles) {
+    Chart chart;
+    chart.title = "Noise power spectrum (radial, normalised)";
+    chart.x.label = "cycles per pixel";
+    chart.y.label = "NPS (px^2)";
+    chart.y.log = true;
+    for (size_t k = 0; k < profiles.size(); ++k)
+        for (size_t c = 0; c < profiles[k].second->channels.size(); ++c) {
+            const GrainChannel& ch = profiles[k].second->channels[c];
+            RadialSpectrum nps = radial_power_spectrum(ch);
+            chart.series.push_back(
+                {ch.name + profiles[k].first, nps.cycles_per_px, nps.power, channel_colour(ch.name, (int)c), k > 0});
+        }
+    return chart;
+}
+
+void plot(const std::string& path, const std::vector<Chart>& charts) {
+    bool text = true;
+    write_charts(path, charts, &text);
+    if (!text) std::cerr << "darkroom: warning: no font for OpenImageIO's text: '" << path << "' has no labels\n";
+}
+
+void print_profile(const GrainProfile& p) {
+    std::printf("encoding %s%s%s", encoding_name(p.encoding), p.colorspace.empty() ? "" : ", colour space ",
+                p.colorspace.c_str());
+    if (p.block_size_px > 0)
+        std::printf(", %d px blocks, %lld grain-only blocks in every channel", p.block_size_px, p.blocks_used);
+    std::printf("\n");
+    for (const GrainChannel& ch : p.channels) {
+        double lo = *std::min_element(ch.sigma.begin(), ch.sigma.end());
+        double hi = *std::max_element(ch.sigma.begin(), ch.sigma.end());
+        long long samples = 0;
+        for (long long s : ch.samples) samples += s;
+        std::printf("  %-3s %2zu levels %.4g..%.4g, sigma %.4g..%.4g, %lld px; half-power %.3f cycles/px, noise-equivalent "
+                    "area %.2f px^2\n",
+                    ch.name.c_str(), ch.level.size(), ch.level.front(), ch.level.back(), lo, hi, samples,
+                    half_power_frequency(radial_power_spectrum(ch)), noise_equivalent_area_px2(ch));
+    }
+    const size_t n = p.channels.size();
+    std::printf("  channel correlation:");
+    for (size_t a = 0; a < n; ++a)
+        for (size_t b = a + 1; b < n; ++b)
+            std::printf(" %s-%s %.3f", p.channels[a].name.c_str(), p.channels[b].name.c_str(), p.correlation((int)a, (int)b));
+    std::printf("\n");
+    for (const SparseLevel& s : p.sparse_levels)
+        std::printf("  too few grain-only samples: channel %s at level %.4g (%lld px), left out\n", s.channel.c_str(),
+                    s.level, s.samples);
+}
+
+void run_analyze(const AnalyzeOptions& o) {
+    GrainProfile profile = analyze_files(expand_frames(o.plates, o.frames), o, o.region, "--region");
+    write_text_file(o.output, grain_profile_to_json(profile) + "\n");
+    print_profile(profile);
+    if (!o.plot.empty()) plot(o.plot, {response_chart("Grain response", {{"", &profile}}), spectrum_chart({{"", &profile}})});
+}
+
+struct ApplyOptions {
+    std::string input, output, profile, colorspace;
+    uint64_t seed = 0;
+    int frame = 0, threads = 0;
+};
+
+void run_apply(const ApplyOptions& o) {
+    GrainProfile profile;
+    try {
+        profile = load_grain_profile_file(o.profile);
+    } catch (const GrainProfileError& e) {
+        throw UserError(e.what());
+    }
+    if (!o.colorspace.empty() && !profile.colorspace.empty() && lower(o.colorspace) != lower(profile.colorspace))
+        throw UserError("'" + o.profile + "' was measured in " + profile.colorspace + ", the input is " + o.colorspace +
+                        ": convert the input to " + profile.colorspace + " first (grain levels are in its encoding)");
+    LoadedImage in = read_plate(o.input);
+    if (in.pixels.channels < (int)profile.channels.size())
+        throw UserError("'" + o.profile + "' has " + std::to_string(profile.channels.size()) + " channels, '" + o.input +
+                        "' only " + std::to_string(in.pixels.channels));
+    apply_grain_profile(profile, in.pixels.view(), o.seed, o.frame, o.threads);
+    write_image(o.output, in.pixels, in.spec, o.input);
+}
+
+struct CompareOptions {
+    std::string a, b, plot;
+    bool json = false;
+    std::vector<int> region_a, region_b;
+    GrainMatchTolerance tolerance;
+    AnalyzeOptions analysis;
+};
+
+void run_compare(const CompareOptions& o) {
+    GrainProfile a = profile_of(o.a, o.analysis, o.region_a, "--region-a");
+    GrainProfile b = profile_of(o.b, o.analysis, o.region_b, "--region-b");
+    GrainMatch match;
+    try {
+        match = compare_grain_profiles(a, b);
+    } catch (const GrainProfileError& e) {
+        throw UserError(e.what());
+    }
+    const bool passes = match.passes(o.tolerance);
+    std::printf("%-8s %-22s %-16s %-26s\n", "channel", "response error", "NPS distance", "half-power (A, B)");
+    for (const ChannelMatch& c : match.channels)
+        std::printf("%-8s %6.2f %% (%2d levels)   %6.3f dB        %.3f, %.3f cycles/px\n", c.name.c_str(),
+                    c.response_error_percent, c.levels_compared, c.nps_distance_db, c.half_power_a, c.half_power_b);
+    std::printf("largest channel correlation difference: %.3f\n", match.max_correlation_difference);
+    std::printf("%s (tolerances: response %.3g %%, NPS %.3g dB, correlation %.3g)\n",
+                passes ? "grain matches" : "grain does not match", o.tolerance.response_percent, o.tolerance.nps_db,
+                o.tolerance.correlation);
+    if (!o.plot.empty())
+        plot(o.plot, {response_chart("Grain response: A solid, B dashed", {{" A", &a}, {" B", &b}}),
+                      spectrum_chart({{" A", &a}, {" B", &b}})});
+    std::fflush(stdout);
+    if (!passes) std::exit(kMismatchExitCode);
+}
+
+struct PredictOptions {
+    std::string stock, output;
+    int width_px = 0;
+    double frame_width_mm = 0;
+};
+
+void run_predict(const PredictOptions& o) {
+    Stock stock;
+    try {
+        stock = find_stock(o.stock);
+    } catch (const StockError& e) {
+        throw UserError(e.what());
+    }
+    GrainProfile profile = predict_grain_profile(stock, ScanGeometry{o.width_px, o.frame_width_mm});
+    write_text_file(o.output, grain_profile_to_json(profile) + "\n");
+    std::printf("%s\n", profile.sources.front().c_str());
+    print_profile(profile);
+}
+
+void add_analysis_flags(CLI::App& cmd, AnalyzeOptions& o) {
+    cmd.add_option("--iscolorspace", o.colorspace, "The plate's colour space (recorded; implies the encoding)");
+    cmd.add_option("--encoding", o.encoding, "linear, log or display (default: from --iscolorspace, else display for "
+                                             "integer files and linear for float files)");
+    cmd.add_option("--block-size", o.block_size, "Block size in pixels (default: 64 if that gives 200 blocks, else 32)")
+        ->check(CLI::Range(8, 256));
+    cmd.add_option("--levels", o.levels, "Signal level bins of the response curve")->check(CLI::Range(1, 256));
+    cmd.add_option("--min-blocks", o.min_blocks, "Grain-only blocks a level needs to be estimated")
+        ->check(CLI::Range(1, 100000));
+    cmd.add_option("--threads", o.threads, "Worker threads, 0 = all cores");
+}
+
+}  // namespace
+
+void add_grain_command(CLI::App& app) {
+    CLI::App* grain = app.add_subcommand("grain", "Plate matching: measure a plate's grain and put it on CG elements");
+    grain->require_subcommand(1);
+
+    auto a = std::make_shared<AnalyzeOptions>();
+    CLI::App* analyze = grain->add_subcommand("analyze", "Estimate a plate's grain per channel into a profile");
+    analyze->add_option("plates", a->plates, "Plate frames (a path with #### or %04d takes --frames)")->required();
+    analyze->add_option("-o,--out", a->output, "Grain profile (.json)")->required();
+    analyze->add_option("--region", a->region, "Analyse only this region X,Y,W,H")->delimiter(',')->expected(4);
+    analyze->add_option("--frames", a->frames, "Frames for a pattern path: 1001-1010 or 1001,1005");
+    analyze->add_option("--plot", a->plot, "Chart of the response and the NPS (.png or .svg)");
+    add_analysis_flags(*analyze, *a);
+    analyze->callback([a] { run_analyze(*a); });
+
+    auto p = std::make_shared<ApplyOptions>();
+    CLI::App* apply = grain->add_subcommand("apply", "Add grain with a profile's statistics to a clean image");
+    apply->add_option("input", p->input, "Clean image, in the encoding of the profile")->required();
+    apply->add_option("--profile", p->profile, "Grain profile (.json)")->required();
+    apply->add_option("-o,--out", p->output, "Output image")->required();
+    apply->add_option("--seed", p->seed, "Grain seed");
+    apply->add_option("--frame", p->frame, "Frame number (the grain changes with it)");
+    apply->add_option("--iscolorspace", p->colorspace, "The input's colour space (must be the profile's)");
+    apply->add_option("--threads", p->threads, "Worker threads, 0 = all cores; the result does not depend on it");
+    apply->callback([p] { run_apply(*p); });
+
+    auto c = std::make_shared<CompareOptions>();
+    CLI::App* compare = grain->add_subcommand(
+        "compare", "How well the grain of two images (or profiles) matches; exit 4 when outside the tolerances");
+    compare->add_option("a", c->a, "Image or grain profile (.json)")->required();
+    compare->add_option("b", c->b, "Image or grain profile (.json)")->required();
+    compare->add_option("--region-a", c->region_a, "Region X,Y,W,H of A")->delimiter(',')->expected(4);
+    compare->add_option("--region-b", c->region_b, "Region X,Y,W,H of B")->delimiter(',')->expected(4);
+    compare->add_option("--plot", c->plot, "Chart of both responses and spectra side by side (.png or .svg)");
+    compare->add_option("--max-response-error", c->tolerance.response_percent, "Tolerance, percent");
+    compare->add_option("--max-nps-distance", c->tolerance.nps_db, "Tolerance, dB");
+    compare->add_option("--max-correlation-difference", c->tolerance.correlation, "Tolerance");
+    add_analysis_flags(*compare, c->analysis);
+    compare->callback([c] { run_compare(*c); });
+
+    auto d = std::make_shared<PredictOptions>();
+    CLI::App* predict = grain->add_subcommand("predict", "Predict a profile from a stock scanned at a resolution");
+    predict->add_option("--stock", d->stock, "Built-in stock id or stock file")->required();
+    predict->add_option("--width", d->width_px, "Scan width in pixels (e.g. 4096)")->required()->check(CLI::Range(1, 1 << 20));
+    predict->add_option("--frame-width-mm", d->frame_width_mm, "Scanned frame width (default: the stock's format)")
+        ->check(CLI::PositiveNumber);
+    predict->add_option("-o,--out", d->output, "Grain profile (.json)")->required();
+    predict->callback([d] { run_predict(*d); });
+}
+
+}  // namespace darkroom::cli

@@ -1,0 +1,520 @@
+#include "core/plate/grain_analysis.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "core/parallel.h"
+
+namespace darkroom {
+
+namespace {
+
+constexpr double kRejectionSigmas = 3.5;   // a block further from the curve than this is not grain only
+// Blocks the autocorrelation is measured on: enough for a stable estimate at bounded cost
+// (fewer in the early passes, which only steer the block selection).
+constexpr int kMaxAutocorrelationBlocks = 256, kEarlyAutocorrelationBlocks = 48;
+// Minimal-residual steps of the fit-bias correction of the autocorrelation per pass.
+constexpr int kEarlySolverSteps = 3, kFinalSolverSteps = 10;
+constexpr int kLargeBlockPx = 64, kSmallBlockPx = 32, kLargeBlockMinCount = 200;
+// Texture and edges differ from grain in their short-range correlation as well as in
+// their variance: each block's own autocorrelation at these lags must be typical.
+constexpr int kShapeLags[][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}, {2, 0}, {0, 2}, {4, 0}, {0, 4}};
+constexpr int kShapeLagCount = sizeof(kShapeLags) / sizeof(kShapeLags[0]);
+constexpr double kShapeOutlierMads = 5.0;
+
+// Lags |dx|, |dy| <= radius, row-major from (-radius, -radius).
+struct LagGrid {
+    int radius = 0;
+    int side() const { return 2 * radius + 1; }
+    size_t size() const { return (size_t)side() * side(); }
+    size_t index(int dx, int dy) const { return (size_t)(dy + radius) * side() + dx + radius; }
+};
+
+// Sum over pixel pairs (p, p + d) inside a size x size block of f(p) g(p + d), for each lag d.
+std::vector<double> cross_correlation(const double* f, const double* g, int size, const LagGrid& lags) {
+    std::vector<double> out(lags.size(), 0.0);
+    for (int dy = -lags.radius; dy <= lags.radius; ++dy)
+        for (int dx = -lags.radius; dx <= lags.radius; ++dx) {
+            double sum = 0;
+            for (int y = std::max(0, -dy); y < std::min(size, size - dy); ++y) {
+                const double* fr = f + (size_t)y * size;
+                const double* gr = g + (size_t)(y + dy) * size + dx;
+                for (int x = std::max(0, -dx); x < std::min(size, size - dx); ++x) sum += fr[x] * gr[x];
+            }
+            out[lags.index(dx, dy)] = sum;
+        }
+    return out;
+}
+
+// cross_correlation(f, f): symmetric, so only half the lags are summed.
+std::vector<double> autocorrelation(const double* f, int size, const LagGrid& lags) {
+    std::vector<double> out(lags.size(), 0.0);
+    for (int dy = 0; dy <= lags.radius; ++dy)
+        for (int dx = dy == 0 ? 0 : -lags.radius; dx <= lags.radius; ++dx) {
+            double sum = 0;
+            for (int y = 0; y < size - dy; ++y) {
+                const double* fr = f + (size_t)y * size;
+                const double* gr = f + (size_t)(y + dy) * size + dx;
+                for (int x = std::max(0, -dx); x < std::min(size, size - dx); ++x) sum += fr[x] * gr[x];
+            }
+            out[lags.index(dx, dy)] = out[lags.index(-dx, -dy)] = sum;
+        }
+    return out;
+}
+
+double pair_count(int size, int dx, int dy) { return double(size - std::abs(dx)) * (size - std::abs(dy)); }
+
+// The least-squares quadratic surface on a block (1, x, y, x^2, xy, y^2), as an
+// orthonormal basis: it follows shading and gentle gradients, not edges or texture.
+struct SurfaceFit {
+    static constexpr int kTerms = 6;
+    int size = 0;
+    std::vector<double> basis[kTerms];
+    std::vector<double> basis_xcorr[kTerms][kTerms];  // cross_correlation(basis k, basis l)
+
+    SurfaceFit(int block, const LagGrid& lags) : size(block) {
+        const double centre = (block - 1) / 2.0;
+        for (int y = 0; y < block; ++y)
+            for (int x = 0; x < block; ++x) {
+                const double u = (x - centre) / block, v = (y - centre) / block;
+                const double monomial[kTerms] = {1, u, v, u * u, u * v, v * v};
+                for (int k = 0; k < kTerms; ++k) basis[k].push_back(monomial[k]);
+            }
+        // Gram-Schmidt, twice for accuracy.
+        for (int k = 0; k < kTerms; ++k)
+            for (int pass = 0; pass < 2; ++pass) {
+                for (int l = 0; l < k; ++l) {
+                    double dot = 0;
+                    for (size_t p = 0; p < basis[k].size(); ++p) dot += basis[k][p] * basis[l][p];
+                    for (size_t p = 0; p < basis[k].size(); ++p) basis[k][p] -= dot * basis[l][p];
+                }
+                double norm = 0;
+                for (double b : basis[k]) norm += b * b;
+                for (double& b : basis[k]) b /= std::sqrt(norm);
+            }
+        for (int k = 0; k < kTerms; ++k)
+            for (int l = 0; l < kTerms; ++l)
+                basis_xcorr[k][l] = cross_correlation(basis[k].data(), basis[l].data(), block, lags);
+    }
+
+    // What the fit does to grain of autocorrelation rho, in units of sigma^2: the
+    // expected residual sum of squares is N - trace, and the mean residual product at lag
+    // d is rho(d) - lag_bias[d].
+    struct Bias {
+        double trace = 0;
+        std::vector<double> lag_bias;
+    };
+    Bias bias(const std::vector<double>& rho, const LagGrid& lags) const {
+        const int n = size;
+        std::vector<double> applied[kTerms];  // R b_k
+        for (int k = 0; k < kTerms; ++k) {
+            applied[k].assign((size_t)n * n, 0.0);
+            for (int y = 0; y < n; ++y)
+                for (int x = 0; x < n; ++x) {
+                    double sum = 0;
+                    for (int dy = std::max(-lags.radius, -y); dy <= std::min(lags.radius, n - 1 - y); ++dy)
+                        for (int dx = std::max(-lags.radius, -x); dx <= std::min(lags.radius, n - 1 - x); ++dx)
+                            sum += rho[lags.index(dx, dy)] * basis[k][(size_t)(y + dy) * n + x + dx];
+                    applied[k][(size_t)y * n + x] = sum;
+                }
+        }
+        double m[kTerms][kTerms];
+        for (int k = 0; k < kTerms; ++k)
+            for (int l = 0; l < kTerms; ++l) {
+                m[k][l] = 0;
+                for (size_t p = 0; p < applied[l].size(); ++p) m[k][l] += basis[k][p] * applied[l][p];
+            }
+        Bias out;
+        for (int k = 0; k < kTerms; ++k) out.trace += m[k][k];
+        out.lag_bias.assign(lags.size(), 0.0);
+        for (int k = 0; k < kTerms; ++k) {
+            std::vector<double> bv = cross_correlation(basis[k].data(), applied[k].data(), n, lags);
+            // cross_correlation(v, b) at d is cross_correlation(b, v) at -d.
+            for (size_t i = 0; i < lags.size(); ++i) out.lag_bias[i] += bv[i] + bv[lags.size() - 1 - i];
+            for (int l = 0; l < kTerms; ++l)
+                for (size_t i = 0; i < lags.size(); ++i) out.lag_bias[i] -= m[k][l] * basis_xcorr[k][l][i];
+        }
+        for (int dy = -lags.radius; dy <= lags.radius; ++dy)
+            for (int dx = -lags.radius; dx <= lags.radius; ++dx) out.lag_bias[lags.index(dx, dy)] /= pair_count(n, dx, dy);
+        return out;
+    }
+};
+
+struct Block {
+    std::vector<double> residual;  // channel-planar: [c][y][x]
+    std::vector<double> level;     // mean per channel
+    std::vector<double> squares;   // residual sum of squares per channel
+    std::vector<double> shape;     // per channel, the block's autocorrelation at kShapeLags
+};
+
+double median_of(std::vector<double> v) {
+    if (v.empty()) return 0;
+    auto mid = v.begin() + v.size() / 2;
+    std::nth_element(v.begin(), mid, v.end());
+    return *mid;
+}
+
+// Variance against level: piecewise linear through the bins' (mean level, mean variance).
+struct LevelCurve {
+    std::vector<double> level, variance;
+    double at(double x) const {
+        if (level.empty()) return 0;
+        if (x <= level.front()) return variance.front();
+        if (x >= level.back()) return variance.back();
+        size_t i = std::upper_bound(level.begin(), level.end(), x) - level.begin();
+        double t = (x - level[i - 1]) / (level[i] - level[i - 1]);
+        return variance[i - 1] + t * (variance[i] - variance[i - 1]);
+    }
+};
+
+struct ChannelState {
+    std::vector<double> rho;        // autocorrelation on the lag grid
+    std::vector<char> accepted;     // per block
+    std::vector<char> typical;      // per block: its short-range correlation is grain-like
+    std::vector<int> bin;           // per block
+    LevelCurve curve;
+    double dof = 0;                 // N - trace: expected residual sum of squares / sigma^2
+};
+
+std::string format_level(double v) {
+    std::ostringstream s;
+    s.precision(4);
+    s << v;
+    return s.str();
+}
+
+}  // namespace
+
+GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const GrainAnalysisSettings& settings) {
+    if (frames.empty()) throw GrainAnalysisError("no plate to analyse");
+    int nch = settings.channels > 0 ? settings.channels : frames.front().channels;
+    for (const ConstImageView& f : frames)
+        if (f.channels < nch)
+            throw GrainAnalysisError("the frames have different channel counts (" + std::to_string(f.channels) +
+                                     " < " + std::to_string(nch) + ")");
+
+    auto count_blocks = [&](int size) {
+        long long n = 0;
+        for (const ConstImageView& f : frames) n += (long long)(f.window.width() / size) * (f.window.height() / size);
+        return n;
+    };
+    int bs = settings.block_size_px;
+    if (bs <= 0) bs = count_blocks(kLargeBlockPx) >= kLargeBlockMinCount ? kLargeBlockPx : kSmallBlockPx;
+    if (bs < 8) throw GrainAnalysisError("the block size must be at least 8 pixels");
+    if (count_blocks(bs) == 0) {
+        const Window& w = frames.front().window;
+        throw GrainAnalysisError("the plate is too small to estimate grain from: " + std::to_string(w.width()) + "x" +
+                                 std::to_string(w.height()) + " pixels holds no " + std::to_string(bs) + "x" +
+                                 std::to_string(bs) + " block");
+    }
+    const int npx = bs * bs;
+    LagGrid lags{bs / 4};
+    SurfaceFit surface(bs, lags);
+
+    // Cut every frame into blocks and fit the surface in each; blocks with a non-finite pixel
+    // are left out.
+    struct Origin {
+        size_t frame;
+        int x, y;
+    };
+    std::vector<Origin> origins;
+    for (size_t f = 0; f < frames.size(); ++f) {
+        const Window& w = frames[f].window;
+        for (int y = w.y0; y + bs <= w.y1; y += bs)
+            for (int x = w.x0; x + bs <= w.x1; x += bs) origins.push_back({f, x, y});
+    }
+    std::vector<Block> all(origins.size());
+    std::vector<char> finite(origins.size(), 1);
+    parallel_for(0, (int)origins.size(), settings.threads, [&](int begin, int end) {
+        for (int i = begin; i < end; ++i) {
+            const ConstImageView& view = frames[origins[i].frame];
+            Block& b = all[i];
+            b.residual.resize((size_t)nch * npx);
+            for (int c = 0; c < nch; ++c) {
+                double* r = &b.residual[(size_t)c * npx];
+                for (int y = 0; y < bs; ++y)
+                    for (int x = 0; x < bs; ++x) {
+                        float v = view.at(origins[i].x + x, origins[i].y + y)[c];
+                        if (!std::isfinite(v)) finite[i] = 0;
+                        r[y * bs + x] = v;
+                    }
+                double coef[SurfaceFit::kTerms] = {};
+                for (int k = 0; k < SurfaceFit::kTerms; ++k)
+                    for (int p = 0; p < npx; ++p) coef[k] += surface.basis[k][p] * r[p];
+                double mean = 0;
+                for (int p = 0; p < npx; ++p) mean += r[p];
+                b.level.push_back(mean / npx);
+                double squares = 0;
+                for (int p = 0; p < npx; ++p) {
+                    for (int k = 0; k < SurfaceFit::kTerms; ++k) r[p] -= coef[k] * surface.basis[k][p];
+                    squares += r[p] * r[p];
+                }
+                b.squares.push_back(squares);
+                for (const auto& lag : kShapeLags) {
+                    const int dx = lag[0], dy = lag[1];
+                    double sum = 0;
+                    for (int y = std::max(0, -dy); y < std::min(bs, bs - dy); ++y)
+                        for (int x = std::max(0, -dx); x < std::min(bs, bs - dx); ++x)
+                            sum += r[y * bs + x] * r[(y + dy) * bs + x + dx];
+                    b.shape.push_back(squares > 0 ? sum / pair_count(bs, dx, dy) / (squares / npx) : 0.0);
+                }
+            }
+        }
+    });
+    std::vector<Block> blocks;
+    for (size_t i = 0; i < all.size(); ++i)
+        if (finite[i]) blocks.push_back(std::move(all[i]));
+    if (blocks.empty()) throw GrainAnalysisError("every block of the plate holds non-finite pixels");
+    const int nblocks = (int)blocks.size();
+    const int nbins = std::max(1, settings.level_bins);
+
+    std::vector<ChannelState> state(nch);
+    for (int c = 0; c < nch; ++c) {
+        ChannelState& s = state[c];
+        s.rho.assign(lags.size(), 0.0);
+        s.rho[lags.index(0, 0)] = 1.0;
+        double lo = blocks[0].level[c], hi = lo;
+        for (const Block& b : blocks) lo = std::min(lo, b.level[c]), hi = std::max(hi, b.level[c]);
+        double width = (hi - lo) / nbins;
+        for (const Block& b : blocks)
+            s.bin.push_back(width > 0 ? std::min(nbins - 1, (int)((b.level[c] - lo) / width)) : 0);
+        s.accepted.assign(nblocks, 0);
+        s.typical.assign(nblocks, 1);
+    }
+
+    // Marks blocks whose short-range correlation is far from the median of the reference
+    // blocks (the quietest ones at first, then the accepted ones).
+    auto mark_typical = [&](int c, const std::vector<char>& reference_blocks) {
+        ChannelState& s = state[c];
+        std::vector<double> reference(kShapeLagCount);
+        for (int l = 0; l < kShapeLagCount; ++l) {
+            std::vector<double> values;
+            for (int i = 0; i < nblocks; ++i)
+                if (reference_blocks[i]) values.push_back(blocks[i].shape[(size_t)c * kShapeLagCount + l]);
+            reference[l] = median_of(values);
+        }
+        std::vector<double> distance(nblocks), reference_distance;
+        for (int i = 0; i < nblocks; ++i) {
+            double sum = 0;
+            for (int l = 0; l < kShapeLagCount; ++l) {
+                double d = blocks[i].shape[(size_t)c * kShapeLagCount + l] - reference[l];
+                sum += d * d;
+            }
+            distance[i] = std::sqrt(sum);
+            if (reference_blocks[i]) reference_distance.push_back(distance[i]);
+        }
+        double centre = median_of(reference_distance);
+        for (double& d : reference_distance) d = std::abs(d - centre);
+        double limit = centre + kShapeOutlierMads * 1.4826 * median_of(reference_distance);
+        for (int i = 0; i < nblocks; ++i) s.typical[i] = distance[i] <= limit;
+    };
+
+    // The curve through the accepted blocks of each bin that has any.
+    auto fit_curve = [&](int c) {
+        ChannelState& s = state[c];
+        std::vector<double> level(nbins, 0.0), variance(nbins, 0.0);
+        std::vector<int> count(nbins, 0);
+        for (int i = 0; i < nblocks; ++i)
+            if (s.accepted[i]) {
+                level[s.bin[i]] += blocks[i].level[c];
+                variance[s.bin[i]] += blocks[i].squares[c] / s.dof;
+                ++count[s.bin[i]];
+            }
+        LevelCurve curve;
+        for (int k = 0; k < nbins; ++k)
+            if (count[k] > 0) {
+                curve.level.push_back(level[k] / count[k]);
+                curve.variance.push_back(variance[k] / count[k]);
+            }
+        return curve;
+    };
+
+    for (int pass = 0; pass < 3; ++pass) {
+        parallel_for(0, nch, settings.threads, [&](int c_begin, int c_end) {
+            for (int c = c_begin; c < c_end; ++c) {
+                ChannelState& s = state[c];
+                SurfaceFit::Bias bias = surface.bias(s.rho, lags);
+                s.dof = npx - bias.trace;
+                double sum_rho2 = 0;
+                for (int dy = -lags.radius; dy <= lags.radius; ++dy)
+                    for (int dx = -lags.radius; dx <= lags.radius; ++dx)
+                        sum_rho2 += pair_count(bs, dx, dy) * s.rho[lags.index(dx, dy)] * s.rho[lags.index(dx, dy)];
+                const double relative_sd = std::sqrt(2.0 * sum_rho2) / s.dof;
+                if (pass == 0) {
+                    // No autocorrelation yet to say how much a grain-only block varies. Picture
+                    // content only adds variance, so start from the quietest quarter of each bin.
+                    std::vector<std::vector<std::pair<double, int>>> per_bin(nbins);
+                    for (int i = 0; i < nblocks; ++i) per_bin[s.bin[i]].push_back({blocks[i].squares[c], i});
+                    std::vector<char> quiet(nblocks, 0);
+                    for (auto& bin : per_bin) {
+                        std::sort(bin.begin(), bin.end());
+                        for (size_t j = 0; j < (bin.size() + 3) / 4; ++j) quiet[bin[j].second] = 1;
+                    }
+                    mark_typical(c, quiet);
+                    for (int i = 0; i < nblocks; ++i) s.accepted[i] = quiet[i] && s.typical[i];
+                    s.curve = fit_curve(c);
+                } else {
+                    mark_typical(c, s.accepted);
+                    for (int round = 0; round < 20; ++round) {
+                        bool changed = false;
+                        for (int i = 0; i < nblocks; ++i) {
+                            double expected = s.curve.at(blocks[i].level[c]);
+                            double variance = blocks[i].squares[c] / s.dof;
+                            bool keep = s.typical[i] && (expected > 0 ? std::abs(variance / expected - 1.0) <=
+                                                                            kRejectionSigmas * relative_sd
+                                                                      : variance <= 0);
+                            changed |= keep != (bool)s.accepted[i];
+                            s.accepted[i] = keep;
+                        }
+                        LevelCurve next = fit_curve(c);
+                        if (next.level.empty()) break;  // nothing is grain-only: reported below
+                        s.curve = next;
+                        if (!changed) break;
+                    }
+                }
+                // Autocorrelation of the accepted blocks (evenly thinned), each normalised by
+                // the curve's variance at its level.
+                std::vector<int> chosen;
+                for (int i = 0; i < nblocks; ++i)
+                    if (s.accepted[i] && s.curve.at(blocks[i].level[c]) > 0) chosen.push_back(i);
+                if (chosen.empty()) continue;
+                const int cap = pass == 2 ? kMaxAutocorrelationBlocks : kEarlyAutocorrelationBlocks;
+                int step = std::max<int>(1, (int)(chosen.size() + cap - 1) / cap);
+                std::vector<double> measured(lags.size(), 0.0);
+                int used = 0;
+                for (size_t j = 0; j < chosen.size(); j += step, ++used) {
+                    const Block& b = blocks[chosen[j]];
+                    const double* r = &b.residual[(size_t)c * npx];
+                    std::vector<double> products = autocorrelation(r, bs, lags);
+                    double scale = 1.0 / s.curve.at(b.level[c]);
+                    for (size_t l = 0; l < lags.size(); ++l) measured[l] += products[l] * scale;
+                }
+                for (int dy = -lags.radius; dy <= lags.radius; ++dy)
+                    for (int dx = -lags.radius; dx <= lags.radius; ++dx)
+                        measured[lags.index(dx, dy)] /= used * pair_count(bs, dx, dy);
+                // Undo the surface fit: solve rho - bias(rho) = measured (bias is linear in
+                // rho). The fit removes most low-frequency power, so plain fixed-point
+                // iteration converges slowly; minimal-residual steps converge in a few.
+                auto unbiased = [&](const std::vector<double>& x) {
+                    std::vector<double> b = surface.bias(x, lags).lag_bias;
+                    for (size_t l = 0; l < x.size(); ++l) b[l] = x[l] - b[l];
+                    return b;
+                };
+                std::vector<double> residual = unbiased(s.rho);
+                for (size_t l = 0; l < lags.size(); ++l) residual[l] = measured[l] - residual[l];
+                const int steps = pass == 2 ? kFinalSolverSteps : kEarlySolverSteps;
+                for (int step = 0; step < steps; ++step) {
+                    std::vector<double> a_residual = unbiased(residual);
+                    double num = 0, den = 0;
+                    for (size_t l = 0; l < lags.size(); ++l)
+                        num += residual[l] * a_residual[l], den += a_residual[l] * a_residual[l];
+                    if (den <= 0) break;
+                    const double alpha = num / den;
+                    for (size_t l = 0; l < lags.size(); ++l)
+                        s.rho[l] += alpha * residual[l], residual[l] -= alpha * a_residual[l];
+                }
+                const double centre = s.rho[lags.index(0, 0)];
+                for (double& v : s.rho) v /= centre;
+            }
+        });
+    }
+
+    // The final autocorrelation sets the fit's degrees of freedom for the final sigma.
+    for (ChannelState& s : state) s.dof = npx - surface.bias(s.rho, lags).trace;
+
+    // Results, and what could not be estimated.
+    GrainProfile profile;
+    profile.colorspace = settings.colorspace;
+    profile.encoding = settings.encoding;
+    profile.block_size_px = bs;
+    std::vector<std::string> failures;
+    for (int c = 0; c < nch; ++c) {
+        ChannelState& s = state[c];
+        GrainChannel ch;
+        ch.name = c < (int)settings.channel_names.size() ? settings.channel_names[c]
+                  : c < 3                                ? std::string(1, "RGB"[c])
+                                                         : "C" + std::to_string(c);
+        std::vector<double> level(nbins, 0.0), all_level(nbins, 0.0), variance(nbins, 0.0);
+        std::vector<int> accepted(nbins, 0), seen(nbins, 0);
+        for (int i = 0; i < nblocks; ++i) {
+            int k = s.bin[i];
+            ++seen[k];
+            all_level[k] += blocks[i].level[c];
+            if (!s.accepted[i]) continue;
+            ++accepted[k];
+            level[k] += blocks[i].level[c];
+            variance[k] += blocks[i].squares[c] / s.dof;
+        }
+        std::vector<SparseLevel> sparse;
+        for (int k = 0; k < nbins; ++k) {
+            if (seen[k] == 0) continue;
+            if (accepted[k] >= settings.min_blocks_per_level) {
+                ch.level.push_back(level[k] / accepted[k]);
+                ch.sigma.push_back(std::sqrt(variance[k] / accepted[k]));
+                ch.samples.push_back((long long)accepted[k] * npx);
+            } else {
+                sparse.push_back({ch.name, all_level[k] / seen[k], (long long)accepted[k] * npx});
+            }
+        }
+        // Below this fraction of the signal, what is left is float rounding, not grain.
+        double signal = 1.0;
+        for (double l : ch.level) signal = std::max(signal, std::abs(l));
+        bool no_grain = !ch.sigma.empty() && *std::max_element(ch.sigma.begin(), ch.sigma.end()) <= 1e-6 * signal;
+        if (ch.level.empty() || no_grain) {
+            std::string seen_levels;
+            for (const SparseLevel& l : sparse)
+                seen_levels += (seen_levels.empty() ? "" : ", ") + format_level(l.level) + " (" +
+                               std::to_string(l.samples / npx) + " grain-only blocks)";
+            failures.push_back(no_grain ? "channel " + ch.name + ": no grain (the residual is 0 in every flat block)"
+                                        : "channel " + ch.name + ": no level has " +
+                                              std::to_string(settings.min_blocks_per_level) + " grain-only blocks of " +
+                                              std::to_string(bs) + "x" + std::to_string(bs) + " px; levels seen: " +
+                                              seen_levels);
+        }
+        profile.sparse_levels.insert(profile.sparse_levels.end(), sparse.begin(), sparse.end());
+        ch.acf_radius = lags.radius;
+        ch.autocorrelation = s.rho;
+        profile.channels.push_back(std::move(ch));
+    }
+    if (!failures.empty()) {
+        std::string message = "cannot estimate the grain (too small or too little flat area; try more frames, a "
+                              "region with flat areas or --block-size 32):";
+        for (const std::string& f : failures) message += "\n  " + f;
+        throw GrainAnalysisError(message);
+    }
+
+    // Channel correlation at lag 0, pooled over blocks that are grain-only in every channel.
+    profile.channel_correlation.assign((size_t)nch * nch, 0.0);
+    std::vector<double> numerator((size_t)nch * nch, 0.0), denominator((size_t)nch * nch, 0.0);
+    for (int i = 0; i < nblocks; ++i) {
+        bool everywhere = true;
+        for (int c = 0; c < nch; ++c) everywhere &= state[c].accepted[i] && state[c].curve.at(blocks[i].level[c]) > 0;
+        if (!everywhere) continue;
+        ++profile.blocks_used;
+        for (int a = 0; a < nch; ++a)
+            for (int b = 0; b < nch; ++b) {
+                const double* ra = &blocks[i].residual[(size_t)a * npx];
+                const double* rb = &blocks[i].residual[(size_t)b * npx];
+                double sum = 0;
+                for (int p = 0; p < npx; ++p) sum += ra[p] * rb[p];
+                numerator[(size_t)a * nch + b] +=
+                    sum / std::sqrt(state[a].curve.at(blocks[i].level[a]) * state[b].curve.at(blocks[i].level[b]));
+                denominator[(size_t)a * nch + b] += std::sqrt(state[a].dof * state[b].dof);
+            }
+    }
+    if (profile.blocks_used == 0)
+        throw GrainAnalysisError("no block is grain-only in every channel: cannot measure the channel correlation");
+    for (int a = 0; a < nch; ++a)
+        for (int b = 0; b < nch; ++b) {
+            double r = a == b ? 1.0 : numerator[(size_t)a * nch + b] / denominator[(size_t)a * nch + b];
+            profile.channel_correlation[(size_t)a * nch + b] = std::clamp(r, -1.0, 1.0);
+        }
+    // Symmetric by construction up to rounding; make it exact for the file format.
+    for (int a = 0; a < nch; ++a)
+        for (int b = 0; b < a; ++b)
+            profile.channel_correlation[(size_t)b * nch + a] = profile.channel_correlation[(size_t)a * nch + b];
+    return profile;
+}
+
+}  // namespace darkroom

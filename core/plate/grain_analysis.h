@@ -1,0 +1,49 @@
+// Measuring a plate's grain: the inverse of grain_synthesis.
+//
+// The plate is cut into square blocks. In each block a least-squares quadratic surface
+// stands in for the picture (shading, gentle gradients), and the residual is grain plus
+// whatever the surface cannot follow (edges, texture). Blocks are binned by their level;
+// a block is kept only while it looks like grain alone:
+// - its residual variance is within 3.5 standard deviations (those of a sample variance
+//   of that many correlated pixels) of the response curve at its level, and
+// - its own autocorrelation at a few short lags is typical of the kept blocks.
+// From the kept blocks:
+// - sigma per level: residual sum of squares / (N - tr(P R)), the exact expectation of a
+//   fit residual for grain with autocorrelation R (P projects onto the surface);
+// - the autocorrelation: residual products at each lag, normalised by sigma^2 and
+//   corrected for the fit the same way (a linear solve, the correction being linear in R);
+// - the channel correlation: the pooled correlation of the residuals at lag 0.
+// Limits: a plate textured alike everywhere cannot be told from coarse grain this way.
+// Several frames pool their blocks.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/image.h"
+#include "core/plate/grain_profile.h"
+
+namespace darkroom {
+
+struct GrainAnalysisSettings {
+    int channels = 0;            // channels to analyse (the first ones); 0 = all
+    std::vector<std::string> channel_names;  // default R, G, B, then C3, C4, ...
+    int block_size_px = 0;       // 0: 64 when that gives at least 200 blocks, else 32
+    int level_bins = 16;         // equal-width bins between the lowest and highest block level
+    int min_blocks_per_level = 4;  // fewer grain-only blocks: the level is reported as sparse
+    std::string colorspace;
+    SignalEncoding encoding = SignalEncoding::linear;
+    int threads = 0;
+};
+
+// A plate that cannot be analysed; the message says what was missing (size, flat areas,
+// which channels and levels).
+struct GrainAnalysisError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+// Each view is one frame (or the region of it to analyse).
+GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const GrainAnalysisSettings& settings);
+
+}  // namespace darkroom

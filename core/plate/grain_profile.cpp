@@ -1,0 +1,219 @@
+#include "core/plate/grain_profile.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <sstream>
+
+#include "core/plate/noise_spectrum.h"
+
+namespace darkroom {
+
+using nlohmann::json;
+
+const char* encoding_name(SignalEncoding e) {
+    switch (e) {
+        case SignalEncoding::linear: return "linear";
+        case SignalEncoding::log: return "log";
+        case SignalEncoding::display: return "display";
+    }
+    return "linear";
+}
+
+double GrainChannel::sigma_at(double x) const {
+    if (x <= level.front()) return sigma.front();
+    if (x >= level.back()) return sigma.back();
+    size_t i = std::upper_bound(level.begin(), level.end(), x) - level.begin();
+    double t = (x - level[i - 1]) / (level[i] - level[i - 1]);
+    return sigma[i - 1] + t * (sigma[i] - sigma[i - 1]);
+}
+
+double GrainChannel::acf(int dx, int dy) const {
+    if (std::abs(dx) > acf_radius || std::abs(dy) > acf_radius) return 0.0;
+    return autocorrelation[(size_t)(dy + acf_radius) * (2 * acf_radius + 1) + dx + acf_radius];
+}
+
+namespace {
+
+[[noreturn]] void fail(const std::string& origin, const std::string& field, const std::string& problem) {
+    throw GrainProfileError(origin + ": field '" + field + "': " + problem);
+}
+
+// The JSON value at `key`, or an error naming the field.
+const json& member(const json& obj, const std::string& key, const std::string& origin, const std::string& path) {
+    std::string field = path.empty() ? key : path + "." + key;
+    if (!obj.is_object()) fail(origin, path, "expected an object");
+    auto it = obj.find(key);
+    if (it == obj.end()) fail(origin, field, "missing");
+    return *it;
+}
+
+std::vector<double> number_array(const json& v, const std::string& origin, const std::string& field) {
+    if (!v.is_array() || v.empty()) fail(origin, field, "expected a non-empty array of numbers");
+    std::vector<double> out;
+    for (size_t i = 0; i < v.size(); ++i) {
+        if (!v[i].is_number() || !std::isfinite(v[i].get<double>()))
+            fail(origin, field + "[" + std::to_string(i) + "]", "expected a finite number, got " + v[i].dump());
+        out.push_back(v[i].get<double>());
+    }
+    return out;
+}
+
+std::string text_field(const json& obj, const std::string& key, const std::string& origin, const std::string& path) {
+    const json& v = member(obj, key, origin, path);
+    if (!v.is_string()) fail(origin, path.empty() ? key : path + "." + key, "expected a string, got " + v.dump());
+    return v.get<std::string>();
+}
+
+}  // namespace
+
+void validate_grain_profile(const GrainProfile& p, const std::string& origin) {
+    const size_t n = p.channels.size();
+    if (n == 0) fail(origin, "channels", "no channels");
+    for (size_t c = 0; c < n; ++c) {
+        const GrainChannel& ch = p.channels[c];
+        const std::string at = "channels[" + std::to_string(c) + "]";
+        if (ch.level.empty()) fail(origin, at + ".response.level", "no levels: the channel has no usable response");
+        for (size_t i = 1; i < ch.level.size(); ++i)
+            if (!(ch.level[i] > ch.level[i - 1]))
+                fail(origin, at + ".response.level", "levels must be strictly increasing");
+        if (ch.sigma.size() != ch.level.size())
+            fail(origin, at + ".response.sigma",
+                 std::to_string(ch.sigma.size()) + " values for " + std::to_string(ch.level.size()) + " levels");
+        if (!ch.samples.empty() && ch.samples.size() != ch.level.size())
+            fail(origin, at + ".response.samples",
+                 std::to_string(ch.samples.size()) + " values for " + std::to_string(ch.level.size()) + " levels");
+        for (size_t i = 0; i < ch.level.size(); ++i) {
+            if (!std::isfinite(ch.sigma[i]) || ch.sigma[i] < 0)
+                fail(origin, at + ".response.sigma[" + std::to_string(i) + "]", "must be finite and >= 0");
+        }
+        const size_t side = 2 * (size_t)ch.acf_radius + 1;
+        if (ch.acf_radius < 0 || ch.autocorrelation.size() != side * side)
+            fail(origin, at + ".autocorrelation.values",
+                 "expected (2 radius + 1)^2 = " + std::to_string(side * side) + " values, got " +
+                     std::to_string(ch.autocorrelation.size()));
+        if (std::abs(ch.acf(0, 0) - 1.0) > 1e-6)
+            fail(origin, at + ".autocorrelation.values", "the value at lag 0 must be 1 (normalised)");
+    }
+    if (p.channel_correlation.size() != n * n)
+        fail(origin, "channel_correlation", "expected a " + std::to_string(n) + " x " + std::to_string(n) + " matrix");
+    for (size_t a = 0; a < n; ++a)
+        for (size_t b = 0; b < n; ++b) {
+            double v = p.correlation((int)a, (int)b);
+            std::string field = "channel_correlation[" + std::to_string(a) + "][" + std::to_string(b) + "]";
+            if (!std::isfinite(v) || std::abs(v) > 1.0) fail(origin, field, "must be within [-1, 1]");
+            if (a == b && v != 1.0) fail(origin, field, "the diagonal must be 1");
+            if (std::abs(v - p.correlation((int)b, (int)a)) > 1e-9) fail(origin, field, "the matrix must be symmetric");
+        }
+}
+
+GrainProfile parse_grain_profile_json(const std::string& text, const std::string& origin) {
+    json doc;
+    try {
+        doc = json::parse(text);
+    } catch (const json::exception& e) {
+        throw GrainProfileError(origin + ": not valid JSON: " + e.what());
+    }
+    if (text_field(doc, "format", origin, "") != "darkroom-grain-profile")
+        fail(origin, "format", "expected \"darkroom-grain-profile\"");
+    const json& version = member(doc, "version", origin, "");
+    if (!version.is_number_integer() || version.get<int>() != GrainProfile::kFormatVersion)
+        fail(origin, "version", "expected " + std::to_string(GrainProfile::kFormatVersion) + ", got " + version.dump());
+
+    GrainProfile p;
+    if (doc.contains("colorspace")) p.colorspace = text_field(doc, "colorspace", origin, "");
+    std::string encoding = text_field(doc, "encoding", origin, "");
+    if (encoding == "linear") p.encoding = SignalEncoding::linear;
+    else if (encoding == "log") p.encoding = SignalEncoding::log;
+    else if (encoding == "display") p.encoding = SignalEncoding::display;
+    else fail(origin, "encoding", "expected linear, log or display, got \"" + encoding + "\"");
+    if (doc.contains("sources"))
+        for (const json& s : doc["sources"])
+            if (s.is_string()) p.sources.push_back(s.get<std::string>());
+
+    const json& channels = member(doc, "channels", origin, "");
+    if (!channels.is_array() || channels.empty()) fail(origin, "channels", "expected a non-empty array");
+    for (size_t c = 0; c < channels.size(); ++c) {
+        const std::string at = "channels[" + std::to_string(c) + "]";
+        const json& cj = channels[c];
+        GrainChannel ch;
+        ch.name = text_field(cj, "name", origin, at);
+        const json& response = member(cj, "response", origin, at);
+        ch.level = number_array(member(response, "level", origin, at + ".response"), origin, at + ".response.level");
+        ch.sigma = number_array(member(response, "sigma", origin, at + ".response"), origin, at + ".response.sigma");
+        if (response.contains("samples"))
+            for (double s : number_array(response["samples"], origin, at + ".response.samples"))
+                ch.samples.push_back((long long)s);
+        const json& acf = member(cj, "autocorrelation", origin, at);
+        const json& radius = member(acf, "radius", origin, at + ".autocorrelation");
+        if (!radius.is_number_integer() || radius.get<int>() < 0 || radius.get<int>() > 64)
+            fail(origin, at + ".autocorrelation.radius", "expected an integer in [0, 64], got " + radius.dump());
+        ch.acf_radius = radius.get<int>();
+        ch.autocorrelation =
+            number_array(member(acf, "values", origin, at + ".autocorrelation"), origin, at + ".autocorrelation.values");
+        p.channels.push_back(std::move(ch));
+    }
+    const json& corr = member(doc, "channel_correlation", origin, "");
+    p.channel_correlation.clear();
+    if (!corr.is_array() || corr.size() != p.channels.size())
+        fail(origin, "channel_correlation", "expected one row per channel");
+    for (size_t a = 0; a < corr.size(); ++a) {
+        std::vector<double> row = number_array(corr[a], origin, "channel_correlation[" + std::to_string(a) + "]");
+        if (row.size() != p.channels.size())
+            fail(origin, "channel_correlation[" + std::to_string(a) + "]", "expected one value per channel");
+        p.channel_correlation.insert(p.channel_correlation.end(), row.begin(), row.end());
+    }
+    if (doc.contains("analysis")) {
+        const json& a = doc["analysis"];
+        p.block_size_px = a.value("block_size_px", 0);
+        p.blocks_used = a.value("blocks_used", 0LL);
+        for (const json& s : a.value("sparse_levels", json::array()))
+            p.sparse_levels.push_back({s.value("channel", ""), s.value("level", 0.0), s.value("samples", 0LL)});
+    }
+    validate_grain_profile(p, origin);
+    return p;
+}
+
+GrainProfile load_grain_profile_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw GrainProfileError(path + ": cannot open grain profile");
+    std::stringstream text;
+    text << in.rdbuf();
+    return parse_grain_profile_json(text.str(), path);
+}
+
+std::string grain_profile_to_json(const GrainProfile& p) {
+    json doc = {{"format", "darkroom-grain-profile"},
+                {"version", GrainProfile::kFormatVersion},
+                {"colorspace", p.colorspace},
+                {"encoding", encoding_name(p.encoding)},
+                {"sources", p.sources}};
+    json channels = json::array();
+    for (const GrainChannel& ch : p.channels) {
+        json response = {{"level", ch.level}, {"sigma", ch.sigma}};
+        if (!ch.samples.empty()) response["samples"] = ch.samples;
+        channels.push_back({{"name", ch.name},
+                            {"response", response},
+                            {"autocorrelation", {{"radius", ch.acf_radius}, {"values", ch.autocorrelation}}},
+                            {"derived",
+                             {{"noise_equivalent_area_px2", noise_equivalent_area_px2(ch)},
+                              {"half_power_cycles_per_px", half_power_frequency(radial_power_spectrum(ch))}}}});
+    }
+    doc["channels"] = channels;
+    json corr = json::array();
+    const size_t n = p.channels.size();
+    for (size_t a = 0; a < n; ++a)
+        corr.push_back(std::vector<double>(p.channel_correlation.begin() + a * n, p.channel_correlation.begin() + (a + 1) * n));
+    doc["channel_correlation"] = corr;
+    if (p.block_size_px > 0) {
+        json sparse = json::array();
+        for (const SparseLevel& s : p.sparse_levels)
+            sparse.push_back({{"channel", s.channel}, {"level", s.level}, {"samples", s.samples}});
+        doc["analysis"] = {{"block_size_px", p.block_size_px}, {"blocks_used", p.blocks_used}, {"sparse_levels", sparse}};
+    }
+    return doc.dump(1);
+}
+
+}  // namespace darkroom

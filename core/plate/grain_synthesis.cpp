@@ -1,0 +1,114 @@
+#include "core/plate/grain_synthesis.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "core/parallel.h"
+#include "core/random.h"
+
+namespace darkroom {
+
+namespace {
+
+// Lower-triangular L with L L^T = m (n x n, row-major), or false if m is not positive
+// semi-definite. A zero pivot (fully correlated channels) gives a zero column.
+bool cholesky(const std::vector<double>& m, int n, std::vector<double>& l) {
+    l.assign((size_t)n * n, 0.0);
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j <= i; ++j) {
+            double sum = m[(size_t)i * n + j];
+            for (int k = 0; k < j; ++k) sum -= l[(size_t)i * n + k] * l[(size_t)j * n + k];
+            if (i == j) {
+                if (sum < -1e-9) return false;
+                l[(size_t)i * n + i] = std::sqrt(std::max(sum, 0.0));
+            } else {
+                double pivot = l[(size_t)j * n + j];
+                l[(size_t)i * n + j] = pivot > 1e-6 ? sum / pivot : 0.0;
+            }
+        }
+    return true;
+}
+
+}  // namespace
+
+GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile) {
+    validate_grain_profile(profile, "grain profile");
+    GrainSynthesisPlan plan;
+    plan.profile = profile;
+    const int n = (int)profile.channels.size();
+    for (const GrainChannel& ch : profile.channels) {
+        plan.kernels.push_back(design_grain_kernel(ch));
+        plan.halo_px = std::max(plan.halo_px, plan.kernels.back().radius);
+    }
+    // Filtering mixed white noise scales the lag-0 correlation of channels a and b by the
+    // overlap of their kernels, so mix with target / overlap.
+    std::vector<double> mix_correlation((size_t)n * n);
+    for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) {
+            const GrainKernel &ka = plan.kernels[a], &kb = plan.kernels[b];
+            int r = std::min(ka.radius, kb.radius);
+            double overlap = 0;
+            for (int y = -r; y <= r; ++y)
+                for (int x = -r; x <= r; ++x) overlap += ka.at(x, y) * kb.at(x, y);
+            double m = a == b ? 1.0 : profile.correlation(a, b) / std::max(overlap, 1e-6);
+            mix_correlation[(size_t)a * n + b] = std::clamp(m, -1.0, 1.0);
+        }
+    // A measured matrix can be slightly indefinite (or ask for more correlation than the
+    // kernels allow): shrink the off-diagonal terms until it factors.
+    while (!cholesky(mix_correlation, n, plan.mixing))
+        for (int a = 0; a < n; ++a)
+            for (int b = 0; b < n; ++b)
+                if (a != b) mix_correlation[(size_t)a * n + b] *= 0.99;
+    return plan;
+}
+
+void apply_grain_profile(const GrainSynthesisPlan& plan, const ImageView& image, uint64_t seed, int frame,
+                         int threads) {
+    const int n = (int)plan.profile.channels.size();
+    if (image.channels < n)
+        throw std::invalid_argument("the grain profile has " + std::to_string(n) + " channels, the image only " +
+                                    std::to_string(image.channels));
+    const Window w = image.window;
+    if (w.empty()) return;
+    const Window noise_window = w.grown(plan.halo_px);
+    // Correlated white noise over the window plus the kernels' halo.
+    std::vector<Plane> mixed(n, Plane(noise_window));
+    parallel_for(noise_window.y0, noise_window.y1, threads, [&](int y_begin, int y_end) {
+        std::vector<double> white(n);
+        for (int y = y_begin; y < y_end; ++y)
+            for (int x = noise_window.x0; x < noise_window.x1; ++x) {
+                for (int c = 0; c < n; ++c)
+                    white[c] = standard_normal(NoiseKey{seed, frame, kPlateGrainStream + (uint32_t)c}, x, y);
+                for (int c = 0; c < n; ++c) {
+                    double sum = 0;
+                    for (int j = 0; j <= c; ++j) sum += plan.mixing[(size_t)c * n + j] * white[j];
+                    mixed[c].at(x, y) = float(sum);
+                }
+            }
+    });
+    parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
+        for (int y = y_begin; y < y_end; ++y)
+            for (int x = w.x0; x < w.x1; ++x) {
+                float* px = image.at(x, y);
+                for (int c = 0; c < n; ++c) {
+                    if (!std::isfinite(px[c])) continue;
+                    const GrainKernel& k = plan.kernels[c];
+                    double g = 0;
+                    for (int dy = -k.radius; dy <= k.radius; ++dy) {
+                        const float* row = mixed[c].row(y + dy) + (x - noise_window.x0);
+                        const double* taps = &k.taps[(size_t)(dy + k.radius) * (2 * k.radius + 1) + k.radius];
+                        for (int dx = -k.radius; dx <= k.radius; ++dx) g += taps[dx] * row[dx];
+                    }
+                    px[c] = float(px[c] + plan.profile.channels[c].sigma_at(px[c]) * g);
+                }
+            }
+    });
+}
+
+void apply_grain_profile(const GrainProfile& profile, const ImageView& image, uint64_t seed, int frame, int threads) {
+    apply_grain_profile(plan_grain_synthesis(profile), image, seed, frame, threads);
+}
+
+}  // namespace darkroom

@@ -1,0 +1,42 @@
+// Grain with a profile's statistics, added to a clean image.
+//
+// Per channel c: out = in + sigma_c(in) * g_c, where g_c is unit-variance noise with the
+// channel's autocorrelation (white noise through the zero-phase kernel of
+// design_grain_kernel) and the channels' grain is correlated at lag 0 as the profile says
+// (the white fields are mixed by a Cholesky factor before filtering). The white noise is
+// a pure function of (seed, frame, channel, absolute pixel), so any window of a frame gets
+// the pixels of that window of the full frame, whatever the thread count.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/image.h"
+#include "core/plate/grain_profile.h"
+#include "core/plate/noise_spectrum.h"
+
+namespace darkroom {
+
+// Noise streams of plate grain (channel c uses kPlateGrainStream + c), distinct from the
+// film model's layer streams.
+constexpr uint32_t kPlateGrainStream = 0x706c0000u;
+
+// What synthesis precomputes from a profile: reuse it across frames and tiles.
+struct GrainSynthesisPlan {
+    GrainProfile profile;
+    std::vector<GrainKernel> kernels;  // per channel
+    std::vector<double> mixing;        // channels x channels, lower triangular, row-major
+    int halo_px = 0;                   // the largest kernel radius: noise is drawn this far outside
+};
+
+GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile);
+
+// Adds grain to the first profile.channels.size() channels of `image` in place (further
+// channels, e.g. alpha, are left alone). `image.window` is its place in the frame. Pixels
+// are read only at their own position, so the caller needs no image halo; non-finite
+// pixels are left unchanged. Throws std::invalid_argument if the image has fewer channels.
+void apply_grain_profile(const GrainSynthesisPlan& plan, const ImageView& image, uint64_t seed, int frame,
+                         int threads);
+void apply_grain_profile(const GrainProfile& profile, const ImageView& image, uint64_t seed, int frame, int threads);
+
+}  // namespace darkroom

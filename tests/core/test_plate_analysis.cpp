@@ -1,0 +1,113 @@
+// Grain analysis and comparison: the null test, the negative controls, picture content,
+// and bad plates.
+#include <catch2/catch.hpp>
+
+#include "core/plate/grain_analysis.h"
+#include "core/plate/grain_compare.h"
+#include "core/plate/grain_synthesis.h"
+#include "tests/core/plate_test_support.h"
+
+using namespace darkroom;
+using namespace darkroom::test;
+
+namespace {
+
+const double kLo = 0.1, kHi = 0.9;
+
+GrainProfile medium_grain(double amount = 1.0, double size = 1.0) {
+    return known_profile({{0.008 * amount, 0.01 * amount, 1.0, 1.2 * size},
+                          {0.006 * amount, 0.008 * amount, 1.0, 1.0 * size},
+                          {0.010 * amount, 0.012 * amount, 1.0, 1.4 * size}},
+                         {1, 0.5, 0.3, 0.5, 1, 0.4, 0.3, 0.4, 1}, SignalEncoding::log, kLo, kHi);
+}
+
+GrainProfile measure(Image plate, const GrainProfile& grain, uint64_t seed) {
+    apply_grain_profile(grain, plate.view(), seed, 0, 0);
+    GrainAnalysisSettings settings;
+    settings.encoding = grain.encoding;
+    return analyze_grain({plate.view()}, settings);
+}
+
+std::string describe(const GrainMatch& m) {
+    std::string s;
+    for (const ChannelMatch& c : m.channels)
+        s += c.name + ": " + std::to_string(c.response_error_percent) + " %, " + std::to_string(c.nps_distance_db) +
+             " dB; ";
+    return s + "correlation " + std::to_string(m.max_correlation_difference);
+}
+
+std::string analysis_error(const std::vector<ConstImageView>& frames, GrainAnalysisSettings settings = {}) {
+    try {
+        analyze_grain(frames, settings);
+    } catch (const GrainAnalysisError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+}  // namespace
+
+TEST_CASE("null test: two seeds of the same grain match, 20 % more grain or 20 % larger grain does not",
+          "[plate][compare]") {
+    const Image plate = flat_patches(512, 512, 3, kLo, kHi);
+    GrainProfile seed1 = measure(plate, medium_grain(), 1);
+    GrainProfile seed2 = measure(plate, medium_grain(), 2);
+    GrainMatch null = compare_grain_profiles(seed1, seed2);
+    INFO("null: " << describe(null));
+    CHECK(null.passes());
+
+    GrainMatch more = compare_grain_profiles(seed1, measure(plate, medium_grain(1.2, 1.0), 2));
+    INFO("amount +20 %: " << describe(more));
+    CHECK_FALSE(more.passes());
+    for (const ChannelMatch& c : more.channels) CHECK(c.response_error_percent == Approx(20).margin(3));
+
+    GrainMatch larger = compare_grain_profiles(seed1, measure(plate, medium_grain(1.0, 1.2), 2));
+    INFO("size +20 %: " << describe(larger));
+    CHECK_FALSE(larger.passes());
+    for (const ChannelMatch& c : larger.channels) {
+        CHECK(c.nps_distance_db > 1.0);
+        CHECK(c.half_power_b < c.half_power_a);  // larger grain, lower frequencies
+    }
+}
+
+TEST_CASE("analysis ignores picture content: edges and texture give the profile of flat patches",
+          "[plate][analysis]") {
+    GrainProfile flat = measure(flat_patches(512, 512, 3, kLo, kHi), medium_grain(), 1);
+    GrainProfile busy = measure(picture_with_content(512, 512, 3, kLo, kHi), medium_grain(), 1);
+    GrainMatch m = compare_grain_profiles(flat, busy);
+    INFO(describe(m));
+    CHECK(m.passes());
+}
+
+TEST_CASE("several frames pool their blocks", "[plate][analysis]") {
+    Image a = flat_patches(256, 256, 3, kLo, kHi), b = a;
+    apply_grain_profile(medium_grain(), a.view(), 5, 1, 0);
+    apply_grain_profile(medium_grain(), b.view(), 5, 2, 0);
+    GrainAnalysisSettings settings;
+    settings.block_size_px = 32;
+    GrainProfile one = analyze_grain({a.view()}, settings);
+    GrainProfile two = analyze_grain({a.view(), b.view()}, settings);
+    long long samples_one = 0, samples_two = 0;
+    for (long long s : one.channels[0].samples) samples_one += s;
+    for (long long s : two.channels[0].samples) samples_two += s;
+    CHECK(samples_two > samples_one * 3 / 2);
+}
+
+TEST_CASE("a plate that cannot be analysed gets a message saying what is missing", "[plate][analysis][bad-input]") {
+    Image tiny(20, 20, 3, 0.5f);
+    CHECK_THAT(analysis_error({tiny.view()}), Catch::Contains("too small") && Catch::Contains("20x20"));
+
+    // One channel (B) flat and grain-free, the others with grain.
+    Image no_grain = flat_patches(256, 256, 3, kLo, kHi);
+    GrainProfile two = known_profile({{0.01, 0, 1, 0}, {0.01, 0, 1, 0}, {0, 0, 1, 0}}, {1, 0, 0, 0, 1, 0, 0, 0, 1},
+                                     SignalEncoding::log, kLo, kHi);
+    apply_grain_profile(two, no_grain.view(), 1, 0, 0);
+    std::string message = analysis_error({no_grain.view()});
+    CHECK_THAT(message, Catch::Contains("channel B: no grain"));
+    CHECK_THAT(message, !Catch::Contains("channel R"));
+
+    GrainAnalysisSettings strict;
+    strict.min_blocks_per_level = 1000;
+    CHECK_THAT(analysis_error({flat_patches(256, 256, 3, kLo, kHi).view()}, strict),
+               Catch::Contains("channel R: no level has 1000 grain-only blocks") && Catch::Contains("levels seen"));
+}

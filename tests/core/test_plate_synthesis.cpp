@@ -1,0 +1,96 @@
+// Grain synthesis from a profile: the statistics it promises, and determinism.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "core/plate/grain_synthesis.h"
+#include "tests/core/plate_test_support.h"
+
+using namespace darkroom;
+using namespace darkroom::test;
+
+namespace {
+
+// Grain of channel c on a flat image: pixel minus the flat level.
+struct FlatGrain {
+    Image image;
+    double level;
+    double covariance(int a, int b, int dx, int dy) const {
+        double sum = 0;
+        long long n = 0;
+        const Window& w = image.window;
+        for (int y = w.y0; y < w.y1 - std::abs(dy); ++y)
+            for (int x = w.x0 + std::max(0, -dx); x < w.x1 - std::max(0, dx); ++x) {
+                sum += (image.at(x, y)[a] - level) * (image.at(x + dx, y + dy)[b] - level);
+                ++n;
+            }
+        return sum / n;
+    }
+};
+
+FlatGrain flat_grain(const GrainProfile& p, double level, uint64_t seed = 7, int frame = 3) {
+    FlatGrain g{Image(384, 384, (int)p.channels.size(), float(level)), level};
+    apply_grain_profile(p, g.image.view(), seed, frame, 2);
+    return g;
+}
+
+}  // namespace
+
+TEST_CASE("synthesised grain has the profile's sigma, autocorrelation and channel correlation",
+          "[plate][synthesis]") {
+    // Different grain sizes per channel: the mixing must still give the asked correlation.
+    GrainProfile p = known_profile({{0.01, 0.02, 1.0, 1.2}, {0.02, -0.01, 1.0, 0.6}, {0.015, 0.0, 1.0, 2.0}},
+                                   {1, 0.6, -0.3, 0.6, 1, 0.2, -0.3, 0.2, 1}, SignalEncoding::log, 0.0, 1.0);
+    const double level = 0.5;
+    FlatGrain g = flat_grain(p, level);
+    for (int c = 0; c < 3; ++c) {
+        double sigma = p.channels[c].sigma_at(level);
+        CHECK(std::sqrt(g.covariance(c, c, 0, 0)) == Approx(sigma).epsilon(0.04));
+        for (auto [dx, dy] : {std::pair{1, 0}, {0, 1}, {2, 1}})
+            CHECK(g.covariance(c, c, dx, dy) / g.covariance(c, c, 0, 0) == Approx(p.channels[c].acf(dx, dy)).margin(0.03));
+    }
+    for (int a = 0; a < 3; ++a)
+        for (int b = a + 1; b < 3; ++b)
+            CHECK(g.covariance(a, b, 0, 0) / std::sqrt(g.covariance(a, a, 0, 0) * g.covariance(b, b, 0, 0)) ==
+                  Approx(p.correlation(a, b)).margin(0.03));
+}
+
+TEST_CASE("the grain's amount follows the response curve at each pixel's level", "[plate][synthesis]") {
+    GrainProfile p = known_profile({{0.002, 0.03, 1.0, 0.0}}, {1}, SignalEncoding::linear, 0.0, 1.0);
+    for (double level : {0.1, 0.8}) {
+        FlatGrain g = flat_grain(p, level);
+        CHECK(std::sqrt(g.covariance(0, 0, 0, 0)) == Approx(0.002 + 0.03 * level).epsilon(0.03));
+    }
+}
+
+TEST_CASE("synthesised grain is a function of seed, frame and absolute pixel only", "[plate][synthesis][determinism]") {
+    GrainProfile p = known_profile({{0.01, 0.0, 1.0, 1.5}, {0.01, 0.0, 1.0, 0.5}, {0.01, 0.0, 1.0, 0.0}},
+                                   {1, 0.5, 0.2, 0.5, 1, 0.3, 0.2, 0.3, 1}, SignalEncoding::log, 0.0, 1.0);
+    Image full(200, 150, 4, 0.4f);  // the fourth channel (alpha) must be left alone
+    apply_grain_profile(p, full.view(), 11, 1001, 1);
+    Image part(Window{37, 21, 37 + 90, 21 + 64}, 4, 0.4f);
+    apply_grain_profile(p, part.view(), 11, 1001, 3);
+    for (int y = part.window.y0; y < part.window.y1; ++y)
+        for (int x = part.window.x0; x < part.window.x1; ++x)
+            for (int c = 0; c < 4; ++c) REQUIRE(part.at(x, y)[c] == full.at(x, y)[c]);
+    CHECK(full.at(5, 5)[3] == 0.4f);
+
+    Image other_frame(200, 150, 4, 0.4f), other_seed(200, 150, 4, 0.4f), again(200, 150, 4, 0.4f);
+    apply_grain_profile(p, other_frame.view(), 11, 1002, 2);
+    apply_grain_profile(p, other_seed.view(), 12, 1001, 2);
+    apply_grain_profile(p, again.view(), 11, 1001, 2);
+    CHECK(again.pixels == full.pixels);
+    CHECK(other_frame.pixels != full.pixels);
+    CHECK(other_seed.pixels != full.pixels);
+}
+
+TEST_CASE("synthesis leaves non-finite pixels alone and refuses too few channels", "[plate][synthesis][bad-input]") {
+    GrainProfile p = known_profile({{0.01, 0.0, 1.0, 0.0}}, {1}, SignalEncoding::linear, 0.0, 1.0);
+    Image img(8, 8, 1, 0.5f);
+    img.at(3, 3)[0] = NAN;
+    apply_grain_profile(p, img.view(), 1, 0, 1);
+    CHECK(std::isnan(img.at(3, 3)[0]));
+    CHECK(img.at(4, 3)[0] != 0.5f);
+    GrainProfile rgb = known_profile({{0.01, 0, 1, 0}, {0.01, 0, 1, 0}, {0.01, 0, 1, 0}}, {1, 0, 0, 0, 1, 0, 0, 0, 1},
+                                     SignalEncoding::linear, 0.0, 1.0);
+    CHECK_THROWS_AS(apply_grain_profile(rgb, img.view(), 1, 0, 1), std::invalid_argument);
+}
