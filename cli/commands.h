@@ -10,5 +10,6 @@ void add_stocks_command(CLI::App& app);
 void add_sensitometry_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_grain_command(CLI::App& app);
+void add_plot_command(CLI::App& app);
 
 }  // namespace darkroom::cli

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
     darkroom::cli::add_sensitometry_command(app);
     darkroom::cli::add_demo_command(app);
     darkroom::cli::add_grain_command(app);
+    darkroom::cli::add_plot_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

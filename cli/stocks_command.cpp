@@ -13,7 +13,7 @@ void add_stocks_command(CLI::App& app) {
     cmd->callback([json_output] {
         nlohmann::json list = nlohmann::json::array();
         for (const Stock& s : builtin_stocks()) {
-            const char* kind = s.kind == StockKind::paper ? "paper" : "negative";
+            std::string kind = stock_kind_name(s.kind);
             if (*json_output)
                 list.push_back({{"id", s.id}, {"name", s.name}, {"kind", kind}, {"iso_speed", s.iso_speed},
                                 {"layers", s.layers.size()}, {"sources", s.sources}});

@@ -211,12 +211,6 @@ Layer read_layer(const FieldReader& r, const json& v, const Stock& stock) {
 const std::map<std::string, StockKind> kKindNames{
     {"negative", StockKind::negative}, {"paper", StockKind::paper}, {"print-film", StockKind::print_film}};
 
-std::string kind_name(StockKind kind) {
-    for (const auto& [name, k] : kKindNames)
-        if (k == kind) return name;
-    return "negative";
-}
-
 // Colour stocks are three layers that all name their dye; black-and-white ones one layer.
 void check_layers(const FieldReader& r, const json& doc, const Stock& s) {
     const json& layers = doc["layers"];
@@ -232,6 +226,12 @@ void check_layers(const FieldReader& r, const json& doc, const Stock& s) {
 }
 
 }  // namespace
+
+std::string stock_kind_name(StockKind kind) {
+    for (const auto& [name, k] : kKindNames)
+        if (k == kind) return name;
+    return "negative";
+}
 
 Spectrum spectral_density(const Stock& stock, const double* layer_density) {
     Spectrum d = stock.base_density;
@@ -323,7 +323,7 @@ std::string stock_to_json(const Stock& s) {
                 {"version", Stock::kFormatVersion},
                 {"id", s.id},
                 {"name", s.name},
-                {"kind", kind_name(s.kind)},
+                {"kind", stock_kind_name(s.kind)},
                 {"sources", s.sources},
                 {"iso_speed", s.iso_speed},
                 {"frame_width_mm", s.frame_width_mm},

@@ -87,6 +87,9 @@ struct Stock {
 // Per pixel.
 Spectrum spectral_density(const Stock& stock, const double* layer_density);
 
+// "negative", "paper" or "print-film", as stock files spell the kind.
+std::string stock_kind_name(StockKind kind);
+
 // The constants of the speed definition for a kind of material (seed paper, eq. 5).
 struct SpeedDefinition {
     double k;                       // speed = k / Hm
