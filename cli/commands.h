@@ -9,5 +9,7 @@ void add_develop_command(CLI::App& app);
 void add_stocks_command(CLI::App& app);
 void add_sensitometry_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
+void add_bake_lut_command(CLI::App& app);
+void add_colorconfig_command(CLI::App& app);
 
 }  // namespace darkroom::cli

@@ -32,12 +32,17 @@ void add_look_flags(CLI::App& cmd, LookOptions& look) {
     cmd.add_option("--frame", s.frame, "Frame number (each frame has its own grain)")->capture_default_str();
     cmd.add_flag("--no-grain{false}", s.grain, "Leave out granularity");
     cmd.add_flag("--no-mtf{false}", s.mtf, "Leave out internal scattering (MTF)");
+    cmd.add_option("--halation", s.halation, "Halation strength, a multiple of the film's (0 = off)")
+        ->check(CLI::Range(0.0, 100.0))
+        ->capture_default_str();
     cmd.add_option("--frame-width-mm", s.frame_width_mm, "Film frame width in mm (default: the stock's format)")
         ->check(CLI::Range(0.0, 1e4));
     cmd.add_option("--print-width-mm", s.print_width_mm, "Print width in mm (default: the paper's format)")
         ->check(CLI::Range(0.0, 1e4));
     cmd.add_option("--threads", look.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
-    cmd.add_flag("-v,--verbose", look.verbose, "Print the plan: the stages run and those skipped");
+    cmd.add_flag("-v,--verbose", look.verbose,
+                 "Print the plan (the stages run and those skipped) and the colour management");
+    add_colour_flags(cmd, look.colour);
 }
 
 Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {
