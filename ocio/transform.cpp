@@ -48,7 +48,9 @@ void apply_grey_row(const OCIO::CPUProcessor& cpu, float* first, int n, std::ptr
 
 Conversion::Conversion(OCIO::ConstProcessorRcPtr processor, std::string description)
     : description_(std::move(description)) {
-    if (processor && !processor->isNoOp()) {
+    // The processor as made holds every step; optimised losslessly, inverse pairs
+    // (log then antilog, a matrix then its inverse) cancel, so a round trip is a no-op.
+    if (processor && !processor->getOptimizedProcessor(OCIO::OPTIMIZATION_LOSSLESS)->isNoOp()) {
         processor_ = std::move(processor);
         cpu_ = processor_->getDefaultCPUProcessor();
     }

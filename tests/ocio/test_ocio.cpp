@@ -817,3 +817,40 @@ TEST_CASE("LUT accuracy against size", "[.lut-accuracy]") {
         }
     }
 }
+
+TEST_CASE("the scan result is read as Cineon Log, whatever the output", "[ocio][convert]") {
+    ColorConverter converter(embedded_active_config());
+    const ResultEncoding scan = ResultEncoding::cineon_log;
+    // Kodak's reference white (code 685) and black (code 95) decode to 1 and 0, as the
+    // embedded config's own Cineon Log space does.
+    const std::array<float, 3> codes = {685.0f / 1023, 95.0f / 1023, 0.5f};
+    const auto linear = convert(*converter.from_working("lin_rec709", scan), codes);
+    const auto reference = convert(*converter.to_working("Cineon Log"), codes);
+    CHECK(linear[0] == Approx(1.0).margin(1e-5));
+    CHECK(linear[1] == Approx(0.0).margin(1e-5));
+    for (int c = 0; c < 3; ++c) CHECK(linear[c] == Approx(reference[c]).margin(1e-6));
+    // To Cineon Log itself: decode then encode cancel, so nothing is done.
+    CHECK(converter.from_working("Cineon Log", scan)->is_noop());
+    // To a display: the display of the decoded values.
+    const auto shown = convert(*converter.to_display("sRGB", "Standard", scan), codes);
+    const auto shown_linear = convert(*converter.to_display("sRGB", "Standard"), linear);
+    for (int c = 0; c < 3; ++c) CHECK(shown[c] == Approx(shown_linear[c]).margin(1e-6));
+    // Cached apart from the working-space conversions of the same names.
+    CHECK(converter.from_working("lin_rec709", scan) != converter.from_working("lin_rec709"));
+    CHECK(converter.from_working("lin_rec709")->is_noop());
+    // Data destinations take the scan as it is.
+    CHECK(converter.from_working("Raw", scan)->is_noop());
+    CHECK(converter.to_display("sRGB", "Raw", scan)->is_noop());
+}
+
+TEST_CASE("the embedded config written out is the same config, and a bad path is named", "[ocio][config]") {
+    TempDir dir;
+    const std::string path = dir.file("darkroom.ocio");
+    write_embedded_config(path);
+    OcioEnv unset(std::nullopt);
+    const ActiveConfig written = resolve_config(path);
+    CHECK(std::string(written.config->getName()) == std::string(embedded_config()->getName()));
+    CHECK(color_space_names(*written.config) == color_space_names(*embedded_config()));
+    const std::string bad = dir.file("no-such-dir/darkroom.ocio");
+    CHECK_THROWS_WITH(write_embedded_config(bad), Catch::Contains(bad));
+}
