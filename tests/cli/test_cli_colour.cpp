@@ -6,35 +6,15 @@
 #include <optional>
 
 #include "cli_support.h"
+#include "../ocio/ocio_variable.h"
 
-namespace fs = std::filesystem;
-using cli_test::darkroom;
-using cli_test::kTmp;
-using cli_test::make_input;
-using cli_test::pixels;
-using cli_test::Result;
+using namespace cli_test;
 
 namespace {
 
 bool oiiotool_available() { return std::system("oiiotool --help > /dev/null 2>&1") == 0; }
 
 std::string tmp(const std::string& name) { return (kTmp / name).string(); }
-
-// Sets or unsets $OCIO for one test (the darkroom runs inherit it) and restores it.
-struct OcioVariable {
-    std::optional<std::string> saved;
-    explicit OcioVariable(const std::optional<std::string>& value) {
-        if (const char* old = std::getenv("OCIO")) saved = old;
-        set(value);
-    }
-    ~OcioVariable() { set(saved); }
-    static void set(const std::optional<std::string>& value) {
-        if (value)
-            setenv("OCIO", value->c_str(), 1);
-        else
-            unsetenv("OCIO");
-    }
-};
 
 // The embedded config as a file, written by darkroom itself, for oiiotool.
 std::string written_config(const std::string& name) {
@@ -47,7 +27,7 @@ std::string written_config(const std::string& name) {
 
 // Runs oiiotool with `config` active ($OCIO unset); REQUIREs success.
 void oiiotool(const std::string& config, const std::string& args) {
-    OcioVariable unset(std::nullopt);
+    ScopedOcioVariable unset(std::nullopt);
     const std::string command = "oiiotool --colorconfig " + config + " " + args;
     INFO(command);
     REQUIRE(std::system(command.c_str()) == 0);
@@ -94,7 +74,7 @@ TEST_CASE("develop converts the input to the working space and the result to the
         WARN("oiiotool is not installed: skipped");
         return;
     }
-    OcioVariable unset(std::nullopt);
+    ScopedOcioVariable unset(std::nullopt);
     const std::string config = written_config("colour-convert.ocio");
     const std::string in = make_input("colour-convert-in.exr"), base = tmp("colour-convert-base.exr");
     const std::string look = " --seed 2 --frame-width-mm 4 --print-width-mm 30";
@@ -129,7 +109,7 @@ TEST_CASE("verbose output names the active config and why: embedded, --colorconf
     const std::string config = written_config("colour-config.ocio");
     const std::string develop = "develop " + in + " -o " + out + " --no-grain -v --iscolorspace srgb ";
     {
-        OcioVariable unset(std::nullopt);
+        ScopedOcioVariable unset(std::nullopt);
         Result r = darkroom(develop);
         INFO(r.output);
         REQUIRE(r.exit_code == 0);
@@ -144,7 +124,7 @@ TEST_CASE("verbose output names the active config and why: embedded, --colorconf
         CHECK_THAT(r.output, Catch::Contains("OCIO config '" + config + "' (given by --colorconfig)"));
     }
     {
-        OcioVariable set(config);
+        ScopedOcioVariable set(config);
         Result r = darkroom(develop);
         INFO(r.output);
         REQUIRE(r.exit_code == 0);
@@ -171,7 +151,7 @@ TEST_CASE("colour conversions keep a window equal to that window of the full ren
 
 TEST_CASE("bad colour input: a message naming the config and the problem, and no output",
           "[cli][colour][bad-input]") {
-    OcioVariable unset(std::nullopt);
+    ScopedOcioVariable unset(std::nullopt);
     const std::string in = make_input("colour-bad-in.exr", 16, 12), out = tmp("colour-never.exr");
     const std::string garbage = tmp("colour-garbage.ocio"), no_displays = tmp("colour-no-displays.ocio");
     std::ofstream(garbage) << "this: [is not: an OCIO config\n";
@@ -206,7 +186,7 @@ TEST_CASE("bad colour input: a message naming the config and the problem, and no
         CHECK_THAT(r.output, Catch::Contains(c.message));
     }
     {
-        OcioVariable set(tmp("colour-missing-env.ocio"));
+        ScopedOcioVariable set(tmp("colour-missing-env.ocio"));
         Result r = darkroom(develop);
         INFO(r.output);
         CHECK(r.exit_code == 1);
@@ -222,7 +202,7 @@ TEST_CASE("a LUT from bake-lut, applied by oiiotool, matches develop without gra
         WARN("oiiotool is not installed: skipped");
         return;
     }
-    OcioVariable unset(std::nullopt);
+    ScopedOcioVariable unset(std::nullopt);
     const std::string config = written_config("colour-lut.ocio");
     const std::string scene = make_lut_scene("colour-lut-scene.exr");
     const std::string look = " --film kodak-tri-x-400 --paper vdr-paper-grade-2 --exposure 0.5 --print-exposure -0.3";

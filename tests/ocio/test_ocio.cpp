@@ -25,6 +25,7 @@
 #include "ocio/config.h"
 #include "ocio/lut_bake.h"
 #include "ocio/transform.h"
+#include "ocio_variable.h"
 
 namespace fs = std::filesystem;
 using namespace darkroom::ocio;
@@ -45,22 +46,6 @@ struct TempDir {
         fs::remove_all(path, ec);
     }
     std::string file(const std::string& name) const { return (path / name).string(); }
-};
-
-// Sets or unsets $OCIO for one test and restores it afterwards.
-struct OcioEnv {
-    std::optional<std::string> saved;
-    explicit OcioEnv(const std::optional<std::string>& value) {
-        if (const char* old = std::getenv("OCIO")) saved = old;
-        set(value);
-    }
-    ~OcioEnv() { set(saved); }
-    static void set(const std::optional<std::string>& value) {
-        if (value)
-            setenv("OCIO", value->c_str(), 1);
-        else
-            unsetenv("OCIO");
-    }
 };
 
 void write_text(const std::string& path, const std::string& text) {
@@ -254,7 +239,7 @@ std::vector<float> apply_lut_with_oiiotool(const TempDir& dir, const std::string
                                            int width, int height) {
     // oiiotool 2.4 with OCIO 2.1 needs some config even for a file transform: give it the
     // embedded one, written out.
-    OcioEnv no_config(std::nullopt);
+    ScopedOcioVariable no_config(std::nullopt);
     const std::string config = dir.file("darkroom.ocio");
     write_text(config, embedded_config_yaml());
     const std::string in = dir.file("lut-in.exr"), out = dir.file("lut-out.exr");
@@ -328,7 +313,7 @@ TEST_CASE("0.18 linear Rec.709 goes to the sRGB display as the sRGB encoding of 
         const std::string config = dir.file("darkroom.ocio"), in = dir.file("grey.exr"), out = dir.file("shown.exr");
         write_text(config, embedded_config_yaml());
         write_exr(in, std::vector<float>(4 * 3, 0.18f), 2, 2);
-        OcioEnv unset(std::nullopt);
+        ScopedOcioVariable unset(std::nullopt);
         const std::string command = "oiiotool --colorconfig '" + config + "' '" + in +
                                     "' --iscolorspace lin_rec709 --ociodisplay sRGB Standard -d float -o '" + out + "'";
         INFO(command);
@@ -387,18 +372,18 @@ TEST_CASE("config precedence: explicit file, then the OCIO variable, then embedd
     };
 
     SECTION("nothing given: the embedded config") {
-        OcioEnv unset(std::nullopt);
+        ScopedOcioVariable unset(std::nullopt);
         const ActiveConfig active = resolve_config();
         CHECK(active.source == ConfigSource::embedded);
         CHECK(active.describe().find("$OCIO is not set") != std::string::npos);
         CHECK(srgb_of_grey(active) == Approx(srgb_encode(0.18)).margin(2e-5));
     }
     SECTION("an empty $OCIO counts as unset") {
-        OcioEnv empty(std::string(""));
+        ScopedOcioVariable empty(std::string(""));
         CHECK(resolve_config().source == ConfigSource::embedded);
     }
     SECTION("given by flag") {
-        OcioEnv unset(std::nullopt);
+        ScopedOcioVariable unset(std::nullopt);
         const ActiveConfig active = resolve_config(show);
         CHECK(active.source == ConfigSource::explicit_file);
         CHECK(std::string(active.config->getName()) == "test-show-config");
@@ -407,7 +392,7 @@ TEST_CASE("config precedence: explicit file, then the OCIO variable, then embedd
         CHECK(srgb_of_grey(active) == Approx(srgb_encode(0.18)).margin(2e-5));
     }
     SECTION("given by $OCIO") {
-        OcioEnv set(env);
+        ScopedOcioVariable set(env);
         const ActiveConfig active = resolve_config();
         CHECK(active.source == ConfigSource::environment);
         CHECK(std::string(active.config->getName()) == "test-env-config");
@@ -415,7 +400,7 @@ TEST_CASE("config precedence: explicit file, then the OCIO variable, then embedd
         CHECK(srgb_of_grey(active) == Approx(srgb_encode(0.18)).margin(2e-5));
     }
     SECTION("the flag wins over $OCIO") {
-        OcioEnv set(env);
+        ScopedOcioVariable set(env);
         const ActiveConfig active = resolve_config(show, "the OFX host");
         CHECK(active.source == ConfigSource::explicit_file);
         CHECK(std::string(active.config->getName()) == "test-show-config");
@@ -449,7 +434,7 @@ TEST_CASE("a missing or invalid config is an error naming the file, never the em
         }
         return "(no ConfigError)";
     };
-    OcioEnv unset(std::nullopt);
+    ScopedOcioVariable unset(std::nullopt);
     SECTION("missing, by flag") {
         const std::string m = message_of([&] { resolve_config(missing); });
         CHECK(m.find(missing) != std::string::npos);
@@ -457,7 +442,7 @@ TEST_CASE("a missing or invalid config is an error naming the file, never the em
         CHECK(m.find("--colorconfig") != std::string::npos);
     }
     SECTION("missing, by $OCIO: an error too, saying it came from $OCIO") {
-        OcioEnv set(missing);
+        ScopedOcioVariable set(missing);
         const std::string m = message_of([&] { resolve_config(); });
         CHECK(m.find(missing) != std::string::npos);
         CHECK(m.find("$OCIO") != std::string::npos);
@@ -488,7 +473,7 @@ TEST_CASE("a config without displays is an error naming the config", "[ocio][con
                "displays: {}\n"
                "colorspaces:\n"
                "  - !<ColorSpace>\n    name: lin_rec709\n    encoding: scene-linear\n");
-    OcioEnv unset(std::nullopt);
+    ScopedOcioVariable unset(std::nullopt);
     // OCIO 2.1 holds a config without displays invalid, so it fails as it loads.
     try {
         resolve_config(path);
@@ -847,7 +832,7 @@ TEST_CASE("the embedded config written out is the same config, and a bad path is
     TempDir dir;
     const std::string path = dir.file("darkroom.ocio");
     write_embedded_config(path);
-    OcioEnv unset(std::nullopt);
+    ScopedOcioVariable unset(std::nullopt);
     const ActiveConfig written = resolve_config(path);
     CHECK(std::string(written.config->getName()) == std::string(embedded_config()->getName()));
     CHECK(color_space_names(*written.config) == color_space_names(*embedded_config()));
