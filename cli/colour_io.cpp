@@ -75,8 +75,8 @@ ColourIO::ColourIO(const ColourOptions& o, OutputMode output, bool verbose)
 }
 
 void ColourIO::apply(const ocio::Conversion& conversion, Image& image) {
-    conversion.apply({image.pixels.data(), image.window.width(), image.window.height(), image.channels,
-                      image.channels, (std::ptrdiff_t)image.channels * image.window.width()});
+    conversion.apply(ocio::PixelBuffer::packed(image.pixels.data(), image.window.width(), image.window.height(),
+                                               image.channels));
 }
 
 }  // namespace darkroom::cli

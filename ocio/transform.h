@@ -3,9 +3,9 @@
 //
 // - A Conversion is a ready-to-run OCIO CPU processor. Conversions are cached process-wide
 //   by (config cache id, kind, names), so asking again is a map look-up.
-// - A conversion that cannot change a pixel (OCIO's isNoOp after optimisation: the same
-//   space, an alias or role of it, data spaces) holds no processor and apply() returns at
-//   once.
+// - A conversion that cannot change a pixel (OCIO's isNoOp after lossless optimisation:
+//   the same space, an alias or role of it, data spaces, a round trip whose steps cancel)
+//   holds no processor and apply() returns at once.
 // - Unknown names throw UnknownNameError listing what the config defines; a config that
 //   cannot make the conversion throws ConfigError naming the config.
 // - Everything here is safe to call from several threads at once.
