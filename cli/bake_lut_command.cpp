@@ -70,7 +70,7 @@ void run_bake_lut(const BakeLutOptions& o) {
         std::copy(rgb, rgb + 3 * n_pixels, in.pixels.begin());
         Image out(in.window, 3);
         plan.run(in.view(), out.view(), look.threads);
-        colour.result_to_output(out);
+        colour.result_to_output(out, look.threads);
         std::copy(out.pixels.begin(), out.pixels.begin() + 3 * n_pixels, rgb);
     };
     ocio::LutBakeSettings settings;

@@ -74,9 +74,10 @@ ColourIO::ColourIO(const ColourOptions& o, OutputMode output, bool verbose)
     say((std::string(output_mode_name(output)) + " result").c_str(), *output_);
 }
 
-void ColourIO::apply(const ocio::Conversion& conversion, Image& image) {
+void ColourIO::apply(const ocio::Conversion& conversion, Image& image, int threads) {
     conversion.apply(ocio::PixelBuffer::packed(image.pixels.data(), image.window.width(), image.window.height(),
-                                               image.channels));
+                                               image.channels),
+                     threads);
 }
 
 }  // namespace darkroom::cli

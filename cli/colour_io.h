@@ -36,9 +36,10 @@ public:
     // conversion (or that it is skipped as a no-op) to stderr.
     ColourIO(const ColourOptions& options, OutputMode output, bool verbose);
 
-    // In place, on the first three channels (further channels, e.g. alpha, unchanged).
-    void input_to_working(Image& image) const { apply(*input_, image); }
-    void result_to_output(Image& image) const { apply(*output_, image); }
+    // In place, on the first three channels (further channels, e.g. alpha, unchanged), on
+    // `threads` threads (0: all cores).
+    void input_to_working(Image& image, int threads) const { apply(*input_, image, threads); }
+    void result_to_output(Image& image, int threads) const { apply(*output_, image, threads); }
 
     const ocio::ColorConverter& converter() const { return converter_; }
     // The input colour space as given; empty for the working space.
@@ -46,7 +47,7 @@ public:
     const ocio::Conversion& output_conversion() const { return *output_; }
 
 private:
-    static void apply(const ocio::Conversion& conversion, Image& image);
+    static void apply(const ocio::Conversion& conversion, Image& image, int threads);
 
     ocio::ColorConverter converter_;
     std::string input_space_;

@@ -51,7 +51,7 @@ void run_demo(const DemoOptions& o) {
         std::string base = (fs::path(o.directory) / out.name).string();
         // The PNG previews the model's own values; the colour flags apply to the EXR.
         write_image(base + ".png", encode_srgb(result), like);
-        colour.result_to_output(result);
+        colour.result_to_output(result, look.threads);
         write_image(base + ".exr", result, like);
         std::cout << "wrote " << base << ".exr and " << base << ".png\n";
     }

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/parallel.h"
+
 namespace darkroom::ocio {
 
 namespace {
@@ -56,23 +58,26 @@ Conversion::Conversion(OCIO::ConstProcessorRcPtr processor, std::string descript
     }
 }
 
-void Conversion::apply(const PixelBuffer& pixels) const {
+void Conversion::apply(const PixelBuffer& pixels, int threads) const {
     if (!cpu_ || !pixels.data || pixels.width <= 0 || pixels.height <= 0) return;
     if (pixels.channels <= 0) throw std::invalid_argument("darkroom::ocio: a pixel buffer needs channels");
     if (pixels.pixel_stride < pixels.channels)
         throw std::invalid_argument("darkroom::ocio: the pixel stride is smaller than the channel count");
-    std::vector<float> grey_scratch;
-    for (int y = 0; y < pixels.height; ++y) {
-        float* row = pixels.data + y * pixels.row_stride;
-        if (pixels.channels < 3) {
-            apply_grey_row(*cpu_, row, pixels.width, pixels.pixel_stride, grey_scratch);
-            continue;
+    // Each pixel is converted on its own, so the row bands cannot change the result.
+    parallel_for(0, pixels.height, threads, [&](int y0, int y1) {
+        std::vector<float> grey_scratch;
+        for (int y = y0; y < y1; ++y) {
+            float* row = pixels.data + y * pixels.row_stride;
+            if (pixels.channels < 3) {
+                apply_grey_row(*cpu_, row, pixels.width, pixels.pixel_stride, grey_scratch);
+                continue;
+            }
+            // RGB only: further channels are stepped over by the pixel stride.
+            OCIO::PackedImageDesc desc(row, pixels.width, 1, 3, OCIO::BIT_DEPTH_F32, sizeof(float),
+                                       pixels.pixel_stride * (std::ptrdiff_t)sizeof(float), OCIO::AutoStride);
+            cpu_->apply(desc);
         }
-        // RGB only: further channels are stepped over by the pixel stride.
-        OCIO::PackedImageDesc desc(row, pixels.width, 1, 3, OCIO::BIT_DEPTH_F32, sizeof(float),
-                                   pixels.pixel_stride * (std::ptrdiff_t)sizeof(float), OCIO::AutoStride);
-        cpu_->apply(desc);
-    }
+    });
 }
 
 void Conversion::apply_rgb(float* rgb, std::size_t n_pixels) const {

@@ -49,7 +49,8 @@ public:
     // The OCIO processor (null for a no-op), e.g. to write its operations into a CLF.
     const OCIO::ConstProcessorRcPtr& processor() const { return processor_; }
 
-    void apply(const PixelBuffer& pixels) const;
+    // On `threads` row bands (0: all cores; an OFX host calling per tile passes 1).
+    void apply(const PixelBuffer& pixels, int threads = 1) const;
     // Packed RGB triplets.
     void apply_rgb(float* rgb, std::size_t n_pixels) const;
 

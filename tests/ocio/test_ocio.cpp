@@ -610,6 +610,11 @@ TEST_CASE("conversions from several threads at once agree", "[ocio][convert]") {
         });
     for (std::thread& th : threads) th.join();
     for (const auto& r : results) CHECK(std::memcmp(r.data(), expected.data(), sizeof(float) * expected.size()) == 0);
+
+    // One buffer on several row bands: the same bits as one thread.
+    std::vector<float> banded = reference;
+    converter.to_display("sRGB", "ACES 1.0 - SDR Video")->apply(PixelBuffer::packed(banded.data(), 64, 64, 3), 3);
+    CHECK(std::memcmp(banded.data(), expected.data(), sizeof(float) * expected.size()) == 0);
 }
 
 // ==== LUT baking ====
