@@ -54,7 +54,7 @@
 // Applying them: `oiiotool --colorconfig CONFIG in.exr --ociofiletransform look.cube -o
 // out.exr`. oiiotool 2.4 with OCIO 2.1 refuses --ociofiletransform when no config is
 // active ($OCIO unset), so give it one: any config works, e.g. the embedded config written
-// out (embedded_config_yaml()).
+// out (write_embedded_config(), `darkroom colorconfig -o FILE`).
 #pragma once
 
 #include <cstddef>

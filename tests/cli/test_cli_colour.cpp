@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <iterator>
 #include <optional>
+#include <utility>
 
 #include "cli_support.h"
 #include "../ocio/ocio_variable.h"
@@ -104,36 +106,54 @@ TEST_CASE("develop converts the input to the working space and the result to the
     }
 }
 
-TEST_CASE("verbose output names the active config and why: embedded, --colorconfig, $OCIO", "[cli][colour]") {
-    const std::string in = make_input("colour-config-in.exr", 16, 12), out = tmp("colour-config-out.exr");
-    const std::string config = written_config("colour-config.ocio");
-    const std::string develop = "develop " + in + " -o " + out + " --no-grain -v --iscolorspace srgb ";
+// The embedded config written out, with the alias "srgb" moved from 'sRGB - Texture' to
+// 'Rec.709 - Camera': a picture read as "srgb" shows which config was used.
+std::string show_config(const std::string& name) {
+    const std::string path = written_config(name);
+    std::ifstream in(path);
+    std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    for (const auto& [from, to] : {std::pair<std::string, std::string>{"aliases: [sRGB, srgb_tx", "aliases: [srgb_tx"},
+                                   {"aliases: [rec709, ", "aliases: [srgb, rec709, "}}) {
+        REQUIRE(yaml.find(from) != std::string::npos);
+        yaml.replace(yaml.find(from), from.size(), to);
+    }
+    std::ofstream(path) << yaml;
+    return path;
+}
+
+TEST_CASE("verbose output names the active config and why; the config used is the one named", "[cli][colour]") {
+    const std::string in = make_input("colour-config-in.exr", 16, 12), config = show_config("colour-config.ocio");
+    const std::string develop = "develop " + in + " --no-grain -v --iscolorspace srgb -o ";
+    auto run = [&](const std::string& out, const std::string& flags, const std::string& active,
+                   const std::string& input) {
+        Result r = darkroom(develop + tmp(out) + flags);
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+        CHECK_THAT(r.output, Catch::Contains(active));
+        CHECK_THAT(r.output, Catch::Contains("input: '" + input + "' -> 'lin_rec709'"));
+        return pixels(tmp(out));
+    };
+    std::vector<float> embedded, by_flag, by_variable;
     {
         ScopedOcioVariable unset(std::nullopt);
-        Result r = darkroom(develop);
-        INFO(r.output);
-        REQUIRE(r.exit_code == 0);
-        CHECK_THAT(r.output, Catch::Contains("the embedded Darkroom config (no --colorconfig was given and $OCIO is "
-                                             "not set)"));
-        CHECK_THAT(r.output, Catch::Contains("'sRGB - Texture' -> 'lin_rec709'"));
-        CHECK_THAT(r.output, Catch::Contains("print result: left as the model writes it") &&
-                                 Catch::Contains("(no-op: skipped)"));
-        r = darkroom(develop + "--colorconfig " + config);
-        INFO(r.output);
-        REQUIRE(r.exit_code == 0);
-        CHECK_THAT(r.output, Catch::Contains("OCIO config '" + config + "' (given by --colorconfig)"));
+        embedded = run("colour-config-embedded.exr", "",
+                       "the embedded Darkroom config (no --colorconfig was given and $OCIO is not set)",
+                       "sRGB - Texture");
+        by_flag = run("colour-config-flag.exr", " --colorconfig " + config,
+                      "OCIO config '" + config + "' (given by --colorconfig)", "Rec.709 - Camera");
     }
     {
         ScopedOcioVariable set(config);
-        Result r = darkroom(develop);
-        INFO(r.output);
-        REQUIRE(r.exit_code == 0);
-        CHECK_THAT(r.output, Catch::Contains("OCIO config '" + config + "' ($OCIO names it"));
+        by_variable = run("colour-config-variable.exr", "", "OCIO config '" + config + "' ($OCIO names it",
+                          "Rec.709 - Camera");
         // The flag wins over $OCIO, and a bad one is an error, not the embedded config.
-        r = darkroom(develop + "--colorconfig " + tmp("no-such.ocio"));
+        Result r = darkroom(develop + tmp("colour-config-never.exr") + " --colorconfig " + tmp("no-such.ocio"));
         CHECK(r.exit_code == 1);
         CHECK_THAT(r.output, Catch::Contains("no-such.ocio") && Catch::Contains("does not exist"));
+        CHECK_FALSE(fs::exists(tmp("colour-config-never.exr")));
     }
+    CHECK(by_flag == by_variable);
+    CHECK(max_difference(by_flag, embedded) > 0.01);  // the BT.709 and sRGB curves differ
 }
 
 TEST_CASE("colour conversions keep a window equal to that window of the full render", "[cli][colour][determinism]") {
