@@ -844,3 +844,28 @@ TEST_CASE("the embedded config written out is the same config, and a bad path is
     const std::string bad = dir.file("no-such-dir/darkroom.ocio");
     CHECK_THROWS_WITH(write_embedded_config(bad), Catch::Contains(bad));
 }
+
+TEST_CASE("every output of the embedded config keeps the model's results finite", "[ocio][convert]") {
+    // The model's results are finite and non-negative (README, bad pixels). Working-space
+    // values: black, white, a saturated primary and the 1e30 clamp. Scan codes / 1023: 0 up
+    // to 2 (code 2046: (2046 - 95) x 0.002 = 3.9 density above the base).
+    ColorConverter converter(embedded_active_config());
+    const std::vector<float> working = {0, 0, 0, 1, 1, 1, 1, 0, 0, 1e30f, 1e30f, 1e30f};
+    const std::vector<float> scan = {0, 0, 0, 1, 1, 1, 2, 0, 0, 2, 2, 2};
+    for (ResultEncoding source : {ResultEncoding::working_linear, ResultEncoding::cineon_log}) {
+        auto all_finite = [&](const Conversion& c) {
+            std::vector<float> v = source == ResultEncoding::cineon_log ? scan : working;
+            c.apply_rgb(v.data(), v.size() / 3);
+            return std::all_of(v.begin(), v.end(), [](float x) { return std::isfinite(x); });
+        };
+        for (const std::string& cs : color_space_names(*embedded_config())) {
+            INFO(cs);
+            CHECK(all_finite(*converter.from_working(cs, source)));
+        }
+        for (const std::string& display : display_names(*embedded_config()))
+            for (const std::string& view : view_names(*embedded_config(), display)) {
+                INFO(display << " / " << view);
+                CHECK(all_finite(*converter.to_display(display, view, source)));
+            }
+    }
+}
