@@ -11,5 +11,7 @@ void add_sensitometry_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_grain_command(CLI::App& app);
 void add_plot_command(CLI::App& app);
+void add_bake_lut_command(CLI::App& app);
+void add_colorconfig_command(CLI::App& app);
 
 }  // namespace darkroom::cli

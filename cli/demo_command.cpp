@@ -27,6 +27,8 @@ Image encode_srgb(Image img) {
 
 void run_demo(const DemoOptions& o) {
     namespace fs = std::filesystem;
+    if (!o.look.colour.input_space.empty())
+        throw UserError("demo renders its built-in scene in the working space: --iscolorspace does not apply");
     std::error_code ec;
     fs::create_directories(o.directory, ec);
     if (ec) throw UserError("cannot create '" + o.directory + "': " + ec.message());
@@ -42,12 +44,15 @@ void run_demo(const DemoOptions& o) {
     for (Output out : {Output{"print", OutputMode::print}, Output{"negative", OutputMode::negative}}) {
         LookOptions look = o.look;
         look.settings.output = out.mode;
+        const ColourIO colour(look.colour, out.mode, look.verbose);
         Plan plan = compile_look(look, frame);
         Image result(scene.window, 3);
         plan.run(scene.view(), result.view(), look.threads);
         std::string base = (fs::path(o.directory) / out.name).string();
-        write_image(base + ".exr", result, like);
+        // The PNG previews the model's own values; the colour flags apply to the EXR.
         write_image(base + ".png", encode_srgb(result), like);
+        colour.result_to_output(result, look.threads);
+        write_image(base + ".exr", result, like);
         std::cout << "wrote " << base << ".exr and " << base << ".png\n";
     }
 }

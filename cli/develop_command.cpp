@@ -28,9 +28,13 @@ void run_develop(const DevelopOptions& o) {
     if (o.look.settings.output == OutputMode::density && !is_float_format(o.output))
         throw UserError("--output density writes float densities: give a float format such as .exr or .tif, not '" +
                         o.output + "'");
+    const ColourIO colour(o.look.colour, o.look.settings.output, o.look.verbose);
     Plan plan = compile_look(o.look, frame);
+    // Per-pixel conversions: a window stays that window of the full render.
+    colour.input_to_working(in.pixels, o.look.threads);
     Image out(out_window, in.pixels.channels >= 4 ? 4 : 3);
     plan.run(in.pixels.view(), out.view(), o.look.threads);
+    colour.result_to_output(out, o.look.threads);
     write_image(o.output, out, in.spec, o.input);
 }
 

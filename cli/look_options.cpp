@@ -78,7 +78,9 @@ void add_look_flags(CLI::App& cmd, LookOptions& look) {
     cmd.add_option("--print-width-mm", s.print_width_mm, "Print width in mm (default: the paper's format)")
         ->check(CLI::Range(0.0, 1e4));
     cmd.add_option("--threads", look.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
-    cmd.add_flag("-v,--verbose", look.verbose, "Print the plan: the stages run and those skipped");
+    cmd.add_flag("-v,--verbose", look.verbose,
+                 "Print the plan (the stages run and those skipped) and the colour management");
+    add_colour_flags(cmd, look.colour);
 }
 
 Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {

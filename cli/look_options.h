@@ -1,10 +1,12 @@
-// The look flags shared by every command that develops (develop, demo): stocks, exposure,
-// output mode, grain and MTF switches, seed and frame.
+// The look flags shared by every command that develops (develop, demo, bake-lut): stocks,
+// exposure, output mode, grain, MTF and halation switches, seed and frame, and the colour
+// flags (cli/colour_io.h).
 #pragma once
 
 #include <CLI/CLI.hpp>
 #include <string>
 
+#include "cli/colour_io.h"
 #include "core/develop.h"
 
 namespace darkroom::cli {
@@ -13,6 +15,7 @@ struct LookOptions {
     std::string film = "kodak-tri-x-400";
     std::string paper = "vdr-paper-grade-2";  // "none" stops at the negative
     DevelopSettings settings;
+    ColourOptions colour;
     int threads = 0;
     bool verbose = false;
 };

@@ -3,8 +3,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <initializer_list>
 #include <sstream>
+#include <unistd.h>
 
 namespace darkroom::ocio {
 
@@ -36,10 +38,12 @@ OCIO::TransformRcPtr power_decode(double exponent, double offset) {
     return t;
 }
 
+}  // namespace
+
 // Cineon printing-density log -> linear (Kodak constants, see config.h). As a
 // LogAffineTransform (lin -> log): v = (300/1023) log10((1 - b) lin + b) + 685/1023,
 // since 0.002 density per code value / 0.6 negative gamma = 1/300 log10 per code value.
-OCIO::TransformRcPtr cineon_decode() {
+OCIO::TransformRcPtr cineon_log_to_lin_rec709() {
     const double code_white = 685.0, code_black = 95.0, code_max = 1023.0;
     const double codes_per_decade = 0.6 / 0.002;  // 300
     const double black = std::pow(10.0, (code_black - code_white) / codes_per_decade);
@@ -53,6 +57,8 @@ OCIO::TransformRcPtr cineon_decode() {
     t->setDirection(OCIO::TRANSFORM_DIR_INVERSE);
     return t;
 }
+
+namespace {
 
 struct SpaceSpec {
     const char* name;
@@ -181,7 +187,7 @@ OCIO::ConstConfigRcPtr build_embedded_config() {
     config->addColorSpace(scene_space(
         {"Cineon Log", {"cineon", "lg10"}, "Film", "log",
          "Kodak Cineon printing-density log (white 685, black 95, 0.002 D/code, gamma 0.6), Rec.709 primaries assumed"},
-        group({cineon_decode(), lin_rec709_to_aces2065_1()})));
+        group({cineon_log_to_lin_rec709(), lin_rec709_to_aces2065_1()})));
 
     OCIO::ColorSpaceRcPtr raw = scene_space({"Raw", {"raw", "Utility - Raw"}, "Utility", "data",
                                              "Data: never colour-converted"},
@@ -351,6 +357,34 @@ std::string embedded_config_yaml() {
     std::ostringstream yaml;
     embedded_config()->serialize(yaml);
     return yaml.str();
+}
+
+void write_file_atomically(const std::string& path, const std::string& contents, const std::string& what) {
+    const fs::path target(path);
+    const fs::path temp =
+        target.parent_path() / ("." + target.filename().string() + ".tmp-" + std::to_string(getpid()));
+    {
+        std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+        if (!out) throw OcioError("cannot write " + what + " '" + path + "': cannot create '" + temp.string() + "'");
+        out.write(contents.data(), (std::streamsize)contents.size());
+        out.close();
+        if (!out) {
+            std::error_code ec;
+            fs::remove(temp, ec);
+            throw OcioError("cannot write " + what + " '" + path + "': writing '" + temp.string() + "' failed");
+        }
+    }
+    std::error_code ec;
+    fs::rename(temp, target, ec);
+    if (ec) {
+        std::error_code ignored;
+        fs::remove(temp, ignored);
+        throw OcioError("cannot write " + what + " '" + path + "': " + ec.message());
+    }
+}
+
+void write_embedded_config(const std::string& path) {
+    write_file_atomically(path, embedded_config_yaml(), "config");
 }
 
 std::vector<std::string> color_space_names(const OCIO::Config& config) {

@@ -5,10 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
-#include <unistd.h>
 #include <vector>
 
 namespace darkroom::ocio {
@@ -23,30 +21,6 @@ std::string format_number(double v) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.6g", v);
     return buf;
-}
-
-void write_file_atomically(const std::string& path, const std::string& contents) {
-    const fs::path target(path);
-    const fs::path temp =
-        target.parent_path() / ("." + target.filename().string() + ".tmp-" + std::to_string(getpid()));
-    {
-        std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-        if (!out) throw OcioError("cannot write LUT '" + path + "': cannot create '" + temp.string() + "'");
-        out.write(contents.data(), (std::streamsize)contents.size());
-        out.close();
-        if (!out) {
-            std::error_code ec;
-            fs::remove(temp, ec);
-            throw OcioError("cannot write LUT '" + path + "': writing '" + temp.string() + "' failed");
-        }
-    }
-    std::error_code ec;
-    fs::rename(temp, target, ec);
-    if (ec) {
-        std::error_code ignored;
-        fs::remove(temp, ignored);
-        throw OcioError("cannot write LUT '" + path + "': " + ec.message());
-    }
 }
 
 void validate(const LutBakeSettings& s, LutFormat format) {
@@ -278,7 +252,7 @@ BakedLut bake_lut(const PixelFunction& look, const LutBakeSettings& settings, co
     const std::string text = baked.format == LutFormat::cube
                                  ? cube_text(settings, summary, shaped ? &sampled : nullptr, lattice)
                                  : clf_text(settings, summary, lattice);
-    write_file_atomically(path, text);
+    write_file_atomically(path, text, "LUT");
     return baked;
 }
 
@@ -302,9 +276,10 @@ OCIO::ConstGroupTransformRcPtr clf_writable_operations(const OCIO::Processor& pr
 BakedLut bake_look(const ColorConverter& converter, const std::string& input_space,
                    const PixelFunction& look_from_working, LutBakeSettings settings, const std::string& path) {
     const LutFormat format = lut_format_for_path(path);
-    const ConversionPtr to_working = converter.to_working(input_space);
     settings.clf_prefix = nullptr;
     settings.input = LutInput::scene_linear;
+    if (input_space.empty()) return bake_lut(look_from_working, settings, path);
+    const ConversionPtr to_working = converter.to_working(input_space);
     if (to_working->is_noop()) return bake_lut(look_from_working, settings, path);
     if (format == LutFormat::clf) {
         settings.clf_prefix = clf_writable_operations(*to_working->processor());

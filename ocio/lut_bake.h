@@ -54,7 +54,7 @@
 // Applying them: `oiiotool --colorconfig CONFIG in.exr --ociofiletransform look.cube -o
 // out.exr`. oiiotool 2.4 with OCIO 2.1 refuses --ociofiletransform when no config is
 // active ($OCIO unset), so give it one: any config works, e.g. the embedded config written
-// out (embedded_config_yaml()).
+// out (write_embedded_config(), `darkroom colorconfig -o FILE`).
 #pragma once
 
 #include <cstddef>
@@ -118,8 +118,8 @@ LutFormat lut_format_for_path(const std::string& path);
 BakedLut bake_lut(const PixelFunction& look, const LutBakeSettings& settings, const std::string& path);
 
 // Bakes a look defined on the working space for pictures in `input_space` of the
-// converter's config: the LUT's input is `input_space`, its output whatever
-// `look_from_working` gives. Chooses the layout described above; `settings.input` and
+// converter's config (empty: the working space itself): the LUT's input is
+// `input_space`, its output whatever `look_from_working` gives. Chooses the layout described above; `settings.input` and
 // `clf_prefix` are set here.
 BakedLut bake_look(const ColorConverter& converter, const std::string& input_space,
                    const PixelFunction& look_from_working, LutBakeSettings settings, const std::string& path);

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/parallel.h"
+
 namespace darkroom::ocio {
 
 namespace {
@@ -48,29 +50,34 @@ void apply_grey_row(const OCIO::CPUProcessor& cpu, float* first, int n, std::ptr
 
 Conversion::Conversion(OCIO::ConstProcessorRcPtr processor, std::string description)
     : description_(std::move(description)) {
-    if (processor && !processor->isNoOp()) {
+    // The processor as made holds every step; optimised losslessly, inverse pairs
+    // (log then antilog, a matrix then its inverse) cancel, so a round trip is a no-op.
+    if (processor && !processor->getOptimizedProcessor(OCIO::OPTIMIZATION_LOSSLESS)->isNoOp()) {
         processor_ = std::move(processor);
         cpu_ = processor_->getDefaultCPUProcessor();
     }
 }
 
-void Conversion::apply(const PixelBuffer& pixels) const {
+void Conversion::apply(const PixelBuffer& pixels, int threads) const {
     if (!cpu_ || !pixels.data || pixels.width <= 0 || pixels.height <= 0) return;
     if (pixels.channels <= 0) throw std::invalid_argument("darkroom::ocio: a pixel buffer needs channels");
     if (pixels.pixel_stride < pixels.channels)
         throw std::invalid_argument("darkroom::ocio: the pixel stride is smaller than the channel count");
-    std::vector<float> grey_scratch;
-    for (int y = 0; y < pixels.height; ++y) {
-        float* row = pixels.data + y * pixels.row_stride;
-        if (pixels.channels < 3) {
-            apply_grey_row(*cpu_, row, pixels.width, pixels.pixel_stride, grey_scratch);
-            continue;
+    // Each pixel is converted on its own, so the row bands cannot change the result.
+    parallel_for(0, pixels.height, threads, [&](int y0, int y1) {
+        std::vector<float> grey_scratch;
+        for (int y = y0; y < y1; ++y) {
+            float* row = pixels.data + y * pixels.row_stride;
+            if (pixels.channels < 3) {
+                apply_grey_row(*cpu_, row, pixels.width, pixels.pixel_stride, grey_scratch);
+                continue;
+            }
+            // RGB only: further channels are stepped over by the pixel stride.
+            OCIO::PackedImageDesc desc(row, pixels.width, 1, 3, OCIO::BIT_DEPTH_F32, sizeof(float),
+                                       pixels.pixel_stride * (std::ptrdiff_t)sizeof(float), OCIO::AutoStride);
+            cpu_->apply(desc);
         }
-        // RGB only: further channels are stepped over by the pixel stride.
-        OCIO::PackedImageDesc desc(row, pixels.width, 1, 3, OCIO::BIT_DEPTH_F32, sizeof(float),
-                                   pixels.pixel_stride * (std::ptrdiff_t)sizeof(float), OCIO::AutoStride);
-        cpu_->apply(desc);
-    }
+    });
 }
 
 void Conversion::apply_rgb(float* rgb, std::size_t n_pixels) const {
@@ -180,7 +187,8 @@ ConversionPtr ColorConverter::cached(const std::string& key, const std::string& 
     if (it != conversion_cache.end()) return it->second;
     OCIO::ConstProcessorRcPtr processor;
     try {
-        processor = config_.config->getProcessor(make());
+        const OCIO::ConstTransformRcPtr transform = make();
+        if (transform) processor = config_.config->getProcessor(transform);
     } catch (const OCIO::Exception& e) {
         throw ConfigError(config_.name() + " cannot convert " + description + ": " + e.what());
     }
@@ -189,13 +197,27 @@ ConversionPtr ColorConverter::cached(const std::string& key, const std::string& 
     return conversion;
 }
 
-OCIO::TransformRcPtr ColorConverter::aces_to_working() const {
-    OCIO::GroupTransformRcPtr t = lin_rec709_to_aces2065_1();
-    t->setDirection(OCIO::TRANSFORM_DIR_INVERSE);
-    return t;
+bool ColorConverter::is_data(const std::string& color_space) const {
+    OCIO::ConstColorSpaceRcPtr cs = config_.config->getColorSpace(color_space.c_str());
+    return cs && cs->isData();
 }
 
-OCIO::TransformRcPtr ColorConverter::working_to_aces() const { return lin_rec709_to_aces2065_1(); }
+std::string ColorConverter::working_space_label() const {
+    return link_.color_space.empty() ? "linear Rec.709" : link_.color_space;
+}
+
+OCIO::ConstTransformRcPtr ColorConverter::from_result(
+    ResultEncoding source, const std::function<OCIO::TransformRcPtr(const std::string&)>& then) const {
+    OCIO::GroupTransformRcPtr g = OCIO::GroupTransform::Create();
+    if (source == ResultEncoding::cineon_log) g->appendTransform(cineon_log_to_lin_rec709());
+    if (link_.color_space.empty()) {
+        g->appendTransform(lin_rec709_to_aces2065_1());
+        g->appendTransform(then(link_.aces_interchange));
+    } else {
+        g->appendTransform(then(link_.color_space));
+    }
+    return g;
+}
 
 namespace {
 
@@ -217,46 +239,57 @@ OCIO::TransformRcPtr display_view_transform(const std::string& src, const std::s
 
 }  // namespace
 
+namespace {
+
+const char* result_key(ResultEncoding source) {
+    return source == ResultEncoding::cineon_log ? "cineon_log" : "working";
+}
+
+std::string result_label(ResultEncoding source, const std::string& working) {
+    return source == ResultEncoding::cineon_log ? "'Cineon Log' (the scan)" : "'" + working + "'";
+}
+
+}  // namespace
+
 ConversionPtr ColorConverter::to_working(const std::string& color_space) const {
     const std::string src = canonical_color_space(color_space);
     require_working_space();
-    const std::string working = link_.color_space.empty() ? "linear Rec.709" : link_.color_space;
-    return cached("to_working\n" + src, quoted(src) + " -> " + quoted(working), [&]() -> OCIO::ConstTransformRcPtr {
-        if (!link_.color_space.empty()) return color_space_transform(src, link_.color_space);
-        OCIO::GroupTransformRcPtr g = OCIO::GroupTransform::Create();
-        g->appendTransform(color_space_transform(src, link_.aces_interchange));
-        g->appendTransform(aces_to_working());
-        return g;
-    });
+    return cached("to_working\n" + src, quoted(src) + " -> " + quoted(working_space_label()),
+                  [&]() -> OCIO::ConstTransformRcPtr {
+                      if (!link_.color_space.empty()) return color_space_transform(src, link_.color_space);
+                      OCIO::GroupTransformRcPtr g = OCIO::GroupTransform::Create();
+                      g->appendTransform(color_space_transform(src, link_.aces_interchange));
+                      OCIO::GroupTransformRcPtr aces_to_working = lin_rec709_to_aces2065_1();
+                      aces_to_working->setDirection(OCIO::TRANSFORM_DIR_INVERSE);
+                      g->appendTransform(aces_to_working);
+                      return g;
+                  });
 }
 
-ConversionPtr ColorConverter::from_working(const std::string& color_space) const {
+ConversionPtr ColorConverter::from_working(const std::string& color_space, ResultEncoding source) const {
     const std::string dst = canonical_color_space(color_space);
     require_working_space();
-    const std::string working = link_.color_space.empty() ? "linear Rec.709" : link_.color_space;
-    return cached("from_working\n" + dst, quoted(working) + " -> " + quoted(dst), [&]() -> OCIO::ConstTransformRcPtr {
-        if (!link_.color_space.empty()) return color_space_transform(link_.color_space, dst);
-        OCIO::GroupTransformRcPtr g = OCIO::GroupTransform::Create();
-        g->appendTransform(working_to_aces());
-        g->appendTransform(color_space_transform(link_.aces_interchange, dst));
-        return g;
-    });
+    return cached(std::string("from_") + result_key(source) + "\n" + dst,
+                  result_label(source, working_space_label()) + " -> " + quoted(dst),
+                  [&]() -> OCIO::ConstTransformRcPtr {
+                      // Data spaces take pixels as they are (OCIO's rule), the scan included.
+                      if (is_data(dst)) return nullptr;
+                      return from_result(source, [&](const std::string& src) { return color_space_transform(src, dst); });
+                  });
 }
 
-ConversionPtr ColorConverter::to_display(const std::string& display, const std::string& view) const {
+ConversionPtr ColorConverter::to_display(const std::string& display, const std::string& view,
+                                         ResultEncoding source) const {
     const std::pair<std::string, std::string> display_view = resolve_display_view(display, view);
     const std::string& d = display_view.first;
     const std::string& v = display_view.second;
     require_working_space();
-    const std::string working = link_.color_space.empty() ? "linear Rec.709" : link_.color_space;
-    return cached("to_display\n" + d + '\n' + v,
-                  quoted(working) + " -> display " + quoted(d) + ", view " + quoted(v),
+    return cached(std::string("display_from_") + result_key(source) + "\n" + d + '\n' + v,
+                  result_label(source, working_space_label()) + " -> display " + quoted(d) + ", view " + quoted(v),
                   [&]() -> OCIO::ConstTransformRcPtr {
-                      if (!link_.color_space.empty()) return display_view_transform(link_.color_space, d, v);
-                      OCIO::GroupTransformRcPtr g = OCIO::GroupTransform::Create();
-                      g->appendTransform(working_to_aces());
-                      g->appendTransform(display_view_transform(link_.aces_interchange, d, v));
-                      return g;
+                      if (is_data(config_.config->getDisplayViewColorSpaceName(d.c_str(), v.c_str()))) return nullptr;
+                      return from_result(source,
+                                         [&](const std::string& src) { return display_view_transform(src, d, v); });
                   });
 }
 

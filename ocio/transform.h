@@ -3,9 +3,9 @@
 //
 // - A Conversion is a ready-to-run OCIO CPU processor. Conversions are cached process-wide
 //   by (config cache id, kind, names), so asking again is a map look-up.
-// - A conversion that cannot change a pixel (OCIO's isNoOp after optimisation: the same
-//   space, an alias or role of it, data spaces) holds no processor and apply() returns at
-//   once.
+// - A conversion that cannot change a pixel (OCIO's isNoOp after lossless optimisation:
+//   the same space, an alias or role of it, data spaces, a round trip whose steps cancel)
+//   holds no processor and apply() returns at once.
 // - Unknown names throw UnknownNameError listing what the config defines; a config that
 //   cannot make the conversion throws ConfigError naming the config.
 // - Everything here is safe to call from several threads at once.
@@ -49,7 +49,8 @@ public:
     // The OCIO processor (null for a no-op), e.g. to write its operations into a CLF.
     const OCIO::ConstProcessorRcPtr& processor() const { return processor_; }
 
-    void apply(const PixelBuffer& pixels) const;
+    // On `threads` row bands (0: all cores; an OFX host calling per tile passes 1).
+    void apply(const PixelBuffer& pixels, int threads = 1) const;
     // Packed RGB triplets.
     void apply_rgb(float* rgb, std::size_t n_pixels) const;
 
@@ -70,6 +71,13 @@ struct WorkingSpaceLink {
     std::string describe() const;
 };
 
+// What the model's result pixels are, on the way out.
+enum class ResultEncoding {
+    working_linear,  // values in the working space (print, negative, texture)
+    cineon_log,      // Cineon log code values / 1023 (scan): decoded by
+                     // cineon_log_to_lin_rec709() first, whatever the config
+};
+
 class ColorConverter {
 public:
     explicit ColorConverter(ActiveConfig config);
@@ -79,11 +87,14 @@ public:
 
     // Input colour space -> working space.
     ConversionPtr to_working(const std::string& color_space) const;
-    // Working space -> output colour space.
-    ConversionPtr from_working(const std::string& color_space) const;
-    // Working space -> (display, view). An empty display means the config's default
-    // display; an empty view, that display's default view. Names ignore case, as in OCIO.
-    ConversionPtr to_display(const std::string& display, const std::string& view) const;
+    // Working space (or Cineon log, see ResultEncoding) -> output colour space.
+    ConversionPtr from_working(const std::string& color_space,
+                               ResultEncoding source = ResultEncoding::working_linear) const;
+    // Working space (or Cineon log) -> (display, view). An empty display means the config's
+    // default display; an empty view, that display's default view. Names ignore case, as
+    // in OCIO.
+    ConversionPtr to_display(const std::string& display, const std::string& view,
+                             ResultEncoding source = ResultEncoding::working_linear) const;
 
     // The config's own name for a colour space, alias or role; throws UnknownNameError.
     std::string canonical_color_space(const std::string& name) const;
@@ -94,12 +105,17 @@ public:
     std::pair<std::string, std::string> resolve_display_view(const std::string& display, const std::string& view) const;
 
 private:
-    // The cached conversion for `key`, made from the transform `make` returns on a miss.
+    // The cached conversion for `key`, made from the transform `make` returns on a miss
+    // (null: a no-op).
     ConversionPtr cached(const std::string& key, const std::string& description,
                          const std::function<OCIO::ConstTransformRcPtr()>& make) const;
-    // Transforms between the config's aces_interchange space and the working space.
-    OCIO::TransformRcPtr aces_to_working() const;
-    OCIO::TransformRcPtr working_to_aces() const;
+    bool is_data(const std::string& color_space) const;
+    // The working space's name for messages.
+    std::string working_space_label() const;
+    // `source` -> a colour space of the config that `then` starts from: the working space
+    // itself, or its aces_interchange space reached through built-in transforms.
+    OCIO::ConstTransformRcPtr from_result(ResultEncoding source,
+                                          const std::function<OCIO::TransformRcPtr(const std::string&)>& then) const;
     void require_working_space() const;
 
     ActiveConfig config_;

@@ -25,6 +25,7 @@
 #include "ocio/config.h"
 #include "ocio/lut_bake.h"
 #include "ocio/transform.h"
+#include "ocio_variable.h"
 
 namespace fs = std::filesystem;
 using namespace darkroom::ocio;
@@ -45,22 +46,6 @@ struct TempDir {
         fs::remove_all(path, ec);
     }
     std::string file(const std::string& name) const { return (path / name).string(); }
-};
-
-// Sets or unsets $OCIO for one test and restores it afterwards.
-struct OcioEnv {
-    std::optional<std::string> saved;
-    explicit OcioEnv(const std::optional<std::string>& value) {
-        if (const char* old = std::getenv("OCIO")) saved = old;
-        set(value);
-    }
-    ~OcioEnv() { set(saved); }
-    static void set(const std::optional<std::string>& value) {
-        if (value)
-            setenv("OCIO", value->c_str(), 1);
-        else
-            unsetenv("OCIO");
-    }
 };
 
 void write_text(const std::string& path, const std::string& text) {
@@ -254,7 +239,7 @@ std::vector<float> apply_lut_with_oiiotool(const TempDir& dir, const std::string
                                            int width, int height) {
     // oiiotool 2.4 with OCIO 2.1 needs some config even for a file transform: give it the
     // embedded one, written out.
-    OcioEnv no_config(std::nullopt);
+    ScopedOcioVariable no_config(std::nullopt);
     const std::string config = dir.file("darkroom.ocio");
     write_text(config, embedded_config_yaml());
     const std::string in = dir.file("lut-in.exr"), out = dir.file("lut-out.exr");
@@ -328,7 +313,7 @@ TEST_CASE("0.18 linear Rec.709 goes to the sRGB display as the sRGB encoding of 
         const std::string config = dir.file("darkroom.ocio"), in = dir.file("grey.exr"), out = dir.file("shown.exr");
         write_text(config, embedded_config_yaml());
         write_exr(in, std::vector<float>(4 * 3, 0.18f), 2, 2);
-        OcioEnv unset(std::nullopt);
+        ScopedOcioVariable unset(std::nullopt);
         const std::string command = "oiiotool --colorconfig '" + config + "' '" + in +
                                     "' --iscolorspace lin_rec709 --ociodisplay sRGB Standard -d float -o '" + out + "'";
         INFO(command);
@@ -387,18 +372,18 @@ TEST_CASE("config precedence: explicit file, then the OCIO variable, then embedd
     };
 
     SECTION("nothing given: the embedded config") {
-        OcioEnv unset(std::nullopt);
+        ScopedOcioVariable unset(std::nullopt);
         const ActiveConfig active = resolve_config();
         CHECK(active.source == ConfigSource::embedded);
         CHECK(active.describe().find("$OCIO is not set") != std::string::npos);
         CHECK(srgb_of_grey(active) == Approx(srgb_encode(0.18)).margin(2e-5));
     }
     SECTION("an empty $OCIO counts as unset") {
-        OcioEnv empty(std::string(""));
+        ScopedOcioVariable empty(std::string(""));
         CHECK(resolve_config().source == ConfigSource::embedded);
     }
     SECTION("given by flag") {
-        OcioEnv unset(std::nullopt);
+        ScopedOcioVariable unset(std::nullopt);
         const ActiveConfig active = resolve_config(show);
         CHECK(active.source == ConfigSource::explicit_file);
         CHECK(std::string(active.config->getName()) == "test-show-config");
@@ -407,7 +392,7 @@ TEST_CASE("config precedence: explicit file, then the OCIO variable, then embedd
         CHECK(srgb_of_grey(active) == Approx(srgb_encode(0.18)).margin(2e-5));
     }
     SECTION("given by $OCIO") {
-        OcioEnv set(env);
+        ScopedOcioVariable set(env);
         const ActiveConfig active = resolve_config();
         CHECK(active.source == ConfigSource::environment);
         CHECK(std::string(active.config->getName()) == "test-env-config");
@@ -415,7 +400,7 @@ TEST_CASE("config precedence: explicit file, then the OCIO variable, then embedd
         CHECK(srgb_of_grey(active) == Approx(srgb_encode(0.18)).margin(2e-5));
     }
     SECTION("the flag wins over $OCIO") {
-        OcioEnv set(env);
+        ScopedOcioVariable set(env);
         const ActiveConfig active = resolve_config(show, "the OFX host");
         CHECK(active.source == ConfigSource::explicit_file);
         CHECK(std::string(active.config->getName()) == "test-show-config");
@@ -449,7 +434,7 @@ TEST_CASE("a missing or invalid config is an error naming the file, never the em
         }
         return "(no ConfigError)";
     };
-    OcioEnv unset(std::nullopt);
+    ScopedOcioVariable unset(std::nullopt);
     SECTION("missing, by flag") {
         const std::string m = message_of([&] { resolve_config(missing); });
         CHECK(m.find(missing) != std::string::npos);
@@ -457,7 +442,7 @@ TEST_CASE("a missing or invalid config is an error naming the file, never the em
         CHECK(m.find("--colorconfig") != std::string::npos);
     }
     SECTION("missing, by $OCIO: an error too, saying it came from $OCIO") {
-        OcioEnv set(missing);
+        ScopedOcioVariable set(missing);
         const std::string m = message_of([&] { resolve_config(); });
         CHECK(m.find(missing) != std::string::npos);
         CHECK(m.find("$OCIO") != std::string::npos);
@@ -488,7 +473,7 @@ TEST_CASE("a config without displays is an error naming the config", "[ocio][con
                "displays: {}\n"
                "colorspaces:\n"
                "  - !<ColorSpace>\n    name: lin_rec709\n    encoding: scene-linear\n");
-    OcioEnv unset(std::nullopt);
+    ScopedOcioVariable unset(std::nullopt);
     // OCIO 2.1 holds a config without displays invalid, so it fails as it loads.
     try {
         resolve_config(path);
@@ -625,6 +610,11 @@ TEST_CASE("conversions from several threads at once agree", "[ocio][convert]") {
         });
     for (std::thread& th : threads) th.join();
     for (const auto& r : results) CHECK(std::memcmp(r.data(), expected.data(), sizeof(float) * expected.size()) == 0);
+
+    // One buffer on several row bands: the same bits as one thread.
+    std::vector<float> banded = reference;
+    converter.to_display("sRGB", "ACES 1.0 - SDR Video")->apply(PixelBuffer::packed(banded.data(), 64, 64, 3), 3);
+    CHECK(std::memcmp(banded.data(), expected.data(), sizeof(float) * expected.size()) == 0);
 }
 
 // ==== LUT baking ====
@@ -815,5 +805,67 @@ TEST_CASE("LUT accuracy against size", "[.lut-accuracy]") {
                             tet.max, tet.mean, tri.max, tri.mean, (double)fs::file_size(lut) / 1024.0);
             }
         }
+    }
+}
+
+TEST_CASE("the scan result is read as Cineon Log, whatever the output", "[ocio][convert]") {
+    ColorConverter converter(embedded_active_config());
+    const ResultEncoding scan = ResultEncoding::cineon_log;
+    // Kodak's reference white (code 685) and black (code 95) decode to 1 and 0, as the
+    // embedded config's own Cineon Log space does.
+    const std::array<float, 3> codes = {685.0f / 1023, 95.0f / 1023, 0.5f};
+    const auto linear = convert(*converter.from_working("lin_rec709", scan), codes);
+    const auto reference = convert(*converter.to_working("Cineon Log"), codes);
+    CHECK(linear[0] == Approx(1.0).margin(1e-5));
+    CHECK(linear[1] == Approx(0.0).margin(1e-5));
+    for (int c = 0; c < 3; ++c) CHECK(linear[c] == Approx(reference[c]).margin(1e-6));
+    // To Cineon Log itself: decode then encode cancel, so nothing is done.
+    CHECK(converter.from_working("Cineon Log", scan)->is_noop());
+    // To a display: the display of the decoded values.
+    const auto shown = convert(*converter.to_display("sRGB", "Standard", scan), codes);
+    const auto shown_linear = convert(*converter.to_display("sRGB", "Standard"), linear);
+    for (int c = 0; c < 3; ++c) CHECK(shown[c] == Approx(shown_linear[c]).margin(1e-6));
+    // Cached apart from the working-space conversions of the same names.
+    CHECK(converter.from_working("lin_rec709", scan) != converter.from_working("lin_rec709"));
+    CHECK(converter.from_working("lin_rec709")->is_noop());
+    // Data destinations take the scan as it is.
+    CHECK(converter.from_working("Raw", scan)->is_noop());
+    CHECK(converter.to_display("sRGB", "Raw", scan)->is_noop());
+}
+
+TEST_CASE("the embedded config written out is the same config, and a bad path is named", "[ocio][config]") {
+    TempDir dir;
+    const std::string path = dir.file("darkroom.ocio");
+    write_embedded_config(path);
+    ScopedOcioVariable unset(std::nullopt);
+    const ActiveConfig written = resolve_config(path);
+    CHECK(std::string(written.config->getName()) == std::string(embedded_config()->getName()));
+    CHECK(color_space_names(*written.config) == color_space_names(*embedded_config()));
+    const std::string bad = dir.file("no-such-dir/darkroom.ocio");
+    CHECK_THROWS_WITH(write_embedded_config(bad), Catch::Contains(bad));
+}
+
+TEST_CASE("every output of the embedded config keeps the model's results finite", "[ocio][convert]") {
+    // The model's results are finite and non-negative (README, bad pixels). Working-space
+    // values: black, white, a saturated primary and the 1e30 clamp. Scan codes / 1023: 0 up
+    // to 2 (code 2046: (2046 - 95) x 0.002 = 3.9 density above the base).
+    ColorConverter converter(embedded_active_config());
+    const std::vector<float> working = {0, 0, 0, 1, 1, 1, 1, 0, 0, 1e30f, 1e30f, 1e30f};
+    const std::vector<float> scan = {0, 0, 0, 1, 1, 1, 2, 0, 0, 2, 2, 2};
+    for (ResultEncoding source : {ResultEncoding::working_linear, ResultEncoding::cineon_log}) {
+        auto all_finite = [&](const Conversion& c) {
+            std::vector<float> v = source == ResultEncoding::cineon_log ? scan : working;
+            c.apply_rgb(v.data(), v.size() / 3);
+            return std::all_of(v.begin(), v.end(), [](float x) { return std::isfinite(x); });
+        };
+        for (const std::string& cs : color_space_names(*embedded_config())) {
+            INFO(cs);
+            CHECK(all_finite(*converter.from_working(cs, source)));
+        }
+        for (const std::string& display : display_names(*embedded_config()))
+            for (const std::string& view : view_names(*embedded_config(), display)) {
+                INFO(display << " / " << view);
+                CHECK(all_finite(*converter.to_display(display, view, source)));
+            }
     }
 }

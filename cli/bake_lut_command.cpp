@@ -1,0 +1,103 @@
+// darkroom bake-lut: the deterministic per-pixel part of a look (tone and colour; no
+// grain, MTF or halation, which depend on neighbours and on the seed) as a 3D LUT file
+// that any OCIO host applies, e.g. `oiiotool --ociofiletransform`. The same look and
+// colour flags as develop; the Plan runs over the LUT's lattice as an image.
+#include <cmath>
+#include <iostream>
+#include <sstream>
+
+#include "cli/commands.h"
+#include "cli/image_io.h"
+#include "cli/look_options.h"
+#include "ocio/lut_bake.h"
+
+namespace darkroom::cli {
+
+namespace {
+
+struct BakeLutOptions {
+    std::string output;
+    int cube_size = 65;
+    LookOptions look;
+};
+
+// The lattice is developed as an image this many pixels wide (the width only sets a pixel
+// pitch, which no per-pixel stage depends on).
+constexpr int kLatticeImageWidth = 4096;
+
+std::string signed_stops(double ev) {
+    std::ostringstream s;
+    s << (ev >= 0 ? "+" : "") << ev << " EV";
+    return s.str();
+}
+
+// What the LUT holds, for its comments / CLF description.
+std::string describe_look(const LookOptions& look, const std::string& input, const ocio::Conversion& output) {
+    const DevelopSettings& s = look.settings;
+    std::ostringstream d;
+    d << "film " << look.film;
+    if (s.output == OutputMode::print) d << ", paper " << look.paper;
+    d << ", exposure " << signed_stops(s.exposure_ev);
+    if (s.output == OutputMode::print)
+        d << ", print exposure " << signed_stops(s.print_exposure_ev) << ", printer lights " << s.printer_lights[0]
+          << "/" << s.printer_lights[1] << "/" << s.printer_lights[2];
+    d << "\ninput: " << (input.empty() ? "the working space (linear Rec.709, D65)" : input)
+      << "\noutput: " << output.description()
+      << "\ngrain, MTF and halation are left out: they are not per-pixel";
+    return d.str();
+}
+
+void run_bake_lut(const BakeLutOptions& o) {
+    LookOptions look = o.look;
+    DevelopSettings& s = look.settings;
+    if (s.input_units != InputUnits::scene_linear)
+        throw UserError("bake-lut samples scene-linear input: --input-units lux-seconds is not supported");
+    s.grain = false;
+    s.mtf = false;
+    s.halation = 0;
+    try {
+        ocio::lut_format_for_path(o.output);
+    } catch (const ocio::OcioError& e) {
+        throw UserError(e.what());
+    }
+    const ColourIO colour(look.colour, s.output, look.verbose);
+
+    const ocio::PixelFunction develop_lattice = [&](float* rgb, std::size_t n_pixels) {
+        const int width = (int)std::min<std::size_t>(n_pixels, kLatticeImageWidth);
+        const int height = (int)((n_pixels + width - 1) / width);
+        const Plan plan = compile_look(look, FrameGeometry{width, height});
+        Image in(width, height, 3);
+        std::copy(rgb, rgb + 3 * n_pixels, in.pixels.begin());
+        Image out(in.window, 3);
+        plan.run(in.view(), out.view(), look.threads);
+        colour.result_to_output(out, look.threads);
+        std::copy(out.pixels.begin(), out.pixels.begin() + 3 * n_pixels, rgb);
+    };
+    ocio::LutBakeSettings settings;
+    settings.cube_size = o.cube_size;
+    settings.title = "Darkroom look (" + look.film + ")";
+    settings.description = describe_look(look, colour.input_space(), colour.output_conversion());
+    try {
+        const ocio::BakedLut baked =
+            ocio::bake_look(colour.converter(), colour.input_space(), develop_lattice, settings, o.output);
+        std::cout << "wrote " << baked.path << ": " << baked.summary << "\n";
+    } catch (const ocio::OcioError& e) {
+        throw UserError(e.what());
+    }
+}
+
+}  // namespace
+
+void add_bake_lut_command(CLI::App& app) {
+    auto o = std::make_shared<BakeLutOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "bake-lut", "Write the look's tone and colour (no grain, MTF or halation) as a .cube or .clf 3D LUT");
+    cmd->add_option("-o,--out", o->output, "LUT file: .clf (exact input conversion) or .cube")->required();
+    cmd->add_option("--size", o->cube_size, "Lattice points per axis")
+        ->check(CLI::Range(2, 129))
+        ->capture_default_str();
+    add_look_flags(*cmd, o->look);
+    cmd->callback([o] { run_bake_lut(*o); });
+}
+
+}  // namespace darkroom::cli

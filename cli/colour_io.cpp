@@ -1,0 +1,83 @@
+#include "cli/colour_io.h"
+
+#include <iostream>
+
+#include "cli/image_io.h"
+
+namespace darkroom::cli {
+
+namespace {
+
+ocio::ActiveConfig resolve_config(const ColourOptions& o) {
+    try {
+        return ocio::resolve_config(o.config_path, "--colorconfig");
+    } catch (const ocio::OcioError& e) {
+        throw UserError(e.what());
+    }
+}
+
+const char* output_mode_name(OutputMode mode) {
+    switch (mode) {
+        case OutputMode::print: return "print";
+        case OutputMode::negative: return "negative";
+        case OutputMode::density: return "density";
+        case OutputMode::scan: return "scan";
+        case OutputMode::texture: return "texture";
+    }
+    return "?";
+}
+
+}  // namespace
+
+void add_colour_flags(CLI::App& cmd, ColourOptions& colour) {
+    cmd.add_option("--colorconfig", colour.config_path,
+                   "OCIO config file (default: $OCIO, else the embedded config)");
+    cmd.add_option("--iscolorspace", colour.input_space,
+                   "Colour space of the input (default: the working space, linear Rec.709)");
+    CLI::Option* to_space =
+        cmd.add_option("--tocolorspace", colour.output_space, "Convert the result to this colour space");
+    cmd.add_option("--ociodisplay", colour.display_view,
+                   "Convert the result to this display and view (\"\" for the config's defaults)")
+        ->expected(2)
+        ->type_name("DISPLAY VIEW")
+        ->excludes(to_space);
+}
+
+ColourIO::ColourIO(const ColourOptions& o, OutputMode output, bool verbose)
+    : converter_(resolve_config(o)), input_space_(o.input_space) {
+    const bool to_display = !o.display_view.empty();
+    const bool converts_result = to_display || !o.output_space.empty();
+    if (output == OutputMode::density && converts_result)
+        throw UserError(std::string("--output density writes densities, which are data, not colours: ") +
+                        (to_display ? "--ociodisplay" : "--tocolorspace") + " cannot convert them");
+    const ocio::ResultEncoding result =
+        output == OutputMode::scan ? ocio::ResultEncoding::cineon_log : ocio::ResultEncoding::working_linear;
+    try {
+        input_ = input_space_.empty()
+                     ? std::make_shared<const ocio::Conversion>(nullptr, "already in the working space (no --iscolorspace)")
+                     : converter_.to_working(input_space_);
+        if (to_display)
+            output_ = converter_.to_display(o.display_view[0], o.display_view[1], result);
+        else if (!o.output_space.empty())
+            output_ = converter_.from_working(o.output_space, result);
+        else
+            output_ = std::make_shared<const ocio::Conversion>(nullptr, "left as the model writes it (no --tocolorspace or --ociodisplay)");
+    } catch (const ocio::OcioError& e) {
+        throw UserError(e.what());
+    }
+    if (!verbose) return;
+    std::cerr << converter_.config().describe() << "\n" << "colour: " << converter_.working_space().describe() << "\n";
+    auto say = [](const char* what, const ocio::Conversion& c) {
+        std::cerr << "colour: " << what << ": " << c.description() << (c.is_noop() ? " (no-op: skipped)" : "") << "\n";
+    };
+    say("input", *input_);
+    say((std::string(output_mode_name(output)) + " result").c_str(), *output_);
+}
+
+void ColourIO::apply(const ocio::Conversion& conversion, Image& image, int threads) {
+    conversion.apply(ocio::PixelBuffer::packed(image.pixels.data(), image.window.width(), image.window.height(),
+                                               image.channels),
+                     threads);
+}
+
+}  // namespace darkroom::cli

@@ -1,0 +1,57 @@
+// Colour management for the commands that develop (develop, demo, bake-lut): which OCIO
+// config is active, the input picture's colour space to the model's working space, and
+// the model's result to an output colour space or to a display and view. The flags are
+// oiiotool's spelling; the library is ocio/.
+//
+// What the model's result is, per output mode (core/develop.h):
+//   print, negative, texture  working-space values (linear Rec.709, D65)
+//   scan                      Cineon log code values / 1023 (the "Cineon Log" space)
+//   density                   data: asking to colour-convert it is an error
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+#include "core/develop.h"
+#include "core/image.h"
+#include "ocio/transform.h"
+
+namespace darkroom::cli {
+
+struct ColourOptions {
+    std::string config_path;                // --colorconfig; empty: $OCIO, then the embedded config
+    std::string input_space;                // --iscolorspace; empty: the working space
+    std::string output_space;               // --tocolorspace
+    std::vector<std::string> display_view;  // --ociodisplay DISPLAY VIEW ("" for the defaults)
+};
+
+void add_colour_flags(CLI::App& command, ColourOptions& colour);
+
+// The active config and the two conversions one develop run needs, resolved up front so
+// that a bad config or name fails before any pixel is computed (UserError naming it).
+class ColourIO {
+public:
+    // With `verbose`, prints the active config and why, the working space, and each
+    // conversion (or that it is skipped as a no-op) to stderr.
+    ColourIO(const ColourOptions& options, OutputMode output, bool verbose);
+
+    // In place, on the first three channels (further channels, e.g. alpha, unchanged), on
+    // `threads` threads (0: all cores).
+    void input_to_working(Image& image, int threads) const { apply(*input_, image, threads); }
+    void result_to_output(Image& image, int threads) const { apply(*output_, image, threads); }
+
+    const ocio::ColorConverter& converter() const { return converter_; }
+    // The input colour space as given; empty for the working space.
+    const std::string& input_space() const { return input_space_; }
+    const ocio::Conversion& output_conversion() const { return *output_; }
+
+private:
+    static void apply(const ocio::Conversion& conversion, Image& image, int threads);
+
+    ocio::ColorConverter converter_;
+    std::string input_space_;
+    ocio::ConversionPtr input_, output_;
+};
+
+}  // namespace darkroom::cli
