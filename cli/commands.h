@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <string>
 
 namespace darkroom::cli {
 
@@ -9,5 +10,9 @@ void add_develop_command(CLI::App& app);
 void add_stocks_command(CLI::App& app);
 void add_sensitometry_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
+
+// The command line as typed, for the outputs' Software and ImageHistory metadata.
+void set_command_line(int argc, char** argv);
+const std::string& command_line();
 
 }  // namespace darkroom::cli

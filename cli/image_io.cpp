@@ -1,9 +1,10 @@
 #include "cli/image_io.h"
 
 #include <OpenImageIO/imagebuf.h>
-#include <cstdio>
+#include <OpenImageIO/strutil.h>
 #include <filesystem>
-#include <unistd.h>
+
+#include "cli/atomic_file.h"
 
 namespace darkroom::cli {
 
@@ -36,42 +37,61 @@ bool is_float_format(const std::string& path) {
     return ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".hdr";
 }
 
-void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
-                 const std::string& protected_input) {
-    if (!protected_input.empty() && same_file(path, protected_input))
-        throw UserError("refusing to overwrite the input '" + path + "' with the output");
-    fs::path target(path);
-    bool wants_float = is_float_format(path);
+const std::vector<std::string>& output_data_types() {
+    static const std::vector<std::string> types{"uint8", "uint16", "half", "float"};
+    return types;
+}
 
-    OIIO::ImageSpec spec(image.window.width(), image.window.height(), image.channels,
-                         wants_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT16);
-    spec.x = image.window.x0;
-    spec.y = image.window.y0;
+namespace {
+
+OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, const std::string& path,
+                            const WriteOptions& options) {
+    OIIO::TypeDesc type = is_float_format(path) ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT16;
+    if (!options.data_type.empty()) type = OIIO::TypeDesc(options.data_type);
+    OIIO::ImageSpec spec(image.window.width(), image.window.height(), image.channels, type);
+    spec.extra_attribs = like.extra_attribs;
+    spec.x = like.x + image.window.x0;
+    spec.y = like.y + image.window.y0;
     spec.full_x = like.full_x;
     spec.full_y = like.full_y;
     spec.full_width = like.full_width > 0 ? like.full_width : spec.width;
     spec.full_height = like.full_height > 0 ? like.full_height : spec.height;
-    if (image.channels == 4) spec.alpha_channel = 3;
+    for (int c = 0; c < image.channels; ++c) {
+        const char* rgb[3] = {"R", "G", "B"};
+        spec.channelnames[c] = c < 3 ? rgb[c] : c < like.nchannels ? like.channelnames[c] : "A";
+    }
+    spec.alpha_channel = like.alpha_channel >= 3 && like.alpha_channel < image.channels ? like.alpha_channel
+                         : image.channels == 4                                           ? 3
+                                                                                         : -1;
+    spec.z_channel = like.z_channel >= 3 && like.z_channel < image.channels ? like.z_channel : -1;
+    if (!options.compression.empty()) spec.attribute("compression", options.compression);
+    if (!options.command_line.empty()) {
+        std::string history = spec.get_string_attribute("Exif:ImageHistory");
+        if (!OIIO::Strutil::ends_with(history, options.command_line)) {
+            if (!history.empty() && history.back() != '\n') history += "\n";
+            spec.attribute("Exif:ImageHistory", history + options.command_line);
+        }
+        spec.attribute("Software", "darkroom " DARKROOM_VERSION " : " + options.command_line);
+    }
+    if (!options.look_json.empty()) spec.attribute("darkroom:look", options.look_json);
+    return spec;
+}
 
-    // The temporary name keeps the extension so OIIO picks the same format.
-    fs::path temp = target.parent_path() / (".darkroom-tmp-" + std::to_string(getpid()) + "-" +
-                                            target.filename().string());
-    auto out = OIIO::ImageOutput::create(target.string());
+}  // namespace
+
+void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
+                 const std::string& protected_input, const WriteOptions& options) {
+    if (!protected_input.empty() && same_file(path, protected_input))
+        throw UserError("refusing to overwrite the input '" + path + "' with the output");
+    OIIO::ImageSpec spec = output_spec(image, like, path, options);
+    auto out = OIIO::ImageOutput::create(path);
     if (!out) throw UserError("cannot write '" + path + "': " + OIIO::geterror());
     if (!out->supports("origin")) spec.x = spec.y = 0;
-    if (!out->open(temp.string(), spec) ||
-        !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close()) {
-        std::string err = out->geterror();
-        std::error_code ec;
-        fs::remove(temp, ec);
-        throw UserError("cannot write '" + path + "': " + err);
-    }
-    std::error_code ec;
-    fs::rename(temp, target, ec);
-    if (ec) {
-        fs::remove(temp, ec);
-        throw UserError("cannot move the finished output to '" + path + "': " + ec.message());
-    }
+    TempFile temp{fs::path(path)};
+    if (!out->open(temp.path().string(), spec) ||
+        !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
+        throw UserError("cannot write '" + path + "': " + out->geterror());
+    temp.commit();
 }
 
 }  // namespace darkroom::cli

@@ -1,9 +1,8 @@
 #include "cli/look_options.h"
 
 #include <iostream>
-#include <map>
 
-#include "cli/image_io.h"
+#include "cli/user_error.h"
 
 namespace darkroom::cli {
 
@@ -17,27 +16,35 @@ void add_look_flags(CLI::App& cmd, LookOptions& look) {
         ->capture_default_str();
     cmd.add_option("--print-exposure", s.print_exposure_ev, "Print exposure in stops relative to the automatic one")
         ->capture_default_str();
-    const std::map<std::string, OutputMode> outputs{
-        {"print", OutputMode::print}, {"negative", OutputMode::negative}, {"density", OutputMode::density}};
-    cmd.add_option("--output", s.output, "What to write: print (reflectance), negative (transmittance), density")
-        ->transform(CLI::CheckedTransformer(outputs, CLI::ignore_case))
-        ->default_str("print");
-    const std::map<std::string, InputUnits> units{{"scene-linear", InputUnits::scene_linear},
-                                                  {"lux-seconds", InputUnits::lux_seconds}};
-    cmd.add_option("--input-units", s.input_units,
-                   "scene-linear (metered so 0.18 is mid grey) or lux-seconds (pixels are the exposure H)")
-        ->transform(CLI::CheckedTransformer(units, CLI::ignore_case))
-        ->default_str("scene-linear");
+    add_choice(cmd, "--output", s.output,
+               {{"print", OutputMode::print}, {"negative", OutputMode::negative}, {"density", OutputMode::density}},
+               "What to write: print (reflectance), negative (transmittance), density");
+    add_choice(cmd, "--input-units", s.input_units,
+               {{"scene-linear", InputUnits::scene_linear}, {"lux-seconds", InputUnits::lux_seconds}},
+               "scene-linear (metered so 0.18 is mid grey) or lux-seconds (pixels are the exposure H)");
     cmd.add_option("--seed", s.seed, "Grain seed")->capture_default_str();
-    cmd.add_option("--frame", s.frame, "Frame number (each frame has its own grain)")->capture_default_str();
-    cmd.add_flag("--no-grain{false}", s.grain, "Leave out granularity");
-    cmd.add_flag("--no-mtf{false}", s.mtf, "Leave out internal scattering (MTF)");
-    cmd.add_option("--frame-width-mm", s.frame_width_mm, "Film frame width in mm (default: the stock's format)")
+    // The frame number belongs to the image, not the look.
+    cmd.add_option("--frame", s.frame, "Frame number (each frame has its own grain)")
+        ->capture_default_str()
+        ->configurable(false);
+    add_switch(cmd, "grain", s.grain, "Granularity (--no-grain leaves it out)");
+    add_switch(cmd, "mtf", s.mtf, "Internal scattering, the MTF (--no-mtf leaves it out)");
+    cmd.add_option("--frame-width-mm", s.frame_width_mm, "Film frame width in mm (0: the stock's format)")
+        ->capture_default_str()
         ->check(CLI::Range(0.0, 1e4));
-    cmd.add_option("--print-width-mm", s.print_width_mm, "Print width in mm (default: the paper's format)")
+    cmd.add_option("--print-width-mm", s.print_width_mm, "Print width in mm (0: the paper's format)")
+        ->capture_default_str()
         ->check(CLI::Range(0.0, 1e4));
-    cmd.add_option("--threads", look.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
-    cmd.add_flag("-v,--verbose", look.verbose, "Print the plan: the stages run and those skipped");
+    // How to run, not how the image looks: kept out of look files.
+    cmd.add_option("--threads", look.threads, "Worker threads (0 = all cores; default $OPENIMAGEIO_THREADS or 0)")
+        ->check(CLI::Range(0, 1024))
+        ->envname("OPENIMAGEIO_THREADS")
+        ->configurable(false);
+    cmd.add_flag("-v,--verbose", look.verbose, "Print the plan: the stages run and those skipped")->configurable(false);
+}
+
+CLI::Option* add_switch(CLI::App& cmd, const std::string& name, bool& value, const std::string& help) {
+    return cmd.add_flag("--" + name + ",!--no-" + name, value, help)->default_str(value ? "true" : "false");
 }
 
 Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {

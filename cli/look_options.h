@@ -1,9 +1,17 @@
 // The look flags shared by every command that develops (develop, demo): stocks, exposure,
 // output mode, grain and MTF switches, seed and frame.
+//
+// Every flag registered here is part of the look (saved by --save-look, read by --look; see
+// cli/look_file.h) unless it is marked configurable(false). For a setting to round-trip
+// through a look file its option must know its default: options bound to a variable call
+// capture_default_str(), enumerations use add_choice() and on/off settings add_switch().
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/develop.h"
 
@@ -18,6 +26,28 @@ struct LookOptions {
 };
 
 void add_look_flags(CLI::App& command, LookOptions& look);
+
+// "--NAME" and "--no-NAME", with its default recorded for look files.
+CLI::Option* add_switch(CLI::App& command, const std::string& name, bool& value, const std::string& help);
+
+// An enumeration chosen by name (case-insensitive); the look file keeps the name.
+template <typename Enum>
+CLI::Option* add_choice(CLI::App& command, const std::string& flag, Enum& value,
+                        const std::vector<std::pair<std::string, Enum>>& choices, const std::string& help) {
+    std::vector<std::string> names;
+    std::string current;
+    for (const auto& [name, e] : choices) {
+        names.push_back(name);
+        if (e == value) current = name;
+    }
+    auto set = [&value, choices](const std::string& text) {
+        for (const auto& [name, e] : choices)
+            if (CLI::detail::to_lower(text) == name) value = e;
+    };
+    return command.add_option_function<std::string>(flag, set, help + " (" + CLI::detail::join(names, ", ") + ")")
+        ->check(CLI::IsMember(names, CLI::ignore_case))
+        ->default_str(current);
+}
 
 // Resolves the stocks and compiles the plan for a frame; prints it with -v.
 Plan compile_look(const LookOptions& look, const FrameGeometry& frame);

@@ -1,54 +1,7 @@
 // The darkroom program run as a user runs it: exit codes, messages, outputs.
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
-#include <catch2/catch.hpp>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
+#include "cli_support.h"
 
-namespace fs = std::filesystem;
-
-namespace {
-
-struct Result {
-    int exit_code;
-    std::string output;  // stdout and stderr together
-};
-
-const fs::path kTmp = DARKROOM_TEST_TMP;
-
-Result darkroom(const std::string& args) {
-    fs::create_directories(kTmp);
-    fs::path log = kTmp / ("output-" + std::to_string(std::hash<std::string>{}(args)) + ".txt");
-    std::string cmd = std::string(DARKROOM_EXE) + " " + args + " > " + log.string() + " 2>&1";
-    int status = std::system(cmd.c_str());
-    std::ifstream in(log);
-    std::stringstream text;
-    text << in.rdbuf();
-    return {WEXITSTATUS(status), text.str()};
-}
-
-std::string make_input(const std::string& name, int w = 64, int h = 48) {
-    fs::create_directories(kTmp);
-    std::string path = (kTmp / name).string();
-    OIIO::ImageBuf buf(OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::FLOAT));
-    const float top[3] = {0.02f, 0.05f, 0.1f}, bottom[3] = {1.5f, 0.9f, 0.3f};
-    OIIO::ImageBufAlgo::fill(buf, top, bottom);
-    REQUIRE(buf.write(path));
-    return path;
-}
-
-std::vector<float> pixels(const std::string& path, OIIO::ImageSpec* spec = nullptr) {
-    OIIO::ImageBuf buf(path);
-    REQUIRE(buf.read(0, 0, true, OIIO::TypeDesc::FLOAT));
-    if (spec) *spec = buf.spec();
-    std::vector<float> out(buf.spec().image_pixels() * buf.nchannels());
-    buf.get_pixels(buf.roi(), OIIO::TypeDesc::FLOAT, out.data());
-    return out;
-}
-
-}  // namespace
+using namespace darkroom_test;
 
 TEST_CASE("develop writes an output image", "[cli]") {
     std::string in = make_input("develop-in.exr"), out = (kTmp / "out.exr").string();
