@@ -60,13 +60,6 @@ size_t count_non_finite(const Image& image) {
     return size_t(std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
 }
 
-// Channels past RGB (alpha, depth, mattes) are not film's business: they pass through.
-void copy_extra_channels(const Image& in, Image& out) {
-    for (int y = out.window.y0; y < out.window.y1; ++y)
-        for (int x = out.window.x0; x < out.window.x1; ++x)
-            for (int c = 3; c < out.channels; ++c) out.at(x, y)[c] = in.at(x, y)[c];
-}
-
 void develop_frame(const DevelopOptions& o, const FrameJob& job, int threads, bool print_plan, FrameReport& report) {
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_image(job.input);
@@ -75,14 +68,11 @@ void develop_frame(const DevelopOptions& o, const FrameJob& job, int threads, bo
         report.warnings.push_back(std::to_string(bad) + " non-finite pixel values (NaN counts as no light, +Inf as 1e30)");
 
     start = std::chrono::steady_clock::now();
-    const FrameGeometry frame{in.pixels.window.width(), in.pixels.window.height()};
     LookOptions look = o.look;
     look.settings.frame = job.frame;
     look.verbose = print_plan;
-    Plan plan = compile_look(look, frame);
-    Image out(output_window(o, in.pixels.window), std::max(3, in.pixels.channels));
-    plan.run(in.pixels.view(), out.view(), threads);
-    copy_extra_channels(in.pixels, out);
+    look.threads = threads;
+    const Image out = develop_image(look, in.pixels.view(), output_window(o, in.pixels.window));
     report.develop_seconds = seconds_since(start);
 
     start = std::chrono::steady_clock::now();

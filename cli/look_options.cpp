@@ -65,4 +65,14 @@ Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {
     }
 }
 
+Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window) {
+    Plan plan = compile_look(look, FrameGeometry{in.window.width(), in.window.height()});
+    Image out(out_window, std::max(3, in.channels));
+    plan.run(in, out.view(), look.threads);
+    for (int y = out.window.y0; y < out.window.y1; ++y)
+        for (int x = out.window.x0; x < out.window.x1; ++x)
+            for (int c = 3; c < out.channels; ++c) out.at(x, y)[c] = in.at(x, y)[c];
+    return out;
+}
+
 }  // namespace darkroom::cli

@@ -52,4 +52,9 @@ CLI::Option* add_choice(CLI::App& command, const std::string& flag, Enum& value,
 // Resolves the stocks and compiles the plan for a frame; prints it with -v.
 Plan compile_look(const LookOptions& look, const FrameGeometry& frame);
 
+// Develops `out_window` of the full frame `in` (window (0, 0, width, height)) with `look`.
+// The output has max(3, input channels) channels; those past RGB (alpha, depth, mattes) are
+// not film's business and pass through. The one path for the program and the Python module.
+Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window);
+
 }  // namespace darkroom::cli
