@@ -23,12 +23,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Frames in flight at once: each holds its input, output and the plan's working planes, so
+// Frames at once by default: each holds its input, output and the plan's working planes, so
 // the count is capped to bound memory on 4K plates.
-constexpr int kMaxFramesInFlight = 8;
+constexpr int kDefaultMaxFramesAtOnce = 8;
 
 struct RunOptions {
     bool dry_run = false, quiet = false, no_clobber = false, skip_bad_frames = false;
+    int frames_at_once = 0;  // 0: min(threads, frames, kDefaultMaxFramesAtOnce)
     std::string log_path;
 };
 
@@ -105,8 +106,12 @@ FrameReport process_frame(const DevelopOptions& o, const FrameJob& job, int thre
 // than one frame's rows (reading and writing overlap with developing). Without
 // --skip-bad-frames the first failure stops new frames from starting.
 void run_frames(const DevelopOptions& o, const std::vector<FrameJob>& jobs, int threads, Progress& progress) {
-    const int workers = std::max(1, std::min({int(jobs.size()), threads, kMaxFramesInFlight}));
+    const int most = o.run.frames_at_once > 0 ? o.run.frames_at_once : std::min(threads, kDefaultMaxFramesAtOnce);
+    const int workers = std::max(1, std::min(int(jobs.size()), most));
     const int threads_per_frame = std::max(1, threads / workers);
+    if (o.look.verbose)
+        std::cerr << "threads: " << threads << " (" << workers << " frame" << (workers > 1 ? "s" : "")
+                  << " at once, " << threads_per_frame << " per frame)\n";
     std::atomic<size_t> next{0};
     std::atomic<bool> stop{false};
     auto work = [&] {
@@ -201,6 +206,9 @@ void add_run_flags(CLI::App& cmd, DevelopOptions& o) {
     run_option(cmd.add_flag("--no-clobber", o.run.no_clobber, "Do not overwrite existing outputs (resumes a stopped run)"));
     run_option(cmd.add_flag("--skip-bad-frames", o.run.skip_bad_frames,
                             "Go on past frames that fail (the exit status still reports them)"));
+    run_option(cmd.add_option("--frames-at-once", o.run.frames_at_once,
+                              "Frames developed in parallel, sharing --threads (0: as many as threads, up to 8)")
+                   ->check(CLI::Range(0, 1024)));
     run_option(cmd.add_option("--log", o.run.log_path, "Write per-frame timings, warnings and errors to this JSON file"));
     add_look_file_flags(cmd, o.look_path, o.save_look_path);
 }

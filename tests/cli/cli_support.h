@@ -21,16 +21,19 @@ struct Result {
 
 inline const fs::path kTmp = DARKROOM_TEST_TMP;
 
-inline Result darkroom(const std::string& args) {
+// Runs a shell command line, capturing what it prints.
+inline Result shell(const std::string& command) {
     fs::create_directories(kTmp);
-    fs::path log = kTmp / ("output-" + std::to_string(std::hash<std::string>{}(args)) + ".txt");
-    std::string cmd = std::string(DARKROOM_EXE) + " " + args + " > " + log.string() + " 2>&1";
+    fs::path log = kTmp / ("output-" + std::to_string(std::hash<std::string>{}(command)) + ".txt");
+    std::string cmd = command + " > " + log.string() + " 2>&1";
     int status = std::system(cmd.c_str());
     std::ifstream in(log);
     std::stringstream text;
     text << in.rdbuf();
     return {WEXITSTATUS(status), text.str()};
 }
+
+inline Result darkroom(const std::string& args) { return shell(std::string(DARKROOM_EXE) + " " + args); }
 
 inline std::string make_input(const std::string& name, int w = 64, int h = 48) {
     fs::create_directories(kTmp);

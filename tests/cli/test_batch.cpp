@@ -312,3 +312,36 @@ TEST_CASE("dry run, no-clobber and the input's protection", "[cli][batch][safe-w
     REQUIRE(darkroom("develop " + frame_name(dir, "plate", 1) + " -o " + out + " --no-clobber").exit_code == 0);
     CHECK(file_bytes(out) == "not touched");
 }
+
+TEST_CASE("threads come from --threads, else OPENIMAGEIO_THREADS, and never change the pixels", "[cli][batch][determinism]") {
+    fs::path dir = fresh_dir("threads");
+    make_plates(dir, 1, 3, 24, 16);
+    const std::string seq = "develop " + (dir / "plate.#.exr").string() + " -o ";
+    Result r = shell("OPENIMAGEIO_THREADS=3 " + std::string(DARKROOM_EXE) + " " + seq + (dir / "a.#.exr").string() +
+                     kLook + " -v");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("threads: 3 (3 frames at once, 1 per frame)"));
+    r = shell("OPENIMAGEIO_THREADS=3 " + std::string(DARKROOM_EXE) + " " + seq + (dir / "b.#.exr").string() + kLook +
+              " -v --threads 2 --frames-at-once 1");
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("threads: 2 (1 frame at once, 2 per frame)"));
+    for (int f = 1; f <= 3; ++f) CHECK(pixels(frame_name(dir, "a", f)) == pixels(frame_name(dir, "b", f)));
+}
+
+TEST_CASE("progress: a bar on a terminal, a line per frame otherwise", "[cli][batch][progress]") {
+    fs::path dir = fresh_dir("progress");
+    make_plates(dir, 1, 2, 16, 12);
+    const std::string args = " develop " + (dir / "plate.#.exr").string() + " -o " + (dir / "out.#.exr").string() +
+                             " --no-grain --no-mtf";
+    Result lines = darkroom(args);
+    REQUIRE(lines.exit_code == 0);
+    CHECK_THAT(lines.output, Catch::Contains("frame 2: ") && Catch::Contains("developed in"));
+    CHECK_THAT(lines.output, !Catch::Contains("fps"));
+    // script(1) gives the program a terminal.
+    Result bar = shell("script -qec '" + std::string(DARKROOM_EXE) + args + " --no-clobber' /dev/null");
+    INFO(bar.output);
+    REQUIRE(bar.exit_code == 0);
+    CHECK_THAT(bar.output, Catch::Contains("2/2 frames") && Catch::Contains("fps") && Catch::Contains("left"));
+    CHECK_THAT(bar.output, !Catch::Contains("frame 2: "));
+}
