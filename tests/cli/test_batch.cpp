@@ -345,3 +345,26 @@ TEST_CASE("progress: a bar on a terminal, a line per frame otherwise", "[cli][ba
     CHECK_THAT(bar.output, Catch::Contains("2/2 frames") && Catch::Contains("fps") && Catch::Contains("left"));
     CHECK_THAT(bar.output, !Catch::Contains("frame 2: "));
 }
+
+TEST_CASE("a sequence that cannot be made is refused before any work", "[cli][batch][bad-input]") {
+    fs::path dir = fresh_dir("bad-sequence");
+    make_plates(dir, 1, 2, 8, 6);
+    const std::string seq = (dir / "plate.####.exr").string(), out = (dir / "out.####.exr").string();
+    struct Case {
+        std::string args, message;
+    };
+    for (const Case& c : std::vector<Case>{
+             {seq + " -o " + (dir / "single.exr").string(), "needs a frame number wildcard"},
+             {seq + " -o " + out + " --frames abc", "--frames 'abc' is not a frame range"},
+             {(dir / "nothere.####.exr").string() + " -o " + out, "no files match the input sequence"},
+             {seq + " -o " + out + " --frame 3", "--frame is for a single image"},
+             {frame_name(dir, "plate", 1) + " -o " + out, "name the frames with --frames"},
+             {frame_name(dir, "plate", 1) + " -o " + (dir / "x.exr").string() + " --frames 1-3", "--frames needs"},
+         }) {
+        Result r = darkroom("develop " + c.args);
+        INFO(c.args << "\n" << r.output);
+        CHECK(r.exit_code == 1);
+        CHECK_THAT(r.output, Catch::Contains(c.message));
+    }
+    CHECK_FALSE(fs::exists(frame_name(dir, "out", 1)));
+}
