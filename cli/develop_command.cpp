@@ -164,7 +164,8 @@ void check_output_format(const DevelopOptions& o) {
 
 void run_develop(DevelopOptions& o, CLI::App& cmd) {
     if (!o.look_path.empty()) apply_look_file(cmd, o.look_path);
-    if (!o.save_look_path.empty()) save_look_file(cmd, o.save_look_path);
+    if (!o.save_look_path.empty() && o.run.dry_run) std::cout << "dry run: would write the look to " << o.save_look_path << "\n";
+    if (!o.save_look_path.empty() && !o.run.dry_run) save_look_file(cmd, o.save_look_path);
     if (o.input.empty() && o.output.empty() && !o.save_look_path.empty()) return;
     if (o.input.empty() || o.output.empty()) throw UserError("develop needs an input image and -o OUTPUT");
 

@@ -50,6 +50,8 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
     if (!options.data_type.empty()) type = OIIO::TypeDesc(options.data_type);
     OIIO::ImageSpec spec(image.window.width(), image.window.height(), image.channels, type);
     spec.extra_attribs = like.extra_attribs;
+    // The input's bit depth describes the input's encoding, not a new data type's (as oiiotool).
+    if (type != like.format) spec.erase_attribute("oiio:BitsPerSample");
     spec.x = like.x + image.window.x0;
     spec.y = like.y + image.window.y0;
     spec.full_x = like.full_x;

@@ -90,7 +90,7 @@ void apply_look(CLI::App& cmd, const json& look, const std::string& source) {
         if (opt == nullptr)
             throw UserError(where + ": unknown setting (known: " + CLI::detail::join(known_keys(cmd), ", ") + ")");
         if (!is_look_option(opt)) throw UserError(where + ": '--" + key + "' is a run option, not part of a look");
-        if (opt->count() > 0) continue;  // the command line wins
+        if (opt->count() > 0 || value.is_null()) continue;  // the command line wins; null: not set
         std::vector<std::string> inputs;
         if (value.is_array())
             for (const json& element : value) inputs.push_back(to_input(element, where));
@@ -126,7 +126,10 @@ json look_json(const CLI::App& cmd) {
         if (!is_look_option(opt)) continue;
         const bool flag_like = opt->get_expected_min() == 0;
         std::vector<std::string> values = opt->count() > 0 ? opt->results() : default_values(opt);
-        if (values.empty()) continue;
+        if (values.empty()) {  // no value and no default (an empty name): listed, as not set
+            settings[opt->get_lnames().front()] = nullptr;
+            continue;
+        }
         if (flag_like && opt->count() > 0) values = {opt->as<bool>() ? "true" : "false"};
         json value;
         if (opt->get_expected_max() > 1 || values.size() > 1) {

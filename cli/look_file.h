@@ -3,7 +3,8 @@
 //   {"format": "darkroom-look", "version": 1,
 //    "settings": {"film": "kodak-tri-x-400", "exposure": 0.5, "grain": true, ...}}
 //
-// A setting's key is its flag's long name without the dashes, so the file covers every
+// A setting's key is its flag's long name without the dashes (null: not set, the program's
+// default; arrays for flags that take several values), so the file covers every
 // flag that add_look_flags registers, including flags added later, with no list to keep
 // in step. A flag is part of the look unless it is marked configurable(false) (input and
 // output names, threads, verbosity: how to run, not how the image looks). Flags given on

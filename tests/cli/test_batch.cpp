@@ -99,7 +99,7 @@ TEST_CASE("frame wildcards and ranges follow oiiotool", "[cli][batch]") {
     CHECK(fs::exists(dir / "e.03.exr"));
 }
 
-TEST_CASE("a missing frame fails with its name; --skip-bad-frames goes on and still reports it", "[cli][batch][bad-input]") {
+TEST_CASE("a missing frame fails with its name and --skip-bad-frames goes on and still reports it", "[cli][batch][bad-input]") {
     fs::path dir = fresh_dir("missing");
     make_plates(dir, 1, 3);
     fs::remove(frame_name(dir, "plate", 2));
@@ -127,7 +127,7 @@ TEST_CASE("a missing frame fails with its name; --skip-bad-frames goes on and st
 
 TEST_CASE("a run killed halfway leaves only complete frames and --no-clobber finishes it", "[cli][batch][safe-writes]") {
     fs::path dir = fresh_dir("killed");
-    const int frames = 12;
+    const int frames = 8;
     make_plates(dir, 1, frames, 96, 72);
     const std::string in = (dir / "plate.####.exr").string(), out = (dir / "out.####.exr").string();
     const std::string look = kLook;
@@ -174,7 +174,7 @@ TEST_CASE("a run killed halfway leaves only complete frames and --no-clobber fin
     }
     // The resumed sequence is the sequence an uninterrupted run makes.
     fs::path clean = fresh_dir("killed-clean");
-    REQUIRE(darkroom("develop " + in + " -o " + (clean / "out.####.exr").string() + look + " --threads 2 -q --frames 1,12")
+    REQUIRE(darkroom("develop " + in + " -o " + (clean / "out.####.exr").string() + look + " --threads 2 -q --frames 1,8")
                 .exit_code == 0);
     for (int f : {1, frames}) CHECK(pixels(frame_name(clean, "out", f)) == pixels(frame_name(dir, "out", f)));
 }

@@ -1,5 +1,7 @@
 // Look files through the look flags themselves (cli/look_file.h), without running the program.
+#include <array>
 #include <catch2/catch.hpp>
+#include <memory>
 
 #include "cli/look_file.h"
 #include "cli/look_options.h"
@@ -57,6 +59,30 @@ TEST_CASE("a look read back gives the same settings, and given flags win", "[loo
     CHECK(overridden.look.settings.exposure_ev == 2.0);
     CHECK(overridden.look.settings.grain);
     CHECK(overridden.look.settings.seed == 42);
+}
+
+TEST_CASE("per-channel and unset settings round-trip", "[look]") {
+    // Flags of the kinds others add to the look: three values per channel, an optional name.
+    auto with_extra_flags = [](std::vector<std::string> args, std::array<double, 3>& amount, std::string& name) {
+        auto command = std::make_unique<Command>(std::vector<std::string>{});
+        command->app.add_option("--channel-amount", amount)->delimiter(',')->capture_default_str();
+        command->app.add_option("--colorspace-name", name)->capture_default_str();
+        std::reverse(args.begin(), args.end());
+        command->app.parse(args);
+        return command;
+    };
+    std::array<double, 3> amount{1, 1, 1}, loaded_amount{1, 1, 1};
+    std::string name, loaded_name = "unchanged";
+    auto original = with_extra_flags({"--channel-amount", "0.5,2,1.25"}, amount, name);
+    const nlohmann::json look = look_json(original->app);
+    CHECK(look["settings"]["channel-amount"] == nlohmann::json::array({0.5, 2, 1.25}));
+    CHECK(look["settings"]["colorspace-name"].is_null());
+
+    auto loaded = with_extra_flags({}, loaded_amount, loaded_name);
+    apply_look(loaded->app, look, "test");
+    CHECK(loaded_amount == std::array<double, 3>{0.5, 2, 1.25});
+    CHECK(loaded_name == "unchanged");
+    CHECK(look_json(loaded->app)["settings"]["channel-amount"] == look["settings"]["channel-amount"]);
 }
 
 TEST_CASE("a look file with an unknown key or version is refused with the key named", "[look][bad-input]") {
