@@ -29,6 +29,7 @@ constexpr int kDefaultMaxFramesAtOnce = 8;
 
 struct RunOptions {
     bool dry_run = false, quiet = false, no_clobber = false, skip_bad_frames = false;
+    bool in_place = false;  // -o names the input itself: each frame replaces its input
     int frames_at_once = 0;  // 0: min(threads, frames, kDefaultMaxFramesAtOnce)
     std::string log_path;
 };
@@ -77,7 +78,7 @@ void develop_frame(const DevelopOptions& o, const FrameJob& job, int threads, bo
     report.develop_seconds = seconds_since(start);
 
     start = std::chrono::steady_clock::now();
-    write_image(job.output, out, in.spec, job.input, o.write);
+    write_image(job.output, out, in.spec, o.run.in_place ? "" : job.input, o.write);
     report.write_seconds = seconds_since(start);
 }
 
@@ -174,6 +175,9 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
         throw UserError("--frame is for a single image: each frame of a sequence uses its own frame number");
     const std::vector<FrameJob> jobs = expand_frames(o.input, o.output, o.sequence, o.look.settings.frame);
     check_output_format(o);
+    // Only an output named as the input itself replaces it; an output that merely resolves
+    // to an input (another spelling of a pattern, a link) is refused frame by frame.
+    o.run.in_place = fs::absolute(o.input).lexically_normal() == fs::absolute(o.output).lexically_normal();
     o.write.command_line = command_line();
     o.write.look_json = look_json(cmd).dump();
     if (!o.run.dry_run) remove_stale_outputs_temps(jobs, o.run.quiet);

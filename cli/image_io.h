@@ -33,7 +33,7 @@ struct WriteOptions {
 const std::vector<std::string>& output_data_types();
 
 // Writes through a TempFile (cli/atomic_file.h): a failed or interrupted write never leaves
-// a partial file. Refuses to overwrite `protected_input`. `image.window` is relative to the
+// a partial file. Refuses to overwrite `protected_input` (the same file under any name). `image.window` is relative to the
 // data window of `like`, whose attributes, display window, channel names and alpha channel
 // the output keeps (the first three channels are named R, G, B).
 void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,

@@ -289,7 +289,7 @@ TEST_CASE("a bad look file is named with its problem", "[cli][batch][look][bad-i
     CHECK_FALSE(fs::exists(out));
 }
 
-TEST_CASE("dry run, no-clobber and the input's protection", "[cli][batch][safe-writes]") {
+TEST_CASE("dry run and no-clobber write nothing and an input is replaced only when named as the output", "[cli][batch][safe-writes]") {
     fs::path dir = fresh_dir("dry-run");
     make_plates(dir, 1, 2, 16, 12);
     const std::string seq_in = (dir / "plate.####.exr").string();
@@ -299,12 +299,24 @@ TEST_CASE("dry run, no-clobber and the input's protection", "[cli][batch][safe-w
     CHECK_THAT(r.output, Catch::Contains("plate.0002.exr -> ") && Catch::Contains("dry run"));
     CHECK_FALSE(fs::exists(frame_name(dir, "out", 1)));
 
-    // An input named as the output of a sequence is refused, frame by frame.
+    // An output that only resolves to an input is refused; naming the input itself replaces it.
     const std::string before = file_bytes(frame_name(dir, "plate", 1));
-    r = darkroom("develop " + seq_in + " -o " + seq_in + " --skip-bad-frames");
+    r = darkroom("develop " + frame_name(dir, "plate", 1) + " -o " + (dir / "plate.#.exr").string() +
+                 " --frames 1-2 --skip-bad-frames --no-grain --no-mtf");
     CHECK(r.exit_code == 1);
     CHECK_THAT(r.output, Catch::Contains("refusing to overwrite the input"));
     CHECK(file_bytes(frame_name(dir, "plate", 1)) == before);
+    fs::create_symlink(frame_name(dir, "plate", 1), dir / "link.exr");
+    r = darkroom("develop " + frame_name(dir, "plate", 1) + " -o " + (dir / "link.exr").string());
+    CHECK_THAT(r.output, Catch::Contains("refusing to overwrite the input"));
+    CHECK(file_bytes(frame_name(dir, "plate", 1)) == before);
+
+    const std::vector<float> plate = pixels(frame_name(dir, "plate", 1));
+    r = darkroom("develop " + seq_in + " -o " + seq_in + " --no-grain --no-mtf");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(pixels(frame_name(dir, "plate", 1)) != plate);
+    CHECK(temp_files_in(dir) == 0);
 
     // --no-clobber leaves an existing output alone.
     std::string out = (dir / "single.exr").string();
