@@ -185,7 +185,9 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
     // A single image is developed silently, as oiiotool does, unless asked (-v, -n).
     const bool quiet = o.run.quiet || (!sequence && !o.run.dry_run && !o.look.verbose);
     Progress progress(jobs.size(), quiet, isatty(STDERR_FILENO) && sequence && !o.run.dry_run);
-    run_frames(o, jobs, resolve_threads(o.look.threads), progress);
+    const int threads = resolve_threads(o.look.threads);
+    OIIO::attribute("threads", threads);  // OpenImageIO's own pool (EXR decoding) keeps to --threads too
+    run_frames(o, jobs, threads, progress);
     progress.finish();
     const std::vector<FrameReport> reports = progress.reports();
     if (!o.run.log_path.empty()) write_run_log(o.run.log_path, reports, progress.elapsed_seconds(), command_line());
