@@ -44,7 +44,7 @@ CLI::Option* add_choice(CLI::App& command, const std::string& flag, Enum& value,
         for (const auto& [name, e] : choices)
             if (CLI::detail::to_lower(text) == name) value = e;
     };
-    return command.add_option_function<std::string>(flag, set, help + " (" + CLI::detail::join(names, ", ") + ")")
+    return command.add_option_function<std::string>(flag, set, help)
         ->check(CLI::IsMember(names, CLI::ignore_case))
         ->default_str(current);
 }
