@@ -142,9 +142,14 @@ TEST_CASE("a run killed halfway leaves only complete frames and --no-clobber fin
             _exit(127);
         }
         // Kill it once the first frame is complete: later frames are in flight or not started.
-        while (!fs::exists(frame_name(dir, "out", 1))) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-        kill(pid, signal_number);
         int status = 0;
+        bool exited = false;
+        while (!fs::exists(frame_name(dir, "out", 1)) && !exited) {
+            exited = waitpid(pid, &status, WNOHANG) == pid;
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+        REQUIRE_FALSE(exited);  // the run failed before its first frame
+        kill(pid, signal_number);
         waitpid(pid, &status, 0);
         INFO("signal " << signal_number);
         if (signal_number == SIGTERM) {
