@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "cli/atomic_file.h"
 #include "cli/image_io.h"
 
 namespace darkroom::cli {
@@ -232,7 +233,7 @@ void write_charts(const std::string& path, const std::vector<Chart>& panels, boo
     std::string ext = std::filesystem::path(path).extension().string();
     for (char& c : ext) c = char(std::tolower((unsigned char)c));
     if (ext == ".svg") {
-        write_text_file(path, charts_to_svg(panels));
+        write_text_atomically(path, charts_to_svg(panels));
         if (text_drawn) *text_drawn = true;
         return;
     }

@@ -44,6 +44,7 @@ public:
     const ocio::ColorConverter& converter() const { return converter_; }
     // The input colour space as given; empty for the working space.
     const std::string& input_space() const { return input_space_; }
+    const ocio::Conversion& input_conversion() const { return *input_; }
     const ocio::Conversion& output_conversion() const { return *output_; }
 
 private:

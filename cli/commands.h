@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <string>
 
 namespace darkroom::cli {
 
@@ -13,5 +14,9 @@ void add_grain_command(CLI::App& app);
 void add_plot_command(CLI::App& app);
 void add_bake_lut_command(CLI::App& app);
 void add_colorconfig_command(CLI::App& app);
+
+// The command line as typed, for the outputs' Software and ImageHistory metadata.
+void set_command_line(int argc, char** argv);
+const std::string& command_line();
 
 }  // namespace darkroom::cli

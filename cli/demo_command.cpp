@@ -3,6 +3,7 @@
 
 #include "cli/commands.h"
 #include "cli/image_io.h"
+#include "cli/look_file.h"
 #include "cli/look_options.h"
 #include "core/demo_scene.h"
 
@@ -13,6 +14,7 @@ namespace {
 struct DemoOptions {
     std::string directory = "demo";
     LookOptions look;
+    std::string look_path, save_look_path;
 };
 
 // Display-referred linear -> sRGB-encoded, for the PNG previews.
@@ -25,10 +27,12 @@ Image encode_srgb(Image img) {
     return img;
 }
 
-void run_demo(const DemoOptions& o) {
+void run_demo(const DemoOptions& o, CLI::App& cmd) {
     namespace fs = std::filesystem;
     if (!o.look.colour.input_space.empty())
         throw UserError("demo renders its built-in scene in the working space: --iscolorspace does not apply");
+    if (!o.look_path.empty()) apply_look_file(cmd, o.look_path);
+    if (!o.save_look_path.empty()) save_look_file(cmd, o.save_look_path);
     std::error_code ec;
     fs::create_directories(o.directory, ec);
     if (ec) throw UserError("cannot create '" + o.directory + "': " + ec.message());
@@ -62,9 +66,10 @@ void run_demo(const DemoOptions& o) {
 void add_demo_command(CLI::App& app) {
     auto o = std::make_shared<DemoOptions>();
     CLI::App* cmd = app.add_subcommand("demo", "Render the built-in test scene through the default film and paper");
-    cmd->add_option("-o,--out", o->directory, "Output directory")->capture_default_str();
+    cmd->add_option("-o,--out", o->directory, "Output directory")->capture_default_str()->configurable(false);
+    add_look_file_flags(*cmd, o->look_path, o->save_look_path);
     add_look_flags(*cmd, o->look);
-    cmd->callback([o] { run_demo(*o); });
+    cmd->callback([o, cmd] { run_demo(*o, *cmd); });
 }
 
 }  // namespace darkroom::cli

@@ -1,55 +1,233 @@
+// darkroom develop: one image or a sequence of frames, oiiotool style.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
 #include <iostream>
+#include <set>
+#include <thread>
+#include <unistd.h>
 
+#include "cli/atomic_file.h"
 #include "cli/commands.h"
 #include "cli/image_io.h"
+#include "cli/look_file.h"
 #include "cli/look_options.h"
+#include "cli/progress.h"
+#include "cli/sequence.h"
 
 namespace darkroom::cli {
 
 namespace {
 
+namespace fs = std::filesystem;
+
+// Frames at once by default: each holds its input, output and the plan's working planes, so
+// the count is capped to bound memory on 4K plates.
+constexpr int kDefaultMaxFramesAtOnce = 8;
+
+struct RunOptions {
+    bool dry_run = false, quiet = false, no_clobber = false, skip_bad_frames = false;
+    bool in_place = false;  // -o names the input itself: each frame replaces its input
+    int frames_at_once = 0;  // 0: min(threads, frames, kDefaultMaxFramesAtOnce)
+    std::string log_path;
+};
+
 struct DevelopOptions {
     std::string input, output;
     std::vector<int> window;  // X, Y, W, H
     LookOptions look;
+    SequenceOptions sequence;
+    WriteOptions write;
+    RunOptions run;
+    std::string look_path, save_look_path;
 };
 
-void run_develop(const DevelopOptions& o) {
-    LoadedImage in = read_image(o.input);
-    const FrameGeometry frame{in.pixels.window.width(), in.pixels.window.height()};
-    Window out_window = in.pixels.window;
-    if (!o.window.empty()) {
-        out_window = {o.window[0], o.window[1], o.window[0] + o.window[2], o.window[1] + o.window[3]};
-        if (out_window.empty() || !in.pixels.window.contains(out_window))
-            throw UserError("--window " + std::to_string(o.window[0]) + "," + std::to_string(o.window[1]) + "," +
-                            std::to_string(o.window[2]) + "," + std::to_string(o.window[3]) + " is not inside the " +
-                            std::to_string(frame.width) + "x" + std::to_string(frame.height) + " frame");
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+Window output_window(const DevelopOptions& o, const Window& frame) {
+    if (o.window.empty()) return frame;
+    const Window w{o.window[0], o.window[1], o.window[0] + o.window[2], o.window[1] + o.window[3]};
+    if (w.empty() || !frame.contains(w))
+        throw UserError("--window " + std::to_string(o.window[0]) + "," + std::to_string(o.window[1]) + "," +
+                        std::to_string(o.window[2]) + "," + std::to_string(o.window[3]) + " is not inside the " +
+                        std::to_string(frame.width()) + "x" + std::to_string(frame.height()) + " frame");
+    return w;
+}
+
+size_t count_non_finite(const Image& image) {
+    return size_t(std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
+}
+
+void develop_frame(const DevelopOptions& o, const FrameJob& job, int threads, bool print_plan, FrameReport& report) {
+    auto start = std::chrono::steady_clock::now();
+    LoadedImage in = read_image(job.input);
+    report.read_seconds = seconds_since(start);
+    if (size_t bad = count_non_finite(in.pixels))
+        report.warnings.push_back(std::to_string(bad) + " non-finite pixel values (NaN counts as no light, +Inf as 1e30)");
+
+    start = std::chrono::steady_clock::now();
+    LookOptions look = o.look;
+    look.settings.frame = job.frame;
+    look.verbose = print_plan;
+    look.threads = threads;
+    const Image out = develop_image(look, in.pixels.view(), output_window(o, in.pixels.window));
+    report.develop_seconds = seconds_since(start);
+
+    start = std::chrono::steady_clock::now();
+    write_image(job.output, out, in.spec, o.run.in_place ? "" : job.input, o.write);
+    report.write_seconds = seconds_since(start);
+}
+
+FrameReport process_frame(const DevelopOptions& o, const FrameJob& job, int threads, bool print_plan) {
+    FrameReport report;
+    report.frame = job.frame;
+    report.input = job.input;
+    report.output = job.output;
+    if (o.run.no_clobber && fs::exists(job.output)) {
+        report.status = FrameReport::Status::skipped_existing;
+    } else if (o.run.dry_run) {
+        report.status = FrameReport::Status::dry_run;
+        if (!fs::exists(job.input)) report.warnings.push_back("input '" + job.input + "' does not exist");
+    } else {
+        try {
+            develop_frame(o, job, threads, print_plan, report);
+        } catch (const std::exception& e) {
+            report.status = FrameReport::Status::failed;
+            report.error = e.what();
+        }
     }
-    if (o.look.settings.output == OutputMode::density && !is_float_format(o.output))
+    return report;
+}
+
+// Frames run in parallel, each with its share of the threads: whole frames scale better
+// than one frame's rows (reading and writing overlap with developing). Without
+// --skip-bad-frames the first failure stops new frames from starting.
+void run_frames(const DevelopOptions& o, const std::vector<FrameJob>& jobs, int threads, Progress& progress) {
+    const int most = o.run.frames_at_once > 0 ? o.run.frames_at_once : std::min(threads, kDefaultMaxFramesAtOnce);
+    const int workers = std::max(1, std::min(int(jobs.size()), most));
+    const int threads_per_frame = std::max(1, threads / workers);
+    if (o.look.verbose)
+        std::cerr << "threads: " << threads << " (" << workers << " frame" << (workers > 1 ? "s" : "")
+                  << " at once, " << threads_per_frame << " per frame)\n";
+    std::atomic<size_t> next{0};
+    std::atomic<bool> stop{false};
+    auto work = [&] {
+        for (size_t i = next++; i < jobs.size() && !stop; i = next++) {
+            FrameReport report = process_frame(o, jobs[i], threads_per_frame, o.look.verbose && i == 0);
+            if (report.status == FrameReport::Status::failed && !o.run.skip_bad_frames) stop = true;
+            progress.add(std::move(report));
+        }
+    };
+    std::vector<std::thread> pool;
+    for (int w = 1; w < workers; ++w) pool.emplace_back(work);
+    work();
+    for (std::thread& t : pool) t.join();
+}
+
+int resolve_threads(int requested) {
+    if (requested > 0) return requested;
+    return std::max(1u, std::thread::hardware_concurrency());
+}
+
+void remove_stale_outputs_temps(const std::vector<FrameJob>& jobs, bool quiet) {
+    std::set<fs::path> directories;
+    for (const FrameJob& job : jobs) directories.insert(fs::path(job.output).parent_path());
+    for (const fs::path& dir : directories)
+        if (int removed = remove_stale_temps(dir); removed > 0 && !quiet)
+            std::cerr << "darkroom: removed " << removed << " partial output(s) left in '"
+                      << (dir.empty() ? "." : dir.string()) << "' by an interrupted run\n";
+}
+
+std::string failure_summary(const std::vector<FrameReport>& reports, size_t total) {
+    std::string text;
+    size_t failed = 0;
+    for (const FrameReport& r : reports)
+        if (r.status == FrameReport::Status::failed) {
+            ++failed;
+            text += "\n  frame " + std::to_string(r.frame) + " (" + r.input + "): " + r.error;
+        }
+    if (failed == 0) return "";
+    return std::to_string(failed) + " of " + std::to_string(total) + " frames failed, " +
+           std::to_string(reports.size() - failed) + " finished" + (reports.size() < total ? ", the rest not started" : "") +
+           ":" + text;
+}
+
+void check_output_format(const DevelopOptions& o) {
+    if (o.look.settings.output == OutputMode::density && !is_float_format(o.output) &&
+        (o.write.data_type.empty() || o.write.data_type.find("int") != std::string::npos))
         throw UserError("--output density writes float densities: give a float format such as .exr or .tif, not '" +
                         o.output + "'");
-    const ColourIO colour(o.look.colour, o.look.settings.output, o.look.verbose);
-    Plan plan = compile_look(o.look, frame);
-    // Per-pixel conversions: a window stays that window of the full render.
-    colour.input_to_working(in.pixels, o.look.threads);
-    Image out(out_window, in.pixels.channels >= 4 ? 4 : 3);
-    plan.run(in.pixels.view(), out.view(), o.look.threads);
-    colour.result_to_output(out, o.look.threads);
-    write_image(o.output, out, in.spec, o.input);
+}
+
+void run_develop(DevelopOptions& o, CLI::App& cmd) {
+    if (!o.look_path.empty()) apply_look_file(cmd, o.look_path);
+    if (!o.save_look_path.empty() && o.run.dry_run) std::cout << "dry run: would write the look to " << o.save_look_path << "\n";
+    if (!o.save_look_path.empty() && !o.run.dry_run) save_look_file(cmd, o.save_look_path);
+    if (o.input.empty() && o.output.empty() && !o.save_look_path.empty()) return;
+    if (o.input.empty() || o.output.empty()) throw UserError("develop needs an input image and -o OUTPUT");
+
+    const bool sequence = is_sequence_pattern(o.input) || is_sequence_pattern(o.output);
+    if (sequence && cmd.get_option("--frame")->count() > 0)
+        throw UserError("--frame is for a single image: each frame of a sequence uses its own frame number");
+    const std::vector<FrameJob> jobs = expand_frames(o.input, o.output, o.sequence, o.look.settings.frame);
+    check_output_format(o);
+    // Only an output named as the input itself replaces it; an output that merely resolves
+    // to an input (another spelling of a pattern, a link) is refused frame by frame.
+    o.run.in_place = fs::absolute(o.input).lexically_normal() == fs::absolute(o.output).lexically_normal();
+    o.write.command_line = command_line();
+    o.write.look_json = look_json(cmd).dump();
+    if (!o.run.dry_run) remove_stale_outputs_temps(jobs, o.run.quiet);
+
+    // A single image is developed silently, as oiiotool does, unless asked (-v, -n).
+    const bool quiet = o.run.quiet || (!sequence && !o.run.dry_run && !o.look.verbose);
+    Progress progress(jobs.size(), quiet, isatty(STDERR_FILENO) && sequence && !o.run.dry_run);
+    const int threads = resolve_threads(o.look.threads);
+    OIIO::attribute("threads", threads);  // OpenImageIO's own pool (EXR decoding) keeps to --threads too
+    run_frames(o, jobs, threads, progress);
+    progress.finish();
+    const std::vector<FrameReport> reports = progress.reports();
+    if (!o.run.log_path.empty()) write_run_log(o.run.log_path, reports, progress.elapsed_seconds(), command_line());
+
+    if (!sequence && reports.front().status == FrameReport::Status::failed) throw UserError(reports.front().error);
+    if (std::string summary = failure_summary(reports, jobs.size()); !summary.empty()) throw UserError(summary);
+}
+
+void add_run_flags(CLI::App& cmd, DevelopOptions& o) {
+    auto run_option = [](CLI::Option* opt) { return opt->configurable(false); };
+    run_option(cmd.add_option("input", o.input, "Input image or sequence (plate.####.exr, plate.%04d.exr, plate.@@@@.exr)"));
+    run_option(cmd.add_option("-o,--out", o.output, "Output image or sequence"));
+    run_option(cmd.add_option("--window", o.window, "Render only this window X,Y,W,H of the full frame")
+                   ->delimiter(',')
+                   ->expected(4));
+    run_option(cmd.add_option("--frames", o.sequence.frames, "Frames of a sequence: 1-100, 1-100x2, 1,5,9-12"));
+    run_option(cmd.add_option("--framepadding", o.sequence.framepadding, "Digits of the frame number for '#' wildcards")
+                   ->check(CLI::Range(1, 16)));
+    run_option(cmd.add_option("-d", o.write.data_type, "Output data type")->check(CLI::IsMember(output_data_types())));
+    run_option(cmd.add_option("--compression", o.write.compression, "Output compression (e.g. zip, piz, dwaa:45)"));
+    run_option(cmd.add_flag("-n", o.run.dry_run, "Dry run: say what would be done, write nothing"));
+    run_option(cmd.add_flag("-q", o.run.quiet, "Quiet: only errors and warnings"));
+    run_option(cmd.add_flag("--no-clobber", o.run.no_clobber, "Do not overwrite existing outputs (resumes a stopped run)"));
+    run_option(cmd.add_flag("--skip-bad-frames", o.run.skip_bad_frames,
+                            "Go on past frames that fail (the exit status still reports them)"));
+    run_option(cmd.add_option("--frames-at-once", o.run.frames_at_once,
+                              "Frames developed in parallel, sharing --threads (0: as many as threads, up to 8)")
+                   ->check(CLI::Range(0, 1024)));
+    run_option(cmd.add_option("--log", o.run.log_path, "Write per-frame timings, warnings and errors to this JSON file"));
+    add_look_file_flags(cmd, o.look_path, o.save_look_path);
 }
 
 }  // namespace
 
 void add_develop_command(CLI::App& app) {
     auto o = std::make_shared<DevelopOptions>();
-    CLI::App* cmd = app.add_subcommand("develop", "Develop an image through film (and paper)");
-    cmd->add_option("input", o->input, "Input image (any format OpenImageIO reads)")->required();
-    cmd->add_option("-o,--out", o->output, "Output image")->required();
-    cmd->add_option("--window", o->window, "Render only this window X,Y,W,H of the full frame")
-        ->delimiter(',')
-        ->expected(4);
+    CLI::App* cmd = app.add_subcommand("develop", "Develop an image or a sequence through film (and paper)");
+    add_run_flags(*cmd, *o);
     add_look_flags(*cmd, o->look);
-    cmd->callback([o] { run_develop(*o); });
+    cmd->callback([o, cmd] { run_develop(*o, *cmd); });
 }
 
 }  // namespace darkroom::cli

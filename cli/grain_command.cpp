@@ -8,6 +8,7 @@
 
 #include "cli/chart.h"
 #include "cli/commands.h"
+#include "cli/atomic_file.h"
 #include "cli/image_io.h"
 #include "core/plate/grain_analysis.h"
 #include "core/plate/grain_compare.h"
@@ -243,7 +244,7 @@ void print_profile(const GrainProfile& p) {
 
 void run_analyze(const AnalyzeOptions& o) {
     GrainProfile profile = analyze_files(expand_frames(o.plates, o.frames), o, o.region, "--region");
-    write_text_file(o.output, grain_profile_to_json(profile) + "\n");
+    write_text_atomically(o.output, grain_profile_to_json(profile) + "\n");
     print_profile(profile);
     if (!o.plot.empty()) plot(o.plot, {response_chart("Grain response", {{"", &profile}}), spectrum_chart({{"", &profile}})});
 }
@@ -319,7 +320,7 @@ void run_predict(const PredictOptions& o) {
         throw UserError(e.what());
     }
     GrainProfile profile = predict_grain_profile(stock, ScanGeometry{o.width_px, o.frame_width_mm});
-    write_text_file(o.output, grain_profile_to_json(profile) + "\n");
+    write_text_atomically(o.output, grain_profile_to_json(profile) + "\n");
     std::printf("%s\n", profile.sources.front().c_str());
     print_profile(profile);
 }

@@ -1,9 +1,10 @@
 #include "cli/image_io.h"
 
 #include <OpenImageIO/imagebuf.h>
-#include <cstdio>
+#include <OpenImageIO/strutil.h>
 #include <filesystem>
-#include <unistd.h>
+
+#include "cli/atomic_file.h"
 
 namespace darkroom::cli {
 
@@ -25,16 +26,6 @@ LoadedImage read_image(const std::string& path) {
     return out;
 }
 
-// Renames a finished temporary file over the target, removing it if that fails.
-static void move_into_place(const fs::path& temp, const fs::path& target) {
-    std::error_code ec;
-    fs::rename(temp, target, ec);
-    if (ec) {
-        fs::remove(temp, ec);
-        throw UserError("cannot move the finished output to '" + target.string() + "': " + ec.message());
-    }
-}
-
 static bool same_file(const std::string& a, const std::string& b) {
     std::error_code ec;
     return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
@@ -46,53 +37,63 @@ bool is_float_format(const std::string& path) {
     return ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".hdr";
 }
 
-void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
-                 const std::string& protected_input) {
-    if (!protected_input.empty() && same_file(path, protected_input))
-        throw UserError("refusing to overwrite the input '" + path + "' with the output");
-    fs::path target(path);
-    bool wants_float = is_float_format(path);
+const std::vector<std::string>& output_data_types() {
+    static const std::vector<std::string> types{"uint8", "uint16", "half", "float"};
+    return types;
+}
 
-    OIIO::ImageSpec spec(image.window.width(), image.window.height(), image.channels,
-                         wants_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT16);
-    spec.x = image.window.x0;
-    spec.y = image.window.y0;
+namespace {
+
+OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, const std::string& path,
+                            const WriteOptions& options) {
+    OIIO::TypeDesc type = is_float_format(path) ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT16;
+    if (!options.data_type.empty()) type = OIIO::TypeDesc(options.data_type);
+    OIIO::ImageSpec spec(image.window.width(), image.window.height(), image.channels, type);
+    spec.extra_attribs = like.extra_attribs;
+    // The input's bit depth describes the input's encoding, not a new data type's (as oiiotool).
+    if (type != like.format) spec.erase_attribute("oiio:BitsPerSample");
+    spec.x = like.x + image.window.x0;
+    spec.y = like.y + image.window.y0;
     spec.full_x = like.full_x;
     spec.full_y = like.full_y;
     spec.full_width = like.full_width > 0 ? like.full_width : spec.width;
     spec.full_height = like.full_height > 0 ? like.full_height : spec.height;
-    if (image.channels == 4) spec.alpha_channel = 3;
-
-    // The temporary name keeps the extension so OIIO picks the same format.
-    fs::path temp = target.parent_path() / (".darkroom-tmp-" + std::to_string(getpid()) + "-" +
-                                            target.filename().string());
-    auto out = OIIO::ImageOutput::create(target.string());
-    if (!out) throw UserError("cannot write '" + path + "': " + OIIO::geterror());
-    if (!out->supports("origin")) spec.x = spec.y = 0;
-    if (!out->open(temp.string(), spec) ||
-        !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close()) {
-        std::string err = out->geterror();
-        std::error_code ec;
-        fs::remove(temp, ec);
-        throw UserError("cannot write '" + path + "': " + err);
+    for (int c = 0; c < image.channels; ++c) {
+        const char* rgb[3] = {"R", "G", "B"};
+        spec.channelnames[c] = c < 3 ? rgb[c] : c < like.nchannels ? like.channelnames[c] : "A";
     }
-    move_into_place(temp, target);
+    spec.alpha_channel = like.alpha_channel >= 3 && like.alpha_channel < image.channels ? like.alpha_channel
+                         : image.channels == 4                                           ? 3
+                                                                                         : -1;
+    spec.z_channel = like.z_channel >= 3 && like.z_channel < image.channels ? like.z_channel : -1;
+    if (!options.compression.empty()) spec.attribute("compression", options.compression);
+    if (!options.command_line.empty()) {
+        std::string history = spec.get_string_attribute("Exif:ImageHistory");
+        if (!OIIO::Strutil::ends_with(history, options.command_line)) {
+            if (!history.empty() && history.back() != '\n') history += "\n";
+            spec.attribute("Exif:ImageHistory", history + options.command_line);
+        }
+        spec.attribute("Software", "darkroom " DARKROOM_VERSION " : " + options.command_line);
+    }
+    if (!options.look_json.empty()) spec.attribute("darkroom:look", options.look_json);
+    return spec;
 }
 
-void write_text_file(const std::string& path, const std::string& text) {
-    fs::path target(path), temp = target.parent_path() / (".darkroom-tmp-" + std::to_string(getpid()) + "-" +
-                                                          target.filename().string());
-    {
-        std::FILE* f = std::fopen(temp.string().c_str(), "wb");
-        if (!f) throw UserError("cannot write '" + path + "'");
-        bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-        ok &= std::fclose(f) == 0;
-        if (!ok) {
-            fs::remove(temp);
-            throw UserError("cannot write '" + path + "'");
-        }
-    }
-    move_into_place(temp, target);
+}  // namespace
+
+void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
+                 const std::string& protected_input, const WriteOptions& options) {
+    if (!protected_input.empty() && same_file(path, protected_input))
+        throw UserError("refusing to overwrite the input '" + path + "' with the output");
+    OIIO::ImageSpec spec = output_spec(image, like, path, options);
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) throw UserError("cannot write '" + path + "': " + OIIO::geterror());
+    if (!out->supports("origin")) spec.x = spec.y = 0;
+    TempFile temp{fs::path(path)};
+    if (!out->open(temp.path().string(), spec) ||
+        !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
+        throw UserError("cannot write '" + path + "': " + out->geterror());
+    temp.commit();
 }
 
 }  // namespace darkroom::cli

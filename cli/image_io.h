@@ -4,15 +4,12 @@
 #include <OpenImageIO/imageio.h>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
+#include "cli/user_error.h"
 #include "core/image.h"
 
 namespace darkroom::cli {
-
-// A failure the user can act on: printed as "darkroom: error: <message>", exit 1.
-struct UserError : std::runtime_error {
-    using std::runtime_error::runtime_error;
-};
 
 struct LoadedImage {
     Image pixels;               // window: (0, 0, width, height) of the data window
@@ -24,13 +21,22 @@ LoadedImage read_image(const std::string& path);
 // Whether the file's format (by its extension) stores float pixels: .exr, .tif, .hdr.
 bool is_float_format(const std::string& path);
 
-// Writes to a temporary file beside `path`, then renames it over `path`, so a failed or
-// interrupted write never leaves a partial file. Refuses to overwrite `protected_input`.
-// Pixel type: float for .exr/.tif/.hdr, else the format's default (8/16-bit).
-void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
-                 const std::string& protected_input = "");
+// How an output is encoded and what it says about itself.
+struct WriteOptions {
+    std::string data_type;     // -d: uint8, uint16, half, float; empty: float for float formats, else uint16
+    std::string compression;   // --compression, as OpenImageIO names it (e.g. "zip", "dwaa:45")
+    std::string command_line;  // appended to Exif:ImageHistory and named in Software, as oiiotool does
+    std::string look_json;     // the settings used, stored as "darkroom:look"
+};
 
-// Text (JSON, SVG) written the same way: a temporary file beside `path`, then renamed.
-void write_text_file(const std::string& path, const std::string& text);
+// The data types -d accepts.
+const std::vector<std::string>& output_data_types();
+
+// Writes through a TempFile (cli/atomic_file.h): a failed or interrupted write never leaves
+// a partial file. Refuses to overwrite `protected_input` (the same file under any name). `image.window` is relative to the
+// data window of `like`, whose attributes, display window, channel names and alpha channel
+// the output keeps (the first three channels are named R, G, B).
+void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
+                 const std::string& protected_input = "", const WriteOptions& options = {});
 
 }  // namespace darkroom::cli

@@ -1,17 +1,17 @@
 #include "cli/look_options.h"
 
 #include <iostream>
-#include <map>
 
-#include "cli/image_io.h"
+#include "cli/user_error.h"
 
 namespace darkroom::cli {
 
 namespace {
 
 // A per-channel (R, G, B) setting given as one value for all channels or three.
+// `default_text` is "" where the default is the stock's own value.
 void add_per_channel_option(CLI::App& cmd, const std::string& name, std::array<double, 3>& values,
-                            const std::string& what, double min, double max) {
+                            const std::string& what, double min, double max, const std::string& default_text) {
     cmd.add_option_function<std::vector<double>>(
            name,
            [&values, name](const std::vector<double>& v) {
@@ -22,7 +22,8 @@ void add_per_channel_option(CLI::App& cmd, const std::string& name, std::array<d
            what + " (one value, or R,G,B)")
         ->delimiter(',')
         ->expected(1, 3)
-        ->check(CLI::Range(min, max));
+        ->check(CLI::Range(min, max))
+        ->default_str(default_text);
 }
 
 }  // namespace
@@ -37,50 +38,62 @@ void add_look_flags(CLI::App& cmd, LookOptions& look) {
         ->capture_default_str();
     cmd.add_option("--print-exposure", s.print_exposure_ev, "Print exposure in stops relative to the automatic one")
         ->capture_default_str();
-    const std::map<std::string, OutputMode> outputs{{"print", OutputMode::print},
-                                                    {"negative", OutputMode::negative},
-                                                    {"density", OutputMode::density},
-                                                    {"scan", OutputMode::scan},
-                                                    {"texture", OutputMode::texture}};
-    cmd.add_option("--output", s.output,
-                   "What to write: print (colour of the print), negative (transmittance), density (per layer), "
-                   "scan (Cineon log code values), texture (the input with grain, MTF and halation only)")
-        ->transform(CLI::CheckedTransformer(outputs, CLI::ignore_case))
-        ->default_str("print");
-    const std::map<std::string, InputUnits> units{{"scene-linear", InputUnits::scene_linear},
-                                                  {"lux-seconds", InputUnits::lux_seconds}};
-    cmd.add_option("--input-units", s.input_units,
-                   "scene-linear (metered so 0.18 is mid grey) or lux-seconds (pixels are the exposure H)")
-        ->transform(CLI::CheckedTransformer(units, CLI::ignore_case))
-        ->default_str("scene-linear");
+    add_choice(cmd, "--output", s.output,
+               {{"print", OutputMode::print},
+                {"negative", OutputMode::negative},
+                {"density", OutputMode::density},
+                {"scan", OutputMode::scan},
+                {"texture", OutputMode::texture}},
+               "What to write: print (colour of the print), negative (transmittance), density (per layer), "
+               "scan (Cineon log code values), texture (the input with grain, MTF and halation only)");
+    add_choice(cmd, "--input-units", s.input_units,
+               {{"scene-linear", InputUnits::scene_linear}, {"lux-seconds", InputUnits::lux_seconds}},
+               "scene-linear (metered so 0.18 is mid grey) or lux-seconds (pixels are the exposure H)");
     cmd.add_option("--seed", s.seed, "Grain seed")->capture_default_str();
-    cmd.add_option("--frame", s.frame, "Frame number (each frame has its own grain)")->capture_default_str();
-    cmd.add_flag("--no-grain{false}", s.grain, "Leave out granularity");
-    cmd.add_flag("--no-mtf{false}", s.mtf, "Leave out internal scattering (MTF)");
+    // The frame number belongs to the image, not the look.
+    cmd.add_option("--frame", s.frame, "Frame number (each frame has its own grain)")
+        ->capture_default_str()
+        ->configurable(false);
+    add_switch(cmd, "grain", s.grain, "Granularity (--no-grain leaves it out)");
+    add_switch(cmd, "mtf", s.mtf, "Internal scattering, the MTF (--no-mtf leaves it out)");
     cmd.add_option("--halation", s.halation, "Halation: multiplies the stock's per-layer strength (0 = off)")
         ->check(CLI::Range(0.0, 100.0))
         ->capture_default_str();
-    add_per_channel_option(cmd, "--grain-amount", s.grain_amount, "Multiplies the stock's RMS granularity", 0.0, 100.0);
-    add_per_channel_option(cmd, "--grain-size", s.grain_size, "Multiplies the stock's grain size", 0.0, 100.0);
+    add_per_channel_option(cmd, "--grain-amount", s.grain_amount, "Multiplies the stock's RMS granularity", 0.0, 100.0, "1");
+    add_per_channel_option(cmd, "--grain-size", s.grain_size, "Multiplies the stock's grain size", 0.0, 100.0, "1");
     add_per_channel_option(cmd, "--grain-response", s.grain_density_exponent,
-                           "Replaces the exponent of the grain's growth with net density, D^x", 0.0, 4.0);
+                           "Replaces the exponent of the grain's growth with net density, D^x (default: the stock's)",
+                           0.0, 4.0, "");
     cmd.add_option("--printer-lights", s.printer_lights,
                    "Printer lights R,G,B in points: 25 = automatic (mid grey prints neutral); +1 point = +0.025 "
                    "log exposure of that paper layer (more red light: more cyan dye)")
         ->delimiter(',')
-        ->expected(3);
+        ->expected(3)
+        ->default_str("[25,25,25]");
     cmd.add_option("--filtration", s.filtration_ymc, "Enlarger filtration Y,M,C in CC units, on top of the lights")
         ->delimiter(',')
         ->expected(3)
-        ->check(CLI::Range(0.0, 1000.0));
-    cmd.add_option("--frame-width-mm", s.frame_width_mm, "Film frame width in mm (default: the stock's format)")
+        ->check(CLI::Range(0.0, 1000.0))
+        ->default_str("[0,0,0]");
+    cmd.add_option("--frame-width-mm", s.frame_width_mm, "Film frame width in mm (0: the stock's format)")
+        ->capture_default_str()
         ->check(CLI::Range(0.0, 1e4));
-    cmd.add_option("--print-width-mm", s.print_width_mm, "Print width in mm (default: the paper's format)")
+    cmd.add_option("--print-width-mm", s.print_width_mm, "Print width in mm (0: the paper's format)")
+        ->capture_default_str()
         ->check(CLI::Range(0.0, 1e4));
-    cmd.add_option("--threads", look.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
+    // How to run, not how the image looks: kept out of look files.
+    cmd.add_option("--threads", look.threads, "Worker threads (0 = all cores; default $OPENIMAGEIO_THREADS or 0)")
+        ->check(CLI::Range(0, 1024))
+        ->envname("OPENIMAGEIO_THREADS")
+        ->configurable(false);
     cmd.add_flag("-v,--verbose", look.verbose,
-                 "Print the plan (the stages run and those skipped) and the colour management");
+                 "Print the plan (the stages run and those skipped) and the colour management")
+        ->configurable(false);
     add_colour_flags(cmd, look.colour);
+}
+
+CLI::Option* add_switch(CLI::App& cmd, const std::string& name, bool& value, const std::string& help) {
+    return cmd.add_flag("--" + name + ",!--no-" + name, value, help)->default_str(value ? "true" : "false");
 }
 
 Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {
@@ -99,6 +112,29 @@ Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {
     } catch (const std::invalid_argument& e) {
         throw UserError(e.what());
     }
+}
+
+Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window) {
+    const ColourIO colour(look.colour, look.settings.output, look.verbose);
+    Plan plan = compile_look(look, FrameGeometry{in.window.width(), in.window.height()});
+    Image out(out_window, std::max(3, in.channels));
+    if (colour.input_conversion().is_noop()) {
+        plan.run(in, out.view(), look.threads);
+    } else {
+        // Per-pixel conversion of just the pixels the plan reads: a window stays that window
+        // of the full render.
+        const Window needed = plan.input_window(out_window);
+        Image working(needed, in.channels);
+        for (int y = needed.y0; y < needed.y1; ++y)
+            for (int x = needed.x0; x < needed.x1; ++x) std::copy_n(in.at(x, y), in.channels, working.at(x, y));
+        colour.input_to_working(working, look.threads);
+        plan.run(working.view(), out.view(), look.threads);
+    }
+    colour.result_to_output(out, look.threads);
+    for (int y = out.window.y0; y < out.window.y1; ++y)
+        for (int x = out.window.x0; x < out.window.x1; ++x)
+            for (int c = 3; c < out.channels; ++c) out.at(x, y)[c] = in.at(x, y)[c];
+    return out;
 }
 
 }  // namespace darkroom::cli

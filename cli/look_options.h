@@ -1,10 +1,18 @@
 // The look flags shared by every command that develops (develop, demo, bake-lut): stocks,
-// exposure, output mode, grain, MTF and halation switches, seed and frame, and the colour
+// exposure, output mode, grain, MTF and halation, printing, seed and frame, and the colour
 // flags (cli/colour_io.h).
+//
+// Every flag registered here is part of the look (saved by --save-look, read by --look; see
+// cli/look_file.h) unless it is marked configurable(false). For a setting to round-trip
+// through a look file its option must know its default: options bound to a variable call
+// capture_default_str(), enumerations use add_choice() and on/off settings add_switch().
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "cli/colour_io.h"
 #include "core/develop.h"
@@ -22,7 +30,34 @@ struct LookOptions {
 
 void add_look_flags(CLI::App& command, LookOptions& look);
 
+// "--NAME" and "--no-NAME", with its default recorded for look files.
+CLI::Option* add_switch(CLI::App& command, const std::string& name, bool& value, const std::string& help);
+
+// An enumeration chosen by name (case-insensitive); the look file keeps the name.
+template <typename Enum>
+CLI::Option* add_choice(CLI::App& command, const std::string& flag, Enum& value,
+                        const std::vector<std::pair<std::string, Enum>>& choices, const std::string& help) {
+    std::vector<std::string> names;
+    std::string current;
+    for (const auto& [name, e] : choices) {
+        names.push_back(name);
+        if (e == value) current = name;
+    }
+    auto set = [&value, choices](const std::string& text) {
+        for (const auto& [name, e] : choices)
+            if (CLI::detail::to_lower(text) == name) value = e;
+    };
+    return command.add_option_function<std::string>(flag, set, help)
+        ->check(CLI::IsMember(names, CLI::ignore_case))
+        ->default_str(current);
+}
+
 // Resolves the stocks and compiles the plan for a frame; prints it with -v.
 Plan compile_look(const LookOptions& look, const FrameGeometry& frame);
+
+// Develops `out_window` of the full frame `in` (window (0, 0, width, height)) with `look`.
+// The output has max(3, input channels) channels; those past RGB (alpha, depth, mattes) are
+// not film's business and pass through. The one path for the program and the Python module.
+Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window);
 
 }  // namespace darkroom::cli

@@ -2,13 +2,32 @@
 // physics, they translate flags and pixels and call core/.
 #include <iostream>
 
+#include "cli/atomic_file.h"
 #include "cli/commands.h"
 #include "cli/image_io.h"
 
+namespace darkroom::cli {
+
+namespace {
+std::string full_command_line;
+}
+
+void set_command_line(int argc, char** argv) {
+    full_command_line = "darkroom";
+    for (int i = 1; i < argc; ++i) full_command_line += std::string(" ") + argv[i];
+}
+
+const std::string& command_line() { return full_command_line; }
+
+}  // namespace darkroom::cli
+
 int main(int argc, char** argv) {
+    // First, before any thread exists: Ctrl-C and kill remove partial outputs.
+    darkroom::cli::install_interrupt_cleanup();
+    darkroom::cli::set_command_line(argc, argv);
     CLI::App app{"darkroom: photographic film and paper development for compositing"};
     app.require_subcommand(1);
-    app.set_version_flag("--version", "darkroom 0.1.0");
+    app.set_version_flag("--version", "darkroom " DARKROOM_VERSION);
     darkroom::cli::add_develop_command(app);
     darkroom::cli::add_stocks_command(app);
     darkroom::cli::add_sensitometry_command(app);

@@ -1,21 +1,18 @@
-// Running the darkroom program as a user runs it, for the CLI tests.
+// Running the darkroom program from tests: its exit status and output, input images, pixels.
 #pragma once
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <catch2/catch.hpp>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <sstream>
-#include <string>
-#include <vector>
+#include <sys/wait.h>
 
-namespace cli_test {
+namespace darkroom_test {
 
-namespace fs = std::filesystem;  // within cli_test only
+namespace fs = std::filesystem;
 
 struct Result {
     int exit_code;
@@ -24,16 +21,19 @@ struct Result {
 
 inline const fs::path kTmp = DARKROOM_TEST_TMP;
 
-inline Result darkroom(const std::string& args) {
+// Runs a shell command line, capturing what it prints.
+inline Result shell(const std::string& command) {
     fs::create_directories(kTmp);
-    fs::path log = kTmp / ("output-" + std::to_string(std::hash<std::string>{}(args)) + ".txt");
-    std::string cmd = std::string(DARKROOM_EXE) + " " + args + " > " + log.string() + " 2>&1";
+    fs::path log = kTmp / ("output-" + std::to_string(std::hash<std::string>{}(command)) + ".txt");
+    std::string cmd = command + " > " + log.string() + " 2>&1";
     int status = std::system(cmd.c_str());
     std::ifstream in(log);
     std::stringstream text;
     text << in.rdbuf();
     return {WEXITSTATUS(status), text.str()};
 }
+
+inline Result darkroom(const std::string& args) { return shell(std::string(DARKROOM_EXE) + " " + args); }
 
 inline std::string make_input(const std::string& name, int w = 64, int h = 48) {
     fs::create_directories(kTmp);
@@ -54,4 +54,18 @@ inline std::vector<float> pixels(const std::string& path, OIIO::ImageSpec* spec 
     return out;
 }
 
-}  // namespace cli_test
+inline std::string file_bytes(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::stringstream bytes;
+    bytes << in.rdbuf();
+    return bytes.str();
+}
+
+// The hidden temporaries a run leaves in `dir` (see cli/atomic_file.h).
+inline int temp_files_in(const fs::path& dir) {
+    int n = 0;
+    for (auto& entry : fs::directory_iterator(dir)) n += entry.path().filename().string().rfind(".darkroom-tmp", 0) == 0;
+    return n;
+}
+
+}  // namespace darkroom_test

@@ -10,7 +10,7 @@
 #include "cli_support.h"
 #include "../ocio/ocio_variable.h"
 
-using namespace cli_test;
+using namespace darkroom_test;
 
 namespace {
 

@@ -1,0 +1,113 @@
+#include "cli/atomic_file.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <mutex>
+#include <set>
+#include <thread>
+#include <unistd.h>
+
+#include "cli/user_error.h"
+
+namespace darkroom::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kTempPrefix = ".darkroom-tmp-";
+
+std::mutex& registry_mutex() {
+    static std::mutex m;
+    return m;
+}
+std::set<std::string>& temps_in_flight() {
+    static std::set<std::string> temps;
+    return temps;
+}
+
+std::string host_name() {
+    char name[256] = {};
+    if (gethostname(name, sizeof name - 1) != 0) return "host";
+    std::string host(name);
+    std::replace(host.begin(), host.end(), '-', '_');  // '-' separates the fields of the name
+    return host;
+}
+
+bool process_exists(long pid) { return kill(pid_t(pid), 0) == 0 || errno == EPERM; }
+
+}  // namespace
+
+void install_interrupt_cleanup() {
+    static sigset_t signals;
+    sigemptyset(&signals);
+    for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, s);
+    pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+    std::thread([] {
+        int signal_number = 0;
+        if (sigwait(&signals, &signal_number) != 0) return;
+        // Hold the registry until exit: no new temporary can be registered after this.
+        registry_mutex().lock();
+        int removed = 0;
+        for (const std::string& temp : temps_in_flight()) removed += std::remove(temp.c_str()) == 0;
+        std::fprintf(stderr, "darkroom: interrupted by signal %d; removed %d partial output%s\n", signal_number,
+                     removed, removed == 1 ? "" : "s");
+        std::fflush(stderr);
+        _exit(128 + signal_number);
+    }).detach();
+}
+
+TempFile::TempFile(const fs::path& target) : target_(target) {
+    // The temporary keeps the target's extension so OpenImageIO picks the same format.
+    temp_ = target.parent_path() /
+            (kTempPrefix + host_name() + "-" + std::to_string(getpid()) + "-" + target.filename().string());
+    std::lock_guard<std::mutex> lock(registry_mutex());
+    temps_in_flight().insert(temp_.string());
+}
+
+TempFile::~TempFile() {
+    std::lock_guard<std::mutex> lock(registry_mutex());
+    if (!committed_) {
+        std::error_code ec;
+        fs::remove(temp_, ec);
+    }
+    temps_in_flight().erase(temp_.string());
+}
+
+void TempFile::commit() {
+    std::error_code ec;
+    fs::rename(temp_, target_, ec);
+    if (ec) throw UserError("cannot move the finished output to '" + target_.string() + "': " + ec.message());
+    committed_ = true;
+}
+
+void write_text_atomically(const std::string& path, const std::string& text) {
+    TempFile temp{fs::path(path)};
+    {
+        std::ofstream out(temp.path());
+        out << text;
+        if (!out.flush()) throw UserError("cannot write '" + path + "'");
+    }
+    temp.commit();
+}
+
+int remove_stale_temps(const fs::path& directory) {
+    const std::string own_prefix = kTempPrefix + host_name() + "-";
+    int removed = 0;
+    std::error_code ec;
+    for (const fs::directory_entry& entry : fs::directory_iterator(directory.empty() ? "." : directory, ec)) {
+        const std::string name = entry.path().filename().string();
+        if (name.rfind(own_prefix, 0) != 0) continue;
+        const std::string rest = name.substr(own_prefix.size());
+        char* end = nullptr;
+        long pid = std::strtol(rest.c_str(), &end, 10);
+        if (end == rest.c_str() || *end != '-' || pid == getpid() || process_exists(pid)) continue;
+        removed += fs::remove(entry.path(), ec) ? 1 : 0;
+    }
+    return removed;
+}
+
+}  // namespace darkroom::cli

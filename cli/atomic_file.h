@@ -1,0 +1,46 @@
+// Outputs appear complete or not at all: each is written to a hidden temporary name beside
+// its target and renamed over it when complete.
+//
+// Temporary names are ".darkroom-tmp-<host>-<pid>-<target name>". While the program runs,
+// every temporary file in flight is registered here; SIGINT, SIGTERM and SIGHUP remove them
+// all before the program exits (status 128 + signal). A run killed without a chance to clean
+// (SIGKILL, power loss) leaves its temporaries; remove_stale_temps() deletes those of this
+// host whose process is gone, so a re-run cleans up after it.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+namespace darkroom::cli {
+
+// Blocks the termination signals in the calling thread (and so in every thread it starts
+// afterwards) and starts a thread that waits for them, removes the temporaries in flight
+// and exits. Call once, first thing in main, before any other thread exists.
+void install_interrupt_cleanup();
+
+// A temporary file beside `target`, registered for removal on interrupt. Destroying it
+// without commit() removes the file.
+class TempFile {
+public:
+    explicit TempFile(const std::filesystem::path& target);
+    ~TempFile();
+    TempFile(const TempFile&) = delete;
+    TempFile& operator=(const TempFile&) = delete;
+
+    const std::filesystem::path& path() const { return temp_; }
+    // Renames the temporary over the target. Throws UserError if that fails.
+    void commit();
+
+private:
+    std::filesystem::path target_, temp_;
+    bool committed_ = false;
+};
+
+// Writes `text` to `path` through a TempFile.
+void write_text_atomically(const std::string& path, const std::string& text);
+
+// Removes this host's temporaries in `directory` whose process no longer runs; returns how
+// many it removed.
+int remove_stale_temps(const std::filesystem::path& directory);
+
+}  // namespace darkroom::cli

@@ -1,0 +1,52 @@
+// What a batch run tells its user while it runs and leaves behind when it ends: a progress
+// bar on a terminal (frames done, frames per second, time left), one plain line per frame
+// otherwise, and with --log a JSON file of per-frame timings, warnings and errors.
+#pragma once
+
+#include <chrono>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace darkroom::cli {
+
+struct FrameReport {
+    enum class Status { developed, skipped_existing, dry_run, failed };
+    int frame = 0;
+    std::string input, output;
+    Status status = Status::developed;
+    double read_seconds = 0, develop_seconds = 0, write_seconds = 0;
+    std::vector<std::string> warnings;
+    std::string error;  // when failed
+};
+
+const char* to_string(FrameReport::Status status);
+
+class Progress {
+public:
+    // `terminal`: draw a bar on stderr; otherwise print a line per frame on stdout.
+    Progress(size_t total_frames, bool quiet, bool terminal);
+
+    // Thread-safe. Failures and warnings are printed even when quiet.
+    void add(FrameReport report);
+    // Ends the bar's line.
+    void finish();
+
+    std::vector<FrameReport> reports() const;
+    double elapsed_seconds() const;
+
+private:
+    void draw_bar() const;
+
+    mutable std::mutex mutex_;
+    size_t total_;
+    bool quiet_, terminal_;
+    std::chrono::steady_clock::time_point start_;
+    std::vector<FrameReport> reports_;
+};
+
+// The --log file: every frame's report and a summary, written atomically.
+void write_run_log(const std::string& path, const std::vector<FrameReport>& reports, double elapsed_seconds,
+                   const std::string& command_line);
+
+}  // namespace darkroom::cli

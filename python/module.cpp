@@ -1,0 +1,101 @@
+// The darkroom Python module: develops numpy arrays with the same settings and look files as
+// the darkroom program. Keyword arguments are the program's look flags with '_' for '-'
+// (exposure=0.5, print_exposure=-1, grain=False, film="kodak-t-max-100"); they go through
+// the same CLI11 flag definitions and look-file reader, so every flag the program knows is
+// known here, with the same checks, and keywords override the look file as flags do.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include "cli/look_file.h"
+#include "cli/look_options.h"
+#include "cli/user_error.h"
+
+namespace py = pybind11;
+using darkroom::cli::LookOptions;
+
+namespace {
+
+// The look flags parsed from Python keywords, then the look file under them.
+struct ParsedLook {
+    CLI::App app{"darkroom"};
+    LookOptions look;
+    std::string look_path, save_look_path;
+
+    ParsedLook(const std::string& look_file, const py::kwargs& settings) {
+        darkroom::cli::add_look_file_flags(app, look_path, save_look_path);
+        darkroom::cli::add_look_flags(app, look);
+        std::vector<std::string> args;
+        for (const auto& [key, value] : settings) {
+            std::string flag = "--" + py::str(key).cast<std::string>();
+            std::replace(flag.begin(), flag.end(), '_', '-');
+            if (app.get_option_no_throw(flag) == nullptr)
+                throw py::type_error("darkroom: unknown setting '" + py::str(key).cast<std::string>() +
+                                     "' (the program's look flags, with '_' for '-')");
+            if (py::isinstance<py::bool_>(value)) {
+                args.push_back(flag + "=" + (value.cast<bool>() ? "true" : "false"));
+            } else if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
+                args.push_back(flag);
+                for (const auto& element : value) args.push_back(py::str(element).cast<std::string>());
+            } else {
+                args.push_back(flag);
+                args.push_back(py::str(value).cast<std::string>());
+            }
+        }
+        std::reverse(args.begin(), args.end());  // CLI11 takes its arguments last first
+        try {
+            app.parse(args);
+        } catch (const CLI::ParseError& e) {
+            throw py::value_error(std::string("darkroom: ") + e.what());
+        }
+        if (!look_file.empty()) darkroom::cli::apply_look_file(app, look_file);
+    }
+};
+
+py::array_t<float> develop(py::array_t<float, py::array::c_style | py::array::forcecast> pixels,
+                           const std::string& look_file, int frame, int threads, const py::kwargs& settings) {
+    if (pixels.ndim() != 3 && pixels.ndim() != 2)
+        throw py::value_error("darkroom: pixels must be an array of shape (height, width) or (height, width, channels)");
+    const int height = int(pixels.shape(0)), width = int(pixels.shape(1));
+    const int channels = pixels.ndim() == 3 ? int(pixels.shape(2)) : 1;
+    if (width <= 0 || height <= 0 || channels <= 0) throw py::value_error("darkroom: the image has no pixels");
+    ParsedLook parsed(look_file, settings);
+    parsed.look.settings.frame = frame;
+    parsed.look.threads = threads;
+
+    const darkroom::Window full{0, 0, width, height};
+    const darkroom::ConstImageView in{pixels.data(), full, channels, channels, (std::ptrdiff_t)channels * width};
+    darkroom::Image out;
+    {
+        py::gil_scoped_release release;
+        out = darkroom::cli::develop_image(parsed.look, in, full);
+    }
+    py::array_t<float> result({height, width, out.channels});
+    std::copy(out.pixels.begin(), out.pixels.end(), result.mutable_data());
+    return result;
+}
+
+py::object look_settings(const std::string& look_file, const py::kwargs& settings) {
+    ParsedLook parsed(look_file, settings);
+    return py::module_::import("json").attr("loads")(darkroom::cli::look_json(parsed.app).dump());
+}
+
+void save_look(const std::string& path, const std::string& look_file, const py::kwargs& settings) {
+    ParsedLook parsed(look_file, settings);
+    darkroom::cli::save_look_file(parsed.app, path);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(darkroom, m) {
+    m.doc() = "Photographic film and paper development for numpy images (the darkroom program's engine)";
+    py::register_exception<darkroom::cli::UserError>(m, "DarkroomError", PyExc_ValueError);
+    m.def("develop", &develop, py::arg("pixels"), py::kw_only(), py::arg("look") = "", py::arg("frame") = 0,
+          py::arg("threads") = 0,
+          "Develops a scene-linear float image of shape (height, width[, channels]); returns (height, width, "
+          "max(3, channels)) float32. look: a look file; frame: the frame number (each frame has its own grain); "
+          "other keywords: the program's look flags with '_' for '-', overriding the look file.");
+    m.def("look", &look_settings, py::kw_only(), py::arg("look") = "",
+          "The look (a dict, as a look file holds it) that these keywords and look file give.");
+    m.def("save_look", &save_look, py::arg("path"), py::kw_only(), py::arg("look") = "",
+          "Writes the look these keywords and look file give to a look file.");
+}

@@ -1,0 +1,387 @@
+// Batch work the oiiotool way: sequences, look files, metadata, safe writes, resuming.
+#include <chrono>
+#include <csignal>
+#include <nlohmann/json.hpp>
+#include <thread>
+#include <unistd.h>
+
+#include "cli_support.h"
+
+using namespace darkroom_test;
+
+namespace {
+
+fs::path fresh_dir(const std::string& name) {
+    fs::path dir = kTmp / name;
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+// Writes the same plate as frames `first`..`last` of "<dir>/plate.%04d.exr".
+void make_plates(const fs::path& dir, int first, int last, int w = 40, int h = 30) {
+    std::string plate = make_input("plate-source.exr", w, h);
+    char name[64];
+    for (int f = first; f <= last; ++f) {
+        std::snprintf(name, sizeof name, "plate.%04d.exr", f);
+        fs::copy_file(plate, dir / name, fs::copy_options::overwrite_existing);
+    }
+}
+
+std::string frame_name(const fs::path& dir, const char* stem, int frame) {
+    char name[64];
+    std::snprintf(name, sizeof name, "%s.%04d.exr", stem, frame);
+    return (dir / name).string();
+}
+
+const std::string kLook = " --seed 11 --frame-width-mm 3 --print-width-mm 20";
+
+}  // namespace
+
+TEST_CASE("a sequence gives each frame its own grain, the same as a single image of that frame, reproducibly",
+          "[cli][batch][determinism]") {
+    fs::path dir = fresh_dir("sequence");
+    make_plates(dir, 1, 3);
+    Result r = darkroom("develop " + (dir / "plate.####.exr").string() + " -o " + (dir / "out.####.exr").string() +
+                        kLook + " --threads 2");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    // The plates are identical, so any difference between frames is the grain.
+    std::vector<float> f1 = pixels(frame_name(dir, "out", 1)), f2 = pixels(frame_name(dir, "out", 2)),
+                       f3 = pixels(frame_name(dir, "out", 3));
+    CHECK(f1 != f2);
+    CHECK(f2 != f3);
+    CHECK(f1 != f3);
+
+    // Frame 2 of the sequence is frame 2 developed on its own, whatever the thread count.
+    std::string single = (dir / "single.exr").string();
+    REQUIRE(darkroom("develop " + frame_name(dir, "plate", 2) + " -o " + single + kLook + " --frame 2 --threads 1")
+                .exit_code == 0);
+    CHECK(pixels(single) == f2);
+
+    // Re-running the same command gives the same bytes.
+    const std::string first_bytes = file_bytes(frame_name(dir, "out", 3));
+    fs::remove(frame_name(dir, "out", 3));
+    REQUIRE(darkroom("develop " + (dir / "plate.####.exr").string() + " -o " + (dir / "out.####.exr").string() +
+                     kLook + " --threads 2")
+                .exit_code == 0);
+    CHECK(file_bytes(frame_name(dir, "out", 3)) == first_bytes);
+}
+
+TEST_CASE("frame wildcards and ranges follow oiiotool", "[cli][batch]") {
+    fs::path dir = fresh_dir("wildcards");
+    make_plates(dir, 1, 6, 16, 12);
+    const std::string fast = " --no-grain --no-mtf -q";
+    struct Case {
+        std::string input, output, frames;
+        std::vector<int> expected;
+    };
+    for (const Case& c : std::vector<Case>{
+             {"plate.%04d.exr", "a.%04d.exr", "1-5x2", {1, 3, 5}},
+             {"plate.@@@@.exr", "b.#.exr", "2,4", {2, 4}},
+             {"plate.#.exr", "c.####.exr", "", {1, 2, 3, 4, 5, 6}},  // without --frames: the files on disk
+             {"plate.1-2#.exr", "d.#.exr", "", {1, 2}},              // a range in the name
+         }) {
+        Result r = darkroom("develop " + (dir / c.input).string() + " -o " + (dir / c.output).string() +
+                            (c.frames.empty() ? "" : " --frames " + c.frames) + fast);
+        INFO(c.input << " -> " << c.output << "\n" << r.output);
+        REQUIRE(r.exit_code == 0);
+        std::string stem = c.output.substr(0, 1);
+        for (int f = 1; f <= 6; ++f) {
+            bool wanted = std::find(c.expected.begin(), c.expected.end(), f) != c.expected.end();
+            CHECK(fs::exists(frame_name(dir, stem.c_str(), f)) == wanted);
+        }
+    }
+    // --framepadding sets the digits of '#'.
+    REQUIRE(darkroom("develop " + (dir / "plate.%04d.exr").string() + " -o " + (dir / "e.#.exr").string() +
+                     " --frames 3 --framepadding 2" + fast)
+                .exit_code == 0);
+    CHECK(fs::exists(dir / "e.03.exr"));
+}
+
+TEST_CASE("a missing frame fails with its name and --skip-bad-frames goes on and still reports it", "[cli][batch][bad-input]") {
+    fs::path dir = fresh_dir("missing");
+    make_plates(dir, 1, 3);
+    fs::remove(frame_name(dir, "plate", 2));
+    const std::string args = "develop " + (dir / "plate.####.exr").string() + " -o " + (dir / "out.####.exr").string() +
+                             " --frames 1-3 --no-grain --no-mtf --threads 1";
+    Result r = darkroom(args);
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("plate.0002.exr") && Catch::Contains("does not exist") &&
+                             Catch::Contains("frames failed"));
+    CHECK_FALSE(fs::exists(frame_name(dir, "out", 2)));
+
+    r = darkroom(args + " --skip-bad-frames --log " + (dir / "log.json").string());
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("1 of 3 frames failed") && Catch::Contains("plate.0002.exr"));
+    CHECK(fs::exists(frame_name(dir, "out", 1)));
+    CHECK(fs::exists(frame_name(dir, "out", 3)));
+    nlohmann::json log = nlohmann::json::parse(file_bytes(dir / "log.json"));
+    REQUIRE(log["frames"].size() == 3);
+    CHECK(log["summary"]["failed"] == 1);
+    for (const auto& f : log["frames"]) {
+        CHECK(f["status"] == (f["frame"] == 2 ? "failed" : "developed"));
+        if (f["frame"] != 2) CHECK(f["develop_seconds"].get<double>() > 0);
+    }
+}
+
+TEST_CASE("a run killed halfway leaves only complete frames and --no-clobber finishes it", "[cli][batch][safe-writes]") {
+    fs::path dir = fresh_dir("killed");
+    const int frames = 8;
+    make_plates(dir, 1, frames, 96, 72);
+    const std::string in = (dir / "plate.####.exr").string(), out = (dir / "out.####.exr").string();
+    const std::string look = kLook;
+
+    for (int signal_number : {SIGTERM, SIGKILL}) {
+        for (int f = 1; f <= frames; ++f) fs::remove(frame_name(dir, "out", f));
+        pid_t pid = fork();
+        REQUIRE(pid >= 0);
+        if (pid == 0) {
+            std::string command = std::string(DARKROOM_EXE) + " develop " + in + " -o " + out + look + " -q --threads 1";
+            execl("/bin/sh", "sh", "-c", ("exec " + command).c_str(), (char*)nullptr);
+            _exit(127);
+        }
+        // Kill it once the first frame is complete: later frames are in flight or not started.
+        int status = 0;
+        bool exited = false;
+        while (!fs::exists(frame_name(dir, "out", 1)) && !exited) {
+            exited = waitpid(pid, &status, WNOHANG) == pid;
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        }
+        REQUIRE_FALSE(exited);  // the run failed before its first frame
+        kill(pid, signal_number);
+        waitpid(pid, &status, 0);
+        INFO("signal " << signal_number);
+        if (signal_number == SIGTERM) {
+            CHECK(WIFEXITED(status));
+            CHECK(WEXITSTATUS(status) == 128 + SIGTERM);
+            CHECK(temp_files_in(dir) == 0);
+        }
+        // Every output under its own name is complete.
+        int done = 0;
+        for (int f = 1; f <= frames; ++f)
+            if (fs::exists(frame_name(dir, "out", f))) {
+                ++done;
+                CHECK(pixels(frame_name(dir, "out", f)).size() == 96 * 72 * 3);
+            }
+        CHECK(done < frames);
+
+        // The re-run keeps the finished frames, makes the rest and cleans what the kill left.
+        Result r = darkroom("develop " + in + " -o " + out + look + " --no-clobber --log " + (dir / "log.json").string());
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+        CHECK(temp_files_in(dir) == 0);
+        nlohmann::json log = nlohmann::json::parse(file_bytes(dir / "log.json"));
+        int skipped = 0;
+        for (const auto& f : log["frames"]) skipped += f["status"] == "skipped (exists)";
+        CHECK(skipped == done);
+        for (int f = 1; f <= frames; ++f) CHECK(fs::exists(frame_name(dir, "out", f)));
+    }
+    // The resumed sequence is the sequence an uninterrupted run makes.
+    fs::path clean = fresh_dir("killed-clean");
+    REQUIRE(darkroom("develop " + in + " -o " + (clean / "out.####.exr").string() + look + " --threads 2 -q --frames 1,8")
+                .exit_code == 0);
+    for (int f : {1, frames}) CHECK(pixels(frame_name(clean, "out", f)) == pixels(frame_name(dir, "out", f)));
+}
+
+TEST_CASE("metadata, windows, pixel aspect and extra channels survive", "[cli][batch][metadata]") {
+    fs::path dir = fresh_dir("metadata");
+    std::string in = (dir / "plate.exr").string(), out = (dir / "out.exr").string();
+    OIIO::ImageSpec spec(40, 30, 5, OIIO::TypeDesc::FLOAT);
+    spec.x = 7;
+    spec.y = 5;
+    spec.full_x = 0;
+    spec.full_y = 0;
+    spec.full_width = 64;
+    spec.full_height = 48;
+    spec.channelnames = {"R", "G", "B", "A", "Z"};
+    spec.alpha_channel = 3;
+    spec.z_channel = 4;
+    spec.attribute("PixelAspectRatio", 2.0f);
+    spec.attribute("shot", "sh010");
+    spec.attribute("Exif:ImageHistory", "oiiotool plate.dpx -o plate.exr");
+    OIIO::ImageBuf buf(spec);
+    for (OIIO::ImageBuf::Iterator<float> p(buf); !p.done(); ++p)
+        for (int c = 0; c < 5; ++c) p[c] = 0.1f * (c + 1) + 0.001f * p.x();
+    REQUIRE(buf.write(in));
+
+    Result r = darkroom("develop " + in + " -o " + out + kLook + " -d half --compression piz");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    std::vector<float> px = pixels(out);
+    auto file = OIIO::ImageInput::open(out);
+    REQUIRE(file);
+    const OIIO::ImageSpec got = file->spec();
+    CHECK(got.x == 7);
+    CHECK(got.y == 5);
+    CHECK(got.full_width == 64);
+    CHECK(got.full_height == 48);
+    CHECK(got.format == OIIO::TypeDesc::HALF);
+    CHECK(got.get_string_attribute("compression") == "piz");
+    CHECK(got.get_float_attribute("PixelAspectRatio") == 2.0f);
+    CHECK(got.get_string_attribute("shot") == "sh010");
+    CHECK(got.channelnames == std::vector<std::string>{"R", "G", "B", "A", "Z"});
+    CHECK(got.alpha_channel == 3);
+    CHECK(got.z_channel == 4);
+    for (int i = 0; i < 40 * 30; ++i) {
+        REQUIRE(px[i * 5 + 3] == Approx(0.4f + 0.001f * (7 + i % 40)).epsilon(1e-3));  // half precision
+        REQUIRE(px[i * 5 + 4] == Approx(0.5f + 0.001f * (7 + i % 40)).epsilon(1e-3));
+    }
+    const std::string history = got.get_string_attribute("Exif:ImageHistory");
+    CHECK_THAT(history, Catch::StartsWith("oiiotool plate.dpx -o plate.exr\ndarkroom develop"));
+    CHECK_THAT(got.get_string_attribute("Software"), Catch::StartsWith("darkroom ") && Catch::Contains("--seed 11"));
+    nlohmann::json look = nlohmann::json::parse(got.get_string_attribute("darkroom:look"));
+    CHECK(look["format"] == "darkroom-look");
+    CHECK(look["settings"]["seed"] == 11);
+    CHECK(look["settings"]["frame-width-mm"] == 3);
+}
+
+TEST_CASE("a look file round-trips and flags override it", "[cli][batch][look]") {
+    fs::path dir = fresh_dir("look");
+    std::string in = make_input("look-in.exr", 40, 30), look = (dir / "look.json").string(),
+                again = (dir / "again.json").string();
+    const std::string settings = kLook + " --exposure 0.5 --output negative --no-mtf";
+    REQUIRE(darkroom("develop --save-look " + look + settings).exit_code == 0);
+    nlohmann::json saved = nlohmann::json::parse(file_bytes(look));
+    CHECK(saved["version"] == 1);
+    CHECK(saved["settings"]["exposure"] == 0.5);
+    CHECK(saved["settings"]["output"] == "negative");
+    CHECK(saved["settings"]["mtf"] == false);
+    CHECK(saved["settings"]["grain"] == true);
+    for (const char* run_option : {"threads", "frame", "out", "look", "verbose"})
+        CHECK_FALSE(saved["settings"].contains(run_option));
+
+    // Loading and saving again gives the same file; developing with it gives the same pixels.
+    REQUIRE(darkroom("develop --look " + look + " --save-look " + again).exit_code == 0);
+    CHECK(nlohmann::json::parse(file_bytes(again)) == saved);
+    std::string by_flags = (dir / "flags.exr").string(), by_look = (dir / "look.exr").string(),
+                overridden = (dir / "override.exr").string(), by_flags2 = (dir / "flags2.exr").string();
+    REQUIRE(darkroom("develop " + in + " -o " + by_flags + settings).exit_code == 0);
+    REQUIRE(darkroom("develop " + in + " -o " + by_look + " --look " + look).exit_code == 0);
+    CHECK(pixels(by_look) == pixels(by_flags));
+
+    // A flag on the command line wins over the file.
+    REQUIRE(darkroom("develop " + in + " -o " + overridden + " --look " + look + " --exposure -1").exit_code == 0);
+    REQUIRE(darkroom("develop " + in + " -o " + by_flags2 + kLook + " --exposure -1 --output negative --no-mtf")
+                .exit_code == 0);
+    CHECK(pixels(overridden) == pixels(by_flags2));
+    CHECK(pixels(overridden) != pixels(by_flags));
+}
+
+TEST_CASE("a bad look file is named with its problem", "[cli][batch][look][bad-input]") {
+    fs::path dir = fresh_dir("bad-look");
+    std::string in = make_input("bad-look-in.exr", 16, 12), out = (dir / "never.exr").string();
+    struct Case {
+        std::string json, message;
+    };
+    for (const Case& c : std::vector<Case>{
+             {R"({"format": "darkroom-look", "version": 1, "settings": {"exposur": 1}})", "setting 'exposur': unknown"},
+             {R"({"format": "darkroom-look", "version": 2, "settings": {}})", "'version'"},
+             {R"({"format": "darkroom-stock", "version": 1})", "not a darkroom look"},
+             {R"({"format": "darkroom-look", "version": 1, "settings": {"threads": 4}})", "run option"},
+             {R"({"format": "darkroom-look", "version": 1, "settings": {"exposure": "lots"}})", "setting 'exposure'"},
+             {R"({"format": "darkroom-look", "version": 1, "settings": {"output": "slide"}})", "setting 'output'"},
+             {R"({"format": "darkroom-look", "version": 1, "setings": {}})", "unknown field 'setings'"},
+             {R"({"format": "darkroom-look", )", "not valid JSON"},
+         }) {
+        std::string look = (dir / "look.json").string();
+        std::ofstream(look) << c.json;
+        Result r = darkroom("develop " + in + " -o " + out + " --look " + look);
+        INFO(c.json << "\n" << r.output);
+        CHECK(r.exit_code == 1);
+        CHECK_THAT(r.output, Catch::Contains(c.message) && Catch::Contains("look.json"));
+    }
+    CHECK_FALSE(fs::exists(out));
+}
+
+TEST_CASE("dry run and no-clobber write nothing and an input is replaced only when named as the output", "[cli][batch][safe-writes]") {
+    fs::path dir = fresh_dir("dry-run");
+    make_plates(dir, 1, 2, 16, 12);
+    const std::string seq_in = (dir / "plate.####.exr").string();
+    Result r = darkroom("develop " + seq_in + " -o " + (dir / "out.####.exr").string() + " -n");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("plate.0002.exr -> ") && Catch::Contains("dry run"));
+    CHECK_FALSE(fs::exists(frame_name(dir, "out", 1)));
+
+    // An output that only resolves to an input is refused; naming the input itself replaces it.
+    const std::string before = file_bytes(frame_name(dir, "plate", 1));
+    r = darkroom("develop " + frame_name(dir, "plate", 1) + " -o " + (dir / "plate.#.exr").string() +
+                 " --frames 1-2 --skip-bad-frames --no-grain --no-mtf");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("refusing to overwrite the input"));
+    CHECK(file_bytes(frame_name(dir, "plate", 1)) == before);
+    fs::create_symlink(frame_name(dir, "plate", 1), dir / "link.exr");
+    r = darkroom("develop " + frame_name(dir, "plate", 1) + " -o " + (dir / "link.exr").string());
+    CHECK_THAT(r.output, Catch::Contains("refusing to overwrite the input"));
+    CHECK(file_bytes(frame_name(dir, "plate", 1)) == before);
+
+    const std::vector<float> plate = pixels(frame_name(dir, "plate", 1));
+    r = darkroom("develop " + seq_in + " -o " + seq_in + " --no-grain --no-mtf");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(pixels(frame_name(dir, "plate", 1)) != plate);
+    CHECK(temp_files_in(dir) == 0);
+
+    // --no-clobber leaves an existing output alone.
+    std::string out = (dir / "single.exr").string();
+    std::ofstream(out) << "not touched";
+    REQUIRE(darkroom("develop " + frame_name(dir, "plate", 1) + " -o " + out + " --no-clobber").exit_code == 0);
+    CHECK(file_bytes(out) == "not touched");
+}
+
+TEST_CASE("threads come from --threads, else OPENIMAGEIO_THREADS, and never change the pixels", "[cli][batch][determinism]") {
+    fs::path dir = fresh_dir("threads");
+    make_plates(dir, 1, 3, 24, 16);
+    const std::string seq = "develop " + (dir / "plate.#.exr").string() + " -o ";
+    Result r = shell("OPENIMAGEIO_THREADS=3 " + std::string(DARKROOM_EXE) + " " + seq + (dir / "a.#.exr").string() +
+                     kLook + " -v");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("threads: 3 (3 frames at once, 1 per frame)"));
+    r = shell("OPENIMAGEIO_THREADS=3 " + std::string(DARKROOM_EXE) + " " + seq + (dir / "b.#.exr").string() + kLook +
+              " -v --threads 2 --frames-at-once 1");
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("threads: 2 (1 frame at once, 2 per frame)"));
+    for (int f = 1; f <= 3; ++f) CHECK(pixels(frame_name(dir, "a", f)) == pixels(frame_name(dir, "b", f)));
+}
+
+TEST_CASE("progress: a bar on a terminal, a line per frame otherwise", "[cli][batch][progress]") {
+    fs::path dir = fresh_dir("progress");
+    make_plates(dir, 1, 2, 16, 12);
+    const std::string args = " develop " + (dir / "plate.#.exr").string() + " -o " + (dir / "out.#.exr").string() +
+                             " --no-grain --no-mtf";
+    Result lines = darkroom(args);
+    REQUIRE(lines.exit_code == 0);
+    CHECK_THAT(lines.output, Catch::Contains("frame 2: ") && Catch::Contains("developed in"));
+    CHECK_THAT(lines.output, !Catch::Contains("fps"));
+    // script(1) gives the program a terminal.
+    Result bar = shell("script -qec '" + std::string(DARKROOM_EXE) + args + " --no-clobber' /dev/null");
+    INFO(bar.output);
+    REQUIRE(bar.exit_code == 0);
+    CHECK_THAT(bar.output, Catch::Contains("2/2 frames") && Catch::Contains("fps") && Catch::Contains("left"));
+    CHECK_THAT(bar.output, !Catch::Contains("frame 2: "));
+}
+
+TEST_CASE("a sequence that cannot be made is refused before any work", "[cli][batch][bad-input]") {
+    fs::path dir = fresh_dir("bad-sequence");
+    make_plates(dir, 1, 2, 8, 6);
+    const std::string seq = (dir / "plate.####.exr").string(), out = (dir / "out.####.exr").string();
+    struct Case {
+        std::string args, message;
+    };
+    for (const Case& c : std::vector<Case>{
+             {seq + " -o " + (dir / "single.exr").string(), "needs a frame number wildcard"},
+             {seq + " -o " + out + " --frames abc", "--frames 'abc' is not a frame range"},
+             {(dir / "nothere.####.exr").string() + " -o " + out, "no files match the input sequence"},
+             {seq + " -o " + out + " --frame 3", "--frame is for a single image"},
+             {frame_name(dir, "plate", 1) + " -o " + out, "name the frames with --frames"},
+             {frame_name(dir, "plate", 1) + " -o " + (dir / "x.exr").string() + " --frames 1-3", "--frames needs"},
+         }) {
+        Result r = darkroom("develop " + c.args);
+        INFO(c.args << "\n" << r.output);
+        CHECK(r.exit_code == 1);
+        CHECK_THAT(r.output, Catch::Contains(c.message));
+    }
+    CHECK_FALSE(fs::exists(frame_name(dir, "out", 1)));
+}

@@ -1,0 +1,91 @@
+"""The darkroom Python module develops numpy arrays exactly as the darkroom program does.
+
+Run by CTest with PYTHONPATH at the built module and DARKROOM_EXE naming the program.
+"""
+import json
+import os
+import subprocess
+import tempfile
+import unittest
+
+import numpy as np
+import OpenImageIO as oiio
+
+import darkroom
+
+DARKROOM_EXE = os.environ["DARKROOM_EXE"]
+
+
+def read_exr(path):
+    image = oiio.ImageInput.open(path)
+    pixels = image.read_image(oiio.FLOAT)
+    image.close()
+    return pixels
+
+
+def write_exr(path, pixels):
+    out = oiio.ImageOutput.create(path)
+    spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2], oiio.FLOAT)
+    spec.channelnames = ("R", "G", "B", "A")
+    spec.alpha_channel = 3
+    out.open(path, spec)
+    out.write_image(pixels)
+    out.close()
+
+
+def run_program(*args):
+    subprocess.run([DARKROOM_EXE, *args], check=True, capture_output=True)
+
+
+class ModuleEqualsProgram(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix="darkroom-python-")
+        height, width = 30, 40
+        y, x = np.mgrid[0:height, 0:width].astype(np.float32)
+        self.plate = np.stack([0.02 + x / width, 0.05 + y / height, 0.1 + 0.5 * x * y / (width * height),
+                               (x + y) / (width + height)], axis=-1).astype(np.float32)
+        self.input = os.path.join(self.dir, "plate.exr")
+        write_exr(self.input, self.plate)
+        self.look = os.path.join(self.dir, "look.json")
+        darkroom.save_look(self.look, seed=7, exposure=0.5, frame_width_mm=3, print_width_mm=20, output="print")
+
+    def program(self, *flags):
+        out = os.path.join(self.dir, "out.exr")
+        run_program("develop", self.input, "-o", out, *flags)
+        return read_exr(out)
+
+    def test_same_pixels_from_the_same_look_and_frame(self):
+        expected = self.program("--look", self.look, "--frame", "9")
+        got = darkroom.develop(self.plate, look=self.look, frame=9)
+        self.assertEqual(got.shape, expected.shape)
+        self.assertTrue(np.array_equal(got, expected))
+        self.assertTrue(np.array_equal(got[..., 3], self.plate[..., 3]))  # alpha passes through
+
+    def test_keywords_override_the_look_file_as_flags_do(self):
+        expected = self.program("--look", self.look, "--frame", "3", "--exposure", "-1", "--no-mtf")
+        got = darkroom.develop(self.plate, look=self.look, frame=3, exposure=-1, mtf=False, threads=1)
+        self.assertTrue(np.array_equal(got, expected))
+        self.assertFalse(np.array_equal(got, darkroom.develop(self.plate, look=self.look, frame=3)))
+
+    def test_the_module_and_the_program_write_the_same_look(self):
+        from_program = os.path.join(self.dir, "program-look.json")
+        run_program("develop", "--save-look", from_program, "--seed", "7", "--exposure", "0.5",
+                    "--frame-width-mm", "3", "--print-width-mm", "20")
+        with open(from_program) as f, open(self.look) as g:
+            self.assertEqual(json.load(f), json.load(g))
+        self.assertEqual(darkroom.look(look=self.look)["settings"]["seed"], 7)
+
+    def test_bad_settings_are_named(self):
+        with self.assertRaisesRegex(TypeError, "exposur"):
+            darkroom.develop(self.plate, exposur=1)
+        with self.assertRaisesRegex(ValueError, "--output"):
+            darkroom.develop(self.plate, output="slide")
+        bad = os.path.join(self.dir, "bad.json")
+        with open(bad, "w") as f:
+            json.dump({"format": "darkroom-look", "version": 1, "settings": {"threads": 2}}, f)
+        with self.assertRaisesRegex(ValueError, "bad.json.*run option"):
+            darkroom.develop(self.plate, look=bad)
+
+
+if __name__ == "__main__":
+    unittest.main()
