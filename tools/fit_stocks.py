@@ -133,18 +133,24 @@ def curve_from_params(d_min, params):
     return {"d_min": d_min, "knots": knots}
 
 
-def fit_curve(x, d):
-    """softplus CURVE with 2-4 knots; the fewest knots that reach MAE <= 0.02 D, else the best."""
+def fit_curve(x, d, saturates):
+    """softplus CURVE with 2-4 knots; the fewest knots that reach MAE <= 0.02 D, else the best.
+
+    saturates: a print material, whose dye density has a ceiling: past the data the curve
+    is held flat (its slope there is penalised) instead of rising on with the last gradient."""
     start, end, d_min = useful_range(x, d)
-    fit_mask = x <= end + 1e-9
-    xf, df = x[fit_mask], d[fit_mask]
+    # All the data are fitted, the plateau past saturation too (it sets D-max); the error is
+    # measured over the useful range.
+    xf, df = x, d
     useful = (x >= start) & (x <= end)
     # Monotonicity is checked well beyond the data, where the loader may sample.
     grid = np.linspace(x[0] - 2.0, x[-1] + 2.0, 150)
     far = np.concatenate([np.linspace(x[0] - 12.0, x[0] - 2.0, 20), np.linspace(x[-1] + 2.0, x[-1] + 8.0, 12)])
+    beyond = np.linspace(x[-1] + 0.5, x[-1] + 3.0, 10) if saturates else np.zeros(0)
     rng = np.random.default_rng(RNG_SEED)
     span = end - start
     gamma = (np.interp(end, x, d) - d_min) / max(span, 1e-3)
+    slope_cap = max(4.0, 1.5 * float(np.max(np.convolve(np.gradient(d, x), np.ones(5) / 5.0, mode="same"))))
 
     def residuals(p):
         curve = curve_from_params(d_min, p)
@@ -154,7 +160,7 @@ def fit_curve(x, d):
         # penalise the negative share of the slope, which tends to a constant there.
         terms = softplus_slope_terms(curve, far)
         share = np.minimum(terms.sum(axis=0), 0.0) / (np.abs(terms).sum(axis=0) + 1e-300)
-        return np.concatenate([fit, penalty, share])
+        return np.concatenate([fit, penalty, share, softplus_slope(curve, beyond)])
 
     results = []
     for n_knots in (2, 3, 4):
@@ -163,17 +169,17 @@ def fit_curve(x, d):
             positions = np.sort(rng.uniform(start - 0.2 * span, end, n_knots))
             positions[0] = start + rng.uniform(-0.1, 0.3) * span
             positions = np.sort(positions) + np.arange(n_knots) * 0.05
-            cumulative = [min(gamma * rng.uniform(0.8, 1.5), 3.9)]
+            cumulative = [min(gamma * rng.uniform(0.8, 1.5), 0.95 * slope_cap)]
             for _ in range(n_knots - 1):
-                cumulative.append(min(cumulative[-1] * rng.uniform(0.0, 1.2), 3.9))
+                cumulative.append(min(cumulative[-1] * rng.uniform(0.0, 1.2), 0.95 * slope_cap))
             p0 = []
             for k in range(n_knots):
                 step = positions[0] if k == 0 else math.log(positions[k] - positions[k - 1])
                 p0 += [step, math.log(rng.uniform(0.05, 0.5) * max(span, 0.5)), cumulative[k]]
-            # Cumulative slopes (gammas) up to 4: no real emulsion is steeper, and the bound keeps
-            # the fit from cancelling two huge opposite slopes.
+            # Cumulative slopes (local gammas) up to max(4, 1.5 x the data's steepest): the bound
+            # keeps the fit from cancelling two huge opposite slopes.
             lower = [-np.inf, math.log(0.01), 0.0] + [math.log(0.01), math.log(0.01), 0.0] * (n_knots - 1)
-            upper = [np.inf, math.log(3.0), 4.0] + [math.log(8.0), math.log(3.0), 4.0] * (n_knots - 1)
+            upper = [np.inf, math.log(3.0), slope_cap] + [math.log(8.0), math.log(3.0), slope_cap] * (n_knots - 1)
             p0 = np.clip(p0, np.array(lower) + 1e-9, np.array(upper) - 1e-9)
             try:
                 r = least_squares(residuals, p0, bounds=(lower, upper), max_nfev=2000)
@@ -319,14 +325,23 @@ def rounded(value, digits):
     return float(f"{value:.{digits}g}")
 
 
+MONOTONE_CHECK_LOG_H = np.linspace(-8.0, 6.0, 2801)  # where the script checks the curves non-decreasing
+
+
 def round_curve(curve):
     knots = [{"log_h": round(k["log_h"], 4), "slope": rounded(k["slope"], 5), "width": rounded(k["width"], 4)}
              for k in curve["knots"]]
-    # Rounding must not leave a net negative slope past the last knot.
-    total = sum(k["slope"] for k in knots)
-    if total < 0.0:
-        knots[-1]["slope"] = rounded(knots[-1]["slope"] - total + 1e-5, 6)
-    return {"softplus": {"d_min": round(curve["d_min"], 4), "knots": knots}}
+    # Where a narrow shoulder knot overtakes a wider one the slope can dip a little below 0
+    # (and rounding can leave a net negative slope): lifting the last knot's slope by the
+    # largest dip over its logistic makes the curve non-decreasing (D moves by about
+    # lift x (log H - log_h) past the knot: the lift is of order 1e-3).
+    rounded_curve = {"d_min": round(curve["d_min"], 4), "knots": knots}
+    slope = softplus_slope(rounded_curve, MONOTONE_CHECK_LOG_H)
+    if slope.min() < 0.0:
+        last = softplus_slope_terms({"knots": [dict(knots[-1], slope=1.0)]}, MONOTONE_CHECK_LOG_H)[0]
+        lift = float(np.max(-slope / last)) * 1.05 + 1e-6
+        knots[-1]["slope"] = math.ceil((knots[-1]["slope"] + lift) * 1e6) / 1e6
+    return {"softplus": rounded_curve}
 
 
 def round_spectral(spectral):
@@ -374,8 +389,9 @@ MTF_NOTE = ("estimate: MTF per layer shaped after the sheet's modulation-transfe
             "frequencies is left out (response capped at 1.0)")
 VISION3_NOTE = ("note: the digitised Vision3 characteristic curves span -2.4..+2.4 log units (+-8 camera stops) "
                 "and all three speeds (50D, 250D, 500T) leave base+fog at the same x (about -1.25): the axis "
-                "is evidently relative to the normal exposure of an 18 % grey card, not absolute lux-seconds; "
-                "the fit keeps the data's x as instructed")
+                "is evidently relative to the normal exposure of an 18 % grey card (there the red density is "
+                "about 0.9, Kodak's 0.75-0.95 grey-card aim for a normal negative, Kodak E-40), not absolute "
+                "lux-seconds; the fit keeps the data's x")
 
 
 def vision3(stock_id, folder, name, iso, sheet, illuminant, rms, grain_um, mtf_tables):
@@ -602,24 +618,36 @@ def to_json(value, indent=0):
     return "[\n" + ",\n".join(items) + "\n" + pad + "]"
 
 
-def build_stock(ref, stock, status):
+FITTED = ("base_density", "spectral_sensitivity", "density_curve", "dye_density")
+
+
+def fit_spectra_and_curves(ref, stock, status):
+    """The fitted parts of a preset: base density, and per layer sensitivity, curve and dye."""
+    nm, base = base_data(ref, stock)
+    fitted = {"base_density": round_spectral(fit_density_spectrum(nm, base, with_constant=True)), "layers": []}
+    for i in range(len(LAYERS)):
+        x, d = layer_curve_data(ref, stock, i, status)
+        curve, _ = fit_curve(x, d, saturates=stock["kind"] != "negative")
+        s_nm, log_s = layer_sensitivity_data(ref, stock, i)
+        dye_nm, dye = layer_dye_data(ref, stock, i)
+        fitted["layers"].append({
+            "spectral_sensitivity": round_spectral(fit_log_sensitivity(s_nm, log_s)),
+            "density_curve": round_curve(curve),
+            "dye_density": round_spectral(fit_density_spectrum(dye_nm, dye, with_constant=False))})
+    return fitted
+
+
+def assemble_stock(stock, fitted):
+    """The preset file: the stock table's published numbers and estimates around the fitted parts."""
     document = {"format": "darkroom-stock", "version": 2, "id": stock["id"], "name": stock["name"],
                 "kind": stock["kind"], "sources": stock["sources"], "iso_speed": stock["iso_speed"],
                 "frame_width_mm": stock["frame_width_mm"], "exposure_illuminant": stock["exposure_illuminant"]}
     if "mid_grey_aim_density" in stock:
         document["mid_grey_aim_density"] = stock["mid_grey_aim_density"]
-    nm, base = base_data(ref, stock)
-    document["base_density"] = round_spectral(fit_density_spectrum(nm, base, with_constant=True))
+    document["base_density"] = fitted["base_density"]
     layers = []
     for i, name in enumerate(LAYERS):
-        x, d = layer_curve_data(ref, stock, i, status)
-        curve, _ = fit_curve(x, d)
-        s_nm, log_s = layer_sensitivity_data(ref, stock, i)
-        dye_nm, dye = layer_dye_data(ref, stock, i)
-        layer = {"name": name,
-                 "spectral_sensitivity": round_spectral(fit_log_sensitivity(s_nm, log_s)),
-                 "density_curve": round_curve(curve),
-                 "dye_density": round_spectral(fit_density_spectrum(dye_nm, dye, with_constant=False)),
+        layer = {"name": name, **{k: fitted["layers"][i][k] for k in FITTED[1:]},
                  "mtf": stock["mtf"][i], "grain": stock["grain"][i]}
         if stock["halation"]:
             layer["halation"] = stock["halation"][i]
@@ -639,8 +667,7 @@ def check_stock(ref, stock, document, status, problems):
         useful = (x >= start) & (x <= end)
         curve = layer["density_curve"]["softplus"]
         error = np.abs(softplus_curve(curve, x[useful]) - d[useful])
-        wide = np.linspace(-8.0, 6.0, 2801)
-        if np.any(np.diff(softplus_curve(curve, wide)) < -1e-12):
+        if np.any(np.diff(softplus_curve(curve, MONOTONE_CHECK_LOG_H)) < -1e-12):
             problems.append(f"{document['id']} {layer['name']}: the fitted curve decreases")
         s_nm, log_s = layer_sensitivity_data(ref, stock, i)
         rel = log_s - log_s.max()
@@ -679,8 +706,12 @@ def main():
                         help="the reference data folder (holds datasheets/ and spektrafilm-profiles/)")
     parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent.parent / "core" / "stocks",
                         help="where the <id>.json presets are written (default: core/stocks)")
-    parser.add_argument("--check-only", action="store_true",
-                        help="do not fit: read the existing presets and print their errors against the data")
+    mode = parser.add_mutually_exclusive_group()
+    mode.add_argument("--check-only", action="store_true",
+                      help="do not fit: read the existing presets and print their errors against the data")
+    mode.add_argument("--refresh-metadata", action="store_true",
+                      help="do not fit: keep the fitted parts of the existing presets and rewrite the rest "
+                           "(sources, speeds, MTF, grain, halation) from the stock tables")
     parser.add_argument("--only", nargs="*", default=None, help="stock ids to process (default: all)")
     args = parser.parse_args()
 
@@ -693,7 +724,9 @@ def main():
         status = read_status(ref, "M" if stock["kind"] == "negative" else "A")
         path = args.out / f"{stock['id']}.json"
         if not args.check_only:
-            document = build_stock(ref, stock, status)
+            fitted = (json.loads(path.read_text()) if args.refresh_metadata
+                      else fit_spectra_and_curves(ref, stock, status))
+            document = assemble_stock(stock, fitted)
             temporary = path.with_suffix(".json.tmp")
             temporary.write_text(to_json(document) + "\n")
             temporary.replace(path)
