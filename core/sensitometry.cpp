@@ -4,6 +4,7 @@
 #include <complex>
 
 #include "core/develop.h"
+#include "core/stages/scatter.h"
 
 namespace darkroom {
 
@@ -64,7 +65,15 @@ double mtf50_cycles_per_mm(const Curve& mtf) {
     for (size_t i = 1; i < mtf.x.size(); ++i)
         if (mtf.y[i] <= 0.5 && mtf.y[i - 1] > 0.5)
             return mtf.x[i - 1] + (mtf.y[i - 1] - 0.5) / (mtf.y[i - 1] - mtf.y[i]) * (mtf.x[i] - mtf.x[i - 1]);
-    return mtf.x_max();
+    // Still above 0.5 at the last sample: where the model's extrapolation (the one the
+    // scatter stage uses) falls to 0.5.
+    double lo = mtf.x_max(), hi = lo;
+    while (mtf_response(mtf, hi) > 0.5 && hi < 1e5) hi *= 2;
+    for (int i = 0; i < 100; ++i) {
+        double mid = 0.5 * (lo + hi);
+        (mtf_response(mtf, mid) > 0.5 ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
 }
 
 SensitometryReport measure_stock(const Stock& stock, const SensitometryOptions& o) {

@@ -34,7 +34,8 @@ SensitometryReport measure_stock(const Stock& stock, const SensitometryOptions& 
 // Definitions shared by the measured and declared columns.
 // Slope of the steepest least-squares line through any 1.0 log-H span of the curve.
 double curve_gamma(const std::vector<double>& log_h, const std::vector<double>& density);
-// First frequency where the MTF falls to 0.5 (cycles/mm), from its samples.
+// First frequency where the MTF falls to 0.5 (cycles/mm), from its samples (past the last
+// one, along mtf_response's extrapolation).
 double mtf50_cycles_per_mm(const Curve& mtf);
 
 }  // namespace darkroom

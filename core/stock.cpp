@@ -125,8 +125,9 @@ Spectrum peak_normalised(const FieldReader& r, Spectrum s) {
 }
 
 // D(x) = d_min + sum_k slope_k width_k ln(1 + exp((x - log_h_k) / width_k)), sampled every
-// 0.01 log H from 12 widths before the first knot to 12 widths past the last (where the
-// softplus is within 6e-6 of its asymptote).
+// 0.01 log H from 12 widths before the first knot (where the softplus is within 6e-6 of its
+// asymptote) to 12 widths, and at least 3 log H (10 stops), past the last: a curve that
+// still rises at the end of its data keeps its final slope that far, then is held.
 Curve read_softplus_curve(const FieldReader& r, const json& v) {
     double d_min = r.at("d_min").number(r.field(v, "d_min"), 0.0, 10.0);
     FieldReader rk = r.at("knots");
@@ -141,7 +142,7 @@ Curve read_softplus_curve(const FieldReader& r, const json& v) {
         double width = rj.at("width").number(rj.field(list[k], "width"), 0.005, 10.0);
         knots.push_back({x, slope, width});
         lo = std::min(lo, x - 12 * width);
-        hi = std::max(hi, x + 12 * width);
+        hi = std::max(hi, std::max(x + 12 * width, x + 3.0));
     }
     std::vector<double> xs, ys;
     int n = (int)std::ceil((hi - lo) / 0.01);
