@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "cli/user_error.h"
+#include "core/plate/grain_synthesis.h"
 
 namespace darkroom::cli {
 
@@ -56,6 +57,10 @@ void add_look_flags(CLI::App& cmd, LookOptions& look) {
         ->configurable(false);
     add_switch(cmd, "grain", s.grain, "Granularity (--no-grain leaves it out)");
     add_switch(cmd, "mtf", s.mtf, "Internal scattering, the MTF (--no-mtf leaves it out)");
+    cmd.add_option("--grain-profile", look.grain_profile,
+                   "A plate's grain profile (darkroom grain analyze/predict): replaces the stock's grain, added "
+                   "to the result in the output colour space (which should be the plate's)")
+        ->capture_default_str();
     cmd.add_option("--halation", s.halation, "Halation: multiplies the stock's per-layer strength (0 = off)")
         ->check(CLI::Range(0.0, 100.0))
         ->capture_default_str();
@@ -68,11 +73,9 @@ void add_look_flags(CLI::App& cmd, LookOptions& look) {
                    "Printer lights R,G,B in points: 25 = automatic (mid grey prints neutral); +1 point = +0.025 "
                    "log exposure of that paper layer (more red light: more cyan dye)")
         ->delimiter(',')
-        ->expected(3)
         ->default_str("[25,25,25]");
     cmd.add_option("--filtration", s.filtration_ymc, "Enlarger filtration Y,M,C in CC units, on top of the lights")
         ->delimiter(',')
-        ->expected(3)
         ->check(CLI::Range(0.0, 1000.0))
         ->default_str("[0,0,0]");
     cmd.add_option("--frame-width-mm", s.frame_width_mm, "Film frame width in mm (0: the stock's format)")
@@ -103,7 +106,9 @@ Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {
         Stock paper = no_paper ? Stock{} : find_stock(look.paper);
         if (look.paper == "none" && look.settings.output == OutputMode::print)
             throw UserError("--paper none stops at the negative: use --output negative or density");
-        Plan plan = Plan::compile(film, no_paper ? nullptr : &paper, look.settings, frame);
+        DevelopSettings settings = look.settings;
+        settings.grain = settings.grain && look.grain_profile.empty();  // the plate's grain replaces the stock's
+        Plan plan = Plan::compile(film, no_paper ? nullptr : &paper, settings, frame);
         if (look.verbose)
             for (const std::string& line : plan.describe()) std::cerr << line << "\n";
         return plan;
@@ -113,6 +118,30 @@ Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {
         throw UserError(e.what());
     }
 }
+
+namespace {
+
+// The plate's grain on the result, keyed like the film grain (seed, frame, absolute pixel).
+void add_plate_grain(const LookOptions& look, Image& out) {
+    GrainProfile profile;
+    try {
+        profile = load_grain_profile_file(look.grain_profile);
+    } catch (const GrainProfileError& e) {
+        throw UserError(e.what());
+    }
+    const std::string& output_space = look.colour.output_space;
+    if (!profile.colorspace.empty() && !output_space.empty() && profile.colorspace != output_space)
+        std::cerr << "darkroom: warning: the grain profile was measured in '" << profile.colorspace
+                  << "' but the output is in '" << output_space << "'\n";
+    if (look.verbose)
+        std::cerr << "grain: plate profile " << look.grain_profile << " (" << encoding_name(profile.encoding)
+                  << (profile.colorspace.empty() ? "" : ", " + profile.colorspace) << ") replaces the stock's grain\n";
+    if (int(profile.channels.size()) > out.channels)
+        throw UserError("the grain profile '" + look.grain_profile + "' has more channels than the image");
+    apply_grain_profile(profile, out.view(), look.settings.seed, look.settings.frame, look.threads);
+}
+
+}  // namespace
 
 Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window) {
     const ColourIO colour(look.colour, look.settings.output, look.verbose);
@@ -131,6 +160,7 @@ Image develop_image(const LookOptions& look, const ConstImageView& in, const Win
         plan.run(working.view(), out.view(), look.threads);
     }
     colour.result_to_output(out, look.threads);
+    if (!look.grain_profile.empty()) add_plate_grain(look, out);
     for (int y = out.window.y0; y < out.window.y1; ++y)
         for (int x = out.window.x0; x < out.window.x1; ++x)
             for (int c = 3; c < out.channels; ++c) out.at(x, y)[c] = in.at(x, y)[c];

@@ -20,10 +20,13 @@
 namespace darkroom::cli {
 
 struct LookOptions {
-    std::string film = "kodak-tri-x-400";
-    std::string paper = "vdr-paper-grade-2";  // "none" stops at the negative
+    std::string film = "kodak-vision3-250d";
+    std::string paper = "kodak-2383";  // "none" stops at the negative
     DevelopSettings settings;
     ColourOptions colour;
+    // A plate's grain profile (darkroom grain analyze/predict): replaces the stock's grain
+    // and is added to the result in the output's encoding, which should be the plate's.
+    std::string grain_profile;
     int threads = 0;
     bool verbose = false;
 };

@@ -244,14 +244,9 @@ Spectrum spectral_density(const Stock& stock, const double* layer_density) {
 }
 
 Stock parse_stock_json(const std::string& text, const std::string& origin) {
-    json doc;
-    try {
-        doc = json::parse(text);
-    } catch (const json::parse_error& e) {
-        throw StockError(origin + ": not valid JSON: " + e.what());
-    }
+    const json doc = stock_json::parse_document(text, origin);
     if (doc.is_object() && !doc.contains("format") && doc.contains("data") && doc.contains("info"))
-        return import_spektrafilm_profile(text, origin);
+        return stock_json::stock_from_spektrafilm(doc, origin);
     FieldReader r(origin, "");
     if (r.at("format").text(r.field(doc, "format")) != "darkroom-stock")
         r.at("format").fail("expected \"darkroom-stock\"");

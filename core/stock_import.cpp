@@ -55,12 +55,10 @@ Spectrum spectral_column(const FieldReader& r, const json& data, const std::stri
 }  // namespace
 
 Stock import_spektrafilm_profile(const std::string& text, const std::string& origin) {
-    json doc;
-    try {
-        doc = json::parse(text);
-    } catch (const json::parse_error& e) {
-        throw StockError(origin + ": not valid JSON: " + e.what());
-    }
+    return stock_json::stock_from_spektrafilm(stock_json::parse_document(text, origin), origin);
+}
+
+Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& origin) {
     FieldReader r(origin, "");
     const json& info = r.field(doc, "info");
     const json& data = r.field(doc, "data");

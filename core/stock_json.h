@@ -57,4 +57,16 @@ private:
     std::string origin_, path_;
 };
 
+// The document in `text`; throws StockError naming `origin` if it is not valid JSON.
+inline json parse_document(const std::string& text, const std::string& origin) {
+    try {
+        return json::parse(text);
+    } catch (const json::parse_error& e) {
+        throw StockError(origin + ": not valid JSON: " + e.what());
+    }
+}
+
+// A parsed spektrafilm profile as a stock (core/stock_import.cpp).
+Stock stock_from_spektrafilm(const json& doc, const std::string& origin);
+
 }  // namespace darkroom::stock_json

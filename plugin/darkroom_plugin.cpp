@@ -21,9 +21,11 @@
 #include <memory>
 #include <mutex>
 #include <new>
+#include <optional>
 #include <sstream>
 
 #include "core/develop.h"
+#include "core/plate/grain_synthesis.h"
 #include "core/stock.h"
 #include "ocio/transform.h"
 #include "plugin/ofx_abi.h"
@@ -281,6 +283,9 @@ struct BandJob {
     const Plan* plan;
     ConstImageView input;
     const ocio::Conversion* output_conversion;  // null: none
+    const GrainSynthesisPlan* plate_grain;       // null: none
+    uint64_t seed;
+    int grain_frame;
     const HostImage* output;
     OfxRectI frame;
     std::vector<Window> bands;  // core coordinates
@@ -297,6 +302,8 @@ void render_band(BandJob& job, const Window& band) {
     if (job.output_conversion)
         job.output_conversion->apply({out.pixels.data(), band.width(), band.height(), channels, channels,
                                       (std::ptrdiff_t)channels * band.width()});
+    // Keyed by absolute pixel like the film grain: a band gets that band of the full frame.
+    if (job.plate_grain) apply_grain_profile(*job.plate_grain, out.view(), job.seed, job.grain_frame, 1);
     const bool premultiply = job.output->premultiplied();
     for (int y = band.y0; y < band.y1; ++y)
         for (int x = band.x0; x < band.x1; ++x) {
@@ -435,6 +442,17 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     job.plan = plan.get();
     job.input = in;
     job.output_conversion = colour.out ? colour.out.get() : nullptr;
+    std::optional<GrainSynthesisPlan> plate_grain;
+    if (!settings.grain_profile.empty()) {
+        try {
+            plate_grain = plan_grain_synthesis(load_grain_profile_file(settings.grain_profile));
+        } catch (const GrainProfileError& e) {
+            throw ParameterError(std::string("Grain profile: ") + e.what());
+        }
+    }
+    job.plate_grain = plate_grain ? &*plate_grain : nullptr;
+    job.seed = settings.develop.seed;
+    job.grain_frame = settings.develop.frame;
     job.output = &output;
     job.frame = frame;
     unsigned cpus = 1;
@@ -491,7 +509,8 @@ OfxStatus is_identity(OfxImageEffectHandle effect, const Props& in_args, const P
     NodeSettings n = read_parameters(effect, time);
     const DevelopSettings& s = n.develop;
     bool no_grain = !s.grain || (s.grain_amount[0] == 0 && s.grain_amount[1] == 0 && s.grain_amount[2] == 0);
-    if (s.output != OutputMode::texture || !no_grain || s.mtf || s.halation != 0) return kOfxStatReplyDefault;
+    if (s.output != OutputMode::texture || !no_grain || s.mtf || s.halation != 0 || !n.grain_profile.empty())
+        return kOfxStatReplyDefault;
     auto converter = converter_for(instance_of(effect), n.ocio_config);
     if (converter->canonical_color_space(n.input_space) != converter->canonical_color_space(n.output_space))
         return kOfxStatReplyDefault;
@@ -511,7 +530,8 @@ OfxStatus clip_preferences(OfxImageEffectHandle effect, const Props& out_args) {
     // Grain changes with the frame unless it is off or static.
     NodeSettings n = read_parameters(effect, 0.0);
     const DevelopSettings& s = n.develop;
-    bool grain = s.grain && (s.grain_amount[0] > 0 || s.grain_amount[1] > 0 || s.grain_amount[2] > 0);
+    bool grain = (s.grain && (s.grain_amount[0] > 0 || s.grain_amount[1] > 0 || s.grain_amount[2] > 0)) ||
+                 !n.grain_profile.empty();
     NodeSettings n1 = read_parameters(effect, 1.0);
     out_args.set(kOfxImageEffectFrameVarying, grain && n1.develop.frame != s.frame ? 1 : 0);
     return kOfxStatOK;

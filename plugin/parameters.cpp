@@ -25,6 +25,7 @@ constexpr const char* kGrainAmount = "grainAmount";
 constexpr const char* kGrainSize = "grainSize";
 constexpr const char* kGrainResponseOverride = "grainResponseOverride";
 constexpr const char* kGrainResponse = "grainResponse";
+constexpr const char* kGrainProfile = "grainProfile";
 constexpr const char* kSeed = "seed";
 constexpr const char* kStaticGrain = "staticGrain";
 constexpr const char* kHalation = "halation";
@@ -281,6 +282,10 @@ void define_parameters(OfxParamSetHandle params) {
     define_double3(params, kGrainResponse, "Response",
                    "Granularity grows with net density as D^response (the seed paper cites 1/3)", grain, 1.0 / 3.0, 0,
                    3, 0, 1, {"R", "G", "B"});
+    define_string(params, kGrainProfile, "Grain profile",
+                  "A plate's grain profile (.json from darkroom grain analyze or predict): replaces the stock's grain "
+                  "and is added in the output colour space, which should be the plate's",
+                  grain, "", true);
     Props seed = define(params, kOfxParamTypeInteger, kSeed, "Seed",
                         "Grain seed: the grain is a function of (seed, frame, layer, pixel)", grain);
     seed.set(kOfxParamPropDefault, 0);
@@ -357,6 +362,9 @@ NodeSettings read_parameters(OfxImageEffectHandle instance, OfxTime time) {
     s.mtf = r.get_bool(kMtf);
     s.frame_width_mm = r.checked_double(kFrameWidth, 0, 10000);
     s.print_width_mm = r.checked_double(kPrintWidth, 0, 10000);
+
+    n.grain_profile = r.get_string(kGrainProfile);
+    if (!n.grain_profile.empty()) s.grain = false;  // the plate's grain replaces the stock's
 
     n.ocio_config = r.get_string(kOcioConfig);
     n.input_space = r.get_string(kInputSpace);

@@ -19,6 +19,9 @@ struct NodeSettings {
     DevelopSettings develop;  // develop.frame is the grain frame (0 with static grain)
     std::string ocio_config;  // empty: $OCIO, else the embedded config
     std::string input_space, output_space;
+    // A plate's grain profile file (darkroom grain analyze/predict); when set it replaces the
+    // stock's grain (develop.grain is false) and is added in the output colour space.
+    std::string grain_profile;
 };
 
 // A parameter value the plugin cannot use; the message names the parameter by its label.

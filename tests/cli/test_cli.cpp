@@ -238,3 +238,27 @@ TEST_CASE("grain analyze on real film scans finds grain of a few code values", "
     pixels(chart, &spec);
     CHECK(spec.width == 1280);
 }
+
+TEST_CASE("develop --grain-profile adds the plate's grain as grain apply does, in place of the stock's", "[cli][grain]") {
+    const std::string clean = make_patches("profile-clean.exr"), profile = (kTmp / "profile-500t.json").string(),
+                      applied = (kTmp / "profile-applied.exr").string(), developed = (kTmp / "profile-developed.exr").string();
+    REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + profile).exit_code == 0);
+    REQUIRE(darkroom("grain apply " + clean + " --profile " + profile + " -o " + applied + " --seed 4 --frame 7").exit_code == 0);
+    // Texture output without MTF and halation is the input itself, so only the plate's grain remains.
+    Result r = darkroom("develop " + clean + " -o " + developed + " --film kodak-vision3-500t --output texture --no-mtf " +
+                        "--halation 0 --grain-profile " + profile + " --seed 4 --frame 7 -v");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("replaces the stock's grain"));
+    std::vector<float> a = pixels(applied), d = pixels(developed), c = pixels(clean);
+    REQUIRE(a.size() == d.size());
+    double grain = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        REQUIRE(d[i] == Approx(a[i]).margin(1e-6));
+        grain = std::max(grain, double(std::abs(a[i] - c[i])));
+    }
+    CHECK(grain > 1e-3);
+    r = darkroom("develop " + clean + " -o " + developed + " --grain-profile /nonexistent.json --output texture");
+    CHECK(r.exit_code != 0);
+    CHECK_THAT(r.output, Catch::Contains("/nonexistent.json"));
+}

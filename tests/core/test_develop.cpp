@@ -10,13 +10,7 @@ using namespace darkroom;
 
 namespace {
 
-Image render(const Stock& film, const Stock* paper, const DevelopSettings& s, const Image& in, int threads = 1,
-             Window window = {}) {
-    Plan plan = Plan::compile(film, paper, s, {in.window.width(), in.window.height()});
-    Image out(window.empty() ? in.window : window, 3);
-    plan.run(in.view(), out.view(), threads);
-    return out;
-}
+using test::render;
 
 DevelopSettings density_settings() {
     DevelopSettings s;

@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "core/develop.h"
 #include "core/stock.h"
 
 namespace darkroom::test {
@@ -81,5 +82,14 @@ inline Stock test_film() { return parse_stock_json(test_film_json(), "test film"
 inline Stock test_colour_film() { return parse_stock_json(test_colour_film_json(), "test colour film"); }
 inline Stock test_colour_paper() { return parse_stock_json(test_colour_paper_json(), "test colour paper"); }
 inline Stock test_paper() { return parse_stock_json(test_paper_json(), "test paper"); }
+
+// Develops `in` (its window is the whole frame) and returns `window` of the result (default all).
+inline Image render(const Stock& film, const Stock* paper, const DevelopSettings& s, const Image& in, int threads = 1,
+                    Window window = {}) {
+    Plan plan = Plan::compile(film, paper, s, {in.window.width(), in.window.height()});
+    Image out(window.empty() ? in.window : window, 3);
+    plan.run(in.view(), out.view(), threads);
+    return out;
+}
 
 }  // namespace darkroom::test

@@ -496,3 +496,37 @@ TEST_CASE("bad input fails with a message, never a crash", "[plugin][bad-input]"
     CHECK(outstanding_allocations() == 0);
     CHECK(outstanding_images() == 0);
 }
+
+TEST_CASE("a grain profile replaces the stock's grain as darkroom develop --grain-profile does, in any tiles",
+          "[plugin][cli][grain]") {
+    const int w = 64, h = 48;
+    std::vector<float> px = scene(w, h, 3);
+    std::string input = write_exr("plugin-profile-scene.exr", px, w, h, 3);
+    std::string profile = (fs::path(DARKROOM_TEST_TMP) / "plugin-profile.json").string();
+    REQUIRE(std::system((std::string(DARKROOM_EXE) + " grain predict --stock kodak-tri-x-400 --width 512 -o " + profile +
+                         " > /dev/null")
+                            .c_str()) == 0);
+    auto inst = make_instance();
+    set_common_look(*inst);
+    inst->set_string("grainProfile", profile);
+    inst->set_source(Frame::from_top_down(px, w, h, 3), kOfxImageOpaque);
+    set_cpu_count(1);
+    RenderResult full = inst->render(9, {0, 0, w, h});
+    INFO(inst->effect().persistent_message);
+    REQUIRE(full.status == kOfxStatOK);
+    std::vector<float> cli = develop(input, kCommonFlags + " --frame 9 --grain-profile " + profile);
+    std::vector<float> ofx = full.output.to_top_down();
+    REQUIRE(ofx.size() == cli.size());
+    long differing = 0;
+    for (size_t i = 0; i < cli.size(); ++i) differing += ofx[i] != cli[i];
+    CHECK(differing == 0);
+    set_cpu_count(3);
+    RenderResult tiles = inst->render_tiles(9, {0, 0, w, h}, 23, 17);
+    REQUIRE(tiles.status == kOfxStatOK);
+    CHECK(same_bits(full.output, tiles.output));
+    set_cpu_count(4);
+    inst->set_string("grainProfile", "/nonexistent-profile.json");
+    RenderResult bad = inst->render(9, {0, 0, w, h});
+    CHECK(bad.status == kOfxStatFailed);
+    CHECK_THAT(inst->effect().persistent_message, Catch::Contains("nonexistent-profile.json"));
+}
