@@ -262,3 +262,22 @@ TEST_CASE("develop --grain-profile adds the plate's grain as grain apply does, i
     CHECK(r.exit_code != 0);
     CHECK_THAT(r.output, Catch::Contains("/nonexistent.json"));
 }
+
+TEST_CASE("plot draws a stock's curves, sensitivities, dyes and MTF", "[cli][plot]") {
+    const std::string svg = (kTmp / "plot-500t.svg").string(), png = (kTmp / "plot-500t.png").string();
+    Result r = darkroom("plot kodak-vision3-500t -o " + svg);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    const std::string text = file_bytes(svg);
+    for (const char* expected : {"characteristic curves", "spectral sensitivity", "spectral dye density",
+                                 "modulation transfer", "red", "green", "blue", "base + fog"})
+        CHECK_THAT(text, Catch::Contains(expected));
+    REQUIRE(darkroom("plot kodak-tri-x-400 -o " + png).exit_code == 0);
+    OIIO::ImageSpec spec;
+    const size_t values = pixels(png, &spec).size();
+    CHECK(values == size_t(spec.width) * spec.height * spec.nchannels);
+    CHECK(spec.width > 2 * spec.height);  // four panels side by side
+    r = darkroom("plot no-such-stock -o " + svg);
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("unknown stock 'no-such-stock'"));
+}

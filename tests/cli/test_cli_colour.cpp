@@ -225,13 +225,18 @@ TEST_CASE("a LUT from bake-lut, applied by oiiotool, matches develop without gra
     ScopedOcioVariable unset(std::nullopt);
     const std::string config = written_config("colour-lut.ocio");
     const std::string scene = make_lut_scene("colour-lut-scene.exr");
-    const std::string look = " --film kodak-tri-x-400 --paper vdr-paper-grade-2 --exposure 0.5 --print-exposure -0.3";
+    const std::string bw_look = " --film kodak-tri-x-400 --paper vdr-paper-grade-2 --exposure 0.5 --print-exposure -0.3";
+    const std::string colour_look = " --film kodak-vision3-250d --paper kodak-2383 --exposure 0.5";
     struct Case {
         const char* lut;
         const char* input_space;  // "" for the working space
+        const std::string& look;
     };
-    for (const Case& c : {Case{"colour-look.cube", ""}, Case{"colour-look.clf", ""},
-                          Case{"colour-look-acescct.clf", "ACEScct"}, Case{"colour-look-acescct.cube", "ACEScct"}}) {
+    for (const Case& c : {Case{"colour-look.cube", "", bw_look}, Case{"colour-look.clf", "", bw_look},
+                          Case{"colour-look-acescct.clf", "ACEScct", bw_look},
+                          Case{"colour-look-acescct.cube", "ACEScct", bw_look},
+                          Case{"colour-look-2383.clf", "", colour_look}, Case{"colour-look-2383.cube", "", colour_look}}) {
+        const std::string& look = c.look;
         std::string in = scene, colour = " --ociodisplay sRGB Standard";
         if (*c.input_space) {
             in = tmp(std::string("colour-lut-scene-") + c.input_space + ".exr");
@@ -251,14 +256,20 @@ TEST_CASE("a LUT from bake-lut, applied by oiiotool, matches develop without gra
         // Display code values, full scale 1.
         const std::vector<float> want = pixels(developed), got = pixels(applied);
         REQUIRE(want.size() == got.size());
-        double max_error = 0, sum = 0;
-        for (size_t i = 0; i < want.size(); ++i) {
-            const double e = std::abs(double(got[i]) - double(want[i]));
-            max_error = std::max(max_error, e);
-            sum += e;
-        }
-        std::printf("[bake-lut] %-24s input %-10s oiiotool vs develop: max %.5f, mean %.6f (sRGB display, full scale 1)\n",
-                    c.lut, *c.input_space ? c.input_space : "lin_rec709", max_error, sum / double(want.size()));
-        CHECK(max_error < 0.005);
+        std::vector<double> errors;
+        for (size_t i = 0; i < want.size(); ++i) errors.push_back(std::abs(double(got[i]) - double(want[i])));
+        std::sort(errors.begin(), errors.end());
+        double mean = std::accumulate(errors.begin(), errors.end(), 0.0) / double(errors.size());
+        double p99 = errors[errors.size() * 99 / 100], max_error = errors.back();
+        std::printf("[bake-lut] %-24s input %-10s oiiotool vs develop: max %.5f, 99th percentile %.5f, mean %.6f "
+                    "(sRGB display, full scale 1)\n",
+                    c.lut, *c.input_space ? c.input_space : "lin_rec709", max_error, p99, mean);
+        // The colour print is far less smooth than the B&W one on colours whose channels lie
+        // up to 16 stops apart: there the 65^3 lattice misses by more (stated in the README).
+        if (&look == &bw_look)
+            CHECK(max_error < 0.005);
+        else
+            CHECK(p99 < 0.01);
+        CHECK(mean < 0.001);
     }
 }
