@@ -267,16 +267,18 @@ std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, in
         const Curve& curve = m.stock.layers[layer].density_curve;
         double gamma = std::max(0.05, curve(mid_grey_log_h + 0.5) - curve(mid_grey_log_h - 0.5));
         double k = kLn10 / gamma;
+        // grain_field's standard deviation per pixel (sum of the 2D kernel's squares).
+        double field_sigma = grain ? grain->pixel_sigma_at_unit_density() / grain->sigma_per_pixel : 1.0;
         parallel_for(out.y0, out.y1, threads, [&](int y0, int y1) {
             for (int y = y0; y < y1; ++y)
                 for (int x = out.x0; x < out.x1; ++x) {
                     double exposure = double(spread.at(x, y)) * normalise;
                     double factor = 1.0;
                     if (grain) {
+                        // The density grain here is sigma times the field normalised to unit variance.
                         double density = curve(std::log10(std::max(exposure, 1e-30)));
                         double sigma = grain_sigma_at(*grain, density);
-                        double g = sigma / grain->pixel_sigma_at_unit_density() * grain->sigma_per_pixel *
-                                   fields[layer]->at(x, y);
+                        double g = sigma * fields[layer]->at(x, y) / field_sigma;
                         factor = std::exp(k * g - 0.5 * k * k * sigma * sigma);
                     }
                     spread.at(x, y) = float(exposure / film_exposure_scale_ * factor);
