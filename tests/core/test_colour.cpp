@@ -214,20 +214,9 @@ TEST_CASE("per-channel grain settings change only their channel", "[colour][grai
 }
 
 TEST_CASE("bad colour stocks and pixels get clear errors or finite output", "[colour][bad-input]") {
-    auto error_of = [](const std::string& json) {
-        try {
-            parse_stock_json(json, "c.json");
-        } catch (const StockError& e) {
-            return std::string(e.what());
-        }
-        return std::string("no error");
-    };
-    std::string good = test::test_colour_film_json();
-    auto replace = [&](const std::string& from, const std::string& to) {
-        std::string s = good;
-        REQUIRE(s.find(from) != std::string::npos);
-        return s.replace(s.find(from), from.size(), to);
-    };
+    auto error_of = [](const std::string& json) { return test::stock_error_of(json, "c.json"); };
+    const std::string good = test::test_colour_film_json();
+    auto replace = [&](const std::string& from, const std::string& to) { return test::replaced(good, from, to); };
     // A missing channel: two layers.
     std::string two = good.substr(0, good.rfind(",{\"name\": \"blue\"")) + "]}";
     CHECK_THAT(error_of(two), Catch::Contains("exactly three layers"));

@@ -16,20 +16,9 @@ TEST_CASE("a stock file parses and round-trips through JSON", "[stock]") {
 }
 
 TEST_CASE("bad stock files name the file, the field and the problem", "[stock]") {
-    auto error_of = [](const std::string& json) {
-        try {
-            parse_stock_json(json, "my.json");
-        } catch (const StockError& e) {
-            return std::string(e.what());
-        }
-        return std::string("no error");
-    };
-    std::string good = test::test_film_json();
-    auto replace = [&](const std::string& from, const std::string& to) {
-        std::string s = good;
-        REQUIRE(s.find(from) != std::string::npos);
-        return s.replace(s.find(from), from.size(), to);
-    };
+    auto error_of = [](const std::string& json) { return test::stock_error_of(json, "my.json"); };
+    const std::string good = test::test_film_json();
+    auto replace = [&](const std::string& from, const std::string& to) { return test::replaced(good, from, to); };
     CHECK_THAT(error_of("{not json"), Catch::Contains("my.json") && Catch::Contains("not valid JSON"));
     CHECK_THAT(error_of(replace("\"iso_speed\": 200", "\"iso_speed\": \"fast\"")),
                Catch::Contains("my.json: field 'iso_speed': expected a number"));

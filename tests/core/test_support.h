@@ -1,6 +1,7 @@
 // Shared fixtures for core tests: a small stock defined in the test itself.
 #pragma once
 
+#include <stdexcept>
 #include <string>
 
 #include "core/develop.h"
@@ -82,6 +83,23 @@ inline Stock test_film() { return parse_stock_json(test_film_json(), "test film"
 inline Stock test_colour_film() { return parse_stock_json(test_colour_film_json(), "test colour film"); }
 inline Stock test_colour_paper() { return parse_stock_json(test_colour_paper_json(), "test colour paper"); }
 inline Stock test_paper() { return parse_stock_json(test_paper_json(), "test paper"); }
+
+// The message of the StockError that parsing `json` (named `origin`) throws, or "no error".
+inline std::string stock_error_of(const std::string& json, const std::string& origin) {
+    try {
+        parse_stock_json(json, origin);
+    } catch (const StockError& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
+// `text` with its one occurrence of `from` replaced by `to` (which must be there).
+inline std::string replaced(std::string text, const std::string& from, const std::string& to) {
+    size_t at = text.find(from);
+    if (at == std::string::npos) throw std::logic_error("test fixture lacks: " + from);
+    return text.replace(at, from.size(), to);
+}
 
 // Develops `in` (its window is the whole frame) and returns `window` of the result (default all).
 inline Image render(const Stock& film, const Stock* paper, const DevelopSettings& s, const Image& in, int threads = 1,
