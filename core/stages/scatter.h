@@ -21,8 +21,14 @@ double mtf_response(const Curve& mtf, double cycles_per_mm);
 struct ScatterKernel {
     int radius = 0;            // taps span [-radius, radius] in x and y
     std::vector<float> taps;   // (2r+1)^2, row-major
+    // The taps as a sum of separable terms weight_k e_k e_k^T (the kernel is symmetric: its
+    // eigen-decomposition), kept when it reproduces every tap within kSeparableTolerance of
+    // the largest and costs fewer operations than the direct sum; empty otherwise.
+    std::vector<std::vector<float>> separable;  // e_k scaled by sqrt|weight_k|
+    std::vector<float> separable_sign;          // sign of weight_k
     bool is_identity() const { return radius == 0; }
 };
+constexpr double kSeparableTolerance = 1e-6;
 
 // Largest |MTF(f) - 1| for f up to the diagonal Nyquist frequency of this pitch: below
 // kMtfNoOpTolerance the stage cannot visibly change the image and is skipped.
@@ -31,7 +37,8 @@ double mtf_deviation_to_nyquist(const Curve& mtf, double pixel_pitch_um);
 
 ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um);
 
-// dst = src convolved with the kernel, for dst.window. Reads src with coordinates clamped
+// dst = src convolved with the kernel (through its separable terms when it has them), for
+// dst.window. Reads src with coordinates clamped
 // to `frame`; src.window must cover (dst.window grown by the radius) intersected with frame.
 void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads);
 
