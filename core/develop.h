@@ -102,8 +102,6 @@ public:
     // The stages in order and those left out, one line each, for -v.
     std::vector<std::string> describe() const;
 
-    double film_exposure_scale() const { return film_exposure_scale_; }
-    const std::optional<PrintExposure>& print_exposure() const { return print_; }
 
 private:
     std::vector<Plane> develop_film(const ConstImageView& in, const Window& film_out, int threads) const;
