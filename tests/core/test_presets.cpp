@@ -53,37 +53,35 @@ nlohmann::json read_profile(const std::string& name) {
     return nlohmann::json::parse(in);
 }
 
-// The published characteristic curve of a layer (0 red, 1 green, 2 blue).
-Samples published_curve(const Published& p, int layer) {
-    const char* rgb = "rgb";
-    if (!p.datasheet.empty()) {
-        Samples s = read_csv(kReference + "/datasheets/" + p.datasheet + "/density_curve_" + rgb[layer] + ".csv");
-        if (!s.empty()) return s;
-    }
-    // spektrafilm's curves are net of the base: the preset adds its base's density.
+// The data sheet's CSV `name`_{r,g,b}.csv of a layer (0 red, 1 green, 2 blue); empty if absent.
+Samples datasheet_csv(const Published& p, const std::string& name, int layer) {
+    if (p.datasheet.empty()) return {};
+    return read_csv(kReference + "/datasheets/" + p.datasheet + "/" + name + "_" + "rgb"[layer] + ".csv");
+}
+
+// Column `layer` of the profile's data[y_key] against data[x_key], plus `offset`.
+Samples profile_column(const Published& p, const char* x_key, const char* y_key, int layer, double offset) {
     nlohmann::json profile = read_profile(p.profile);
+    const auto& x = profile["data"][x_key];
+    const auto& y = profile["data"][y_key];
     Samples s;
-    const double d_min = find_stock(p.stock_id).layers[layer].density_curve.y_min();
-    const auto& log_h = profile["data"]["log_exposure"];
-    const auto& d = profile["data"]["density_curves"];
-    for (size_t i = 0; i < log_h.size(); ++i)
-        if (d[i][layer].is_number()) s.push_back({log_h[i].get<double>(), d_min + d[i][layer].get<double>()});
+    for (size_t i = 0; i < x.size(); ++i)
+        if (y[i][layer].is_number()) s.push_back({x[i].get<double>(), offset + y[i][layer].get<double>()});
     return s;
 }
 
+// The published characteristic curve of a layer.
+Samples published_curve(const Published& p, int layer) {
+    Samples s = datasheet_csv(p, "density_curve", layer);
+    if (!s.empty()) return s;
+    // spektrafilm's curves are net of the base: the preset adds its base's density.
+    const double d_min = find_stock(p.stock_id).layers[layer].density_curve.y_min();
+    return profile_column(p, "log_exposure", "density_curves", layer, d_min);
+}
+
 Samples published_log_sensitivity(const Published& p, int layer) {
-    const char* rgb = "rgb";
-    if (!p.datasheet.empty()) {
-        Samples s = read_csv(kReference + "/datasheets/" + p.datasheet + "/log_sensitivity_" + rgb[layer] + ".csv");
-        if (!s.empty()) return s;
-    }
-    nlohmann::json profile = read_profile(p.profile);
-    Samples s;
-    for (int i = 0; i < kSpectralSamples; ++i) {
-        const auto& v = profile["data"]["log_sensitivity"][i][layer];
-        if (v.is_number()) s.push_back({profile["data"]["wavelengths"][i].get<double>(), v.get<double>()});
-    }
-    return s;
+    Samples s = datasheet_csv(p, "log_sensitivity", layer);
+    return s.empty() ? profile_column(p, "wavelengths", "log_sensitivity", layer, 0.0) : s;
 }
 
 bool have_reference_data() {
