@@ -47,6 +47,11 @@ void add_look_flags(CLI::App& cmd, LookOptions& look) {
                 {"texture", OutputMode::texture}},
                "What to write: print (colour of the print), negative (transmittance), density (per layer), "
                "scan (Cineon log code values), texture (the input with grain, MTF and halation only)");
+    add_choice(cmd, "--quality", s.quality,
+               {{"reference", Quality::reference}, {"high", Quality::high}, {"fast", Quality::fast},
+                {"preview", Quality::preview}},
+               "How each stage is computed: reference (from its definition; slow), high, fast or preview "
+               "(README, Quality tiers; 'darkroom bench' measures each against the reference)");
     add_choice(cmd, "--input-units", s.input_units,
                {{"scene-linear", InputUnits::scene_linear}, {"lux-seconds", InputUnits::lux_seconds}},
                "scene-linear (metered so 0.18 is mid grey) or lux-seconds (pixels are the exposure H)");

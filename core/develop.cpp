@@ -1,5 +1,6 @@
 #include "core/develop.h"
 
+#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -16,6 +17,23 @@ constexpr double kLn10 = 2.302585092994046;
 // The scan output: Cineon-style 10-bit printing-density code values (Kodak Cineon: 0.002
 // density per code value, base+fog at code 95), written as code / 1023.
 constexpr double kScanBaseCode = 95.0, kScanDensityPerCode = 0.002, kScanFullCode = 1023.0;
+
+// Adds the time from construction to destruction to a stage (when timing).
+class StageTimer {
+public:
+    StageTimer(StageTimes* times, const char* stage) : times_(times), stage_(stage) {}
+    ~StageTimer() { stop(); }
+    void stop() {
+        if (times_) times_->add(stage_, std::chrono::duration<double>(Clock::now() - start_).count());
+        times_ = nullptr;
+    }
+
+private:
+    using Clock = std::chrono::steady_clock;
+    StageTimes* times_;
+    const char* stage_;
+    Clock::time_point start_ = Clock::now();
+};
 
 std::string fmt(double v, int precision = 4) {
     std::ostringstream s;
@@ -60,7 +78,7 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         }
 
         if (!s.mtf) {
-            m.scatter.push_back(ScatterKernel{0, {1.0f}});
+            m.scatter.push_back(ScatterKernel{0, {1.0f}, {}, {}});
             skipped.push_back("scatter (" + where + "): MTF turned off");
         } else {
             double deviation = mtf_deviation_to_nyquist(layer.mtf, m.pixel_pitch_um);
@@ -89,15 +107,17 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
 
 // Halation then scatter of one layer's exposure (on its window) into `out`.
 Plane spread_exposure(const MaterialStages& m, size_t layer, const Plane& exposure, const Window& out,
-                      const Window& frame, int threads) {
+                      const Window& frame, int threads, StageTimes* times) {
     const Plane* source = &exposure;
     Plane halated;
     const HalationKernel& halation = m.halation[layer];
     if (!halation.is_noop()) {
+        StageTimer timer(times, "halation");
         halated = Plane(out.grown(m.scatter[layer].radius).intersected(frame));
         apply_halation(exposure, halated, halation, frame, threads);
         source = &halated;
     }
+    StageTimer timer(times, "scatter");
     Plane spread(out);
     if (!m.scatter[layer].is_identity()) {
         scatter(*source, spread, m.scatter[layer], frame, threads);
@@ -110,13 +130,19 @@ Plane spread_exposure(const MaterialStages& m, size_t layer, const Plane& exposu
 
 // One material: exposure planes (one per layer) on their window -> density planes on `out`.
 std::vector<Plane> develop_material(const MaterialStages& m, const std::vector<Plane>& exposure, const Window& out,
-                                    const Window& frame, int threads) {
+                                    const Window& frame, int threads, StageTimes* times) {
     std::vector<Plane> density;
     for (size_t i = 0; i < exposure.size(); ++i) {
-        Plane d = spread_exposure(m, i, exposure[i], out, frame, threads);
-        const Curve& curve = m.stock.layers[i].density_curve;
-        for (float& v : d.pixels) v = float(curve(std::log10(double(v))));
-        if (m.grain[i]) apply_grain(d, *m.grain[i], threads);
+        Plane d = spread_exposure(m, i, exposure[i], out, frame, threads, times);
+        {
+            StageTimer timer(times, "develop");
+            const Curve& curve = m.stock.layers[i].density_curve;
+            for (float& v : d.pixels) v = float(curve(std::log10(double(v))));
+        }
+        if (m.grain[i]) {
+            StageTimer timer(times, "grain");
+            apply_grain(d, *m.grain[i], threads);
+        }
         density.push_back(std::move(d));
     }
     return density;
@@ -209,9 +235,11 @@ Window Plan::input_window(const Window& output) const {
     return output.grown(halo).intersected(frame_);
 }
 
-std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& film_out, int threads) const {
+std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& film_out, int threads,
+                                      StageTimes* times) const {
     const Window film_in = film_out.grown(film_stages_.halo_px()).intersected(frame_);
     std::vector<Plane> exposure;
+    StageTimer expose_timer(times, "expose");
     for (const auto& w : film_stages_.rgb_weights) {
         Plane h(film_in);
         parallel_for(film_in.y0, film_in.y1, threads, [&](int y0, int y1) {
@@ -226,18 +254,23 @@ std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& fi
         });
         exposure.push_back(std::move(h));
     }
-    return develop_material(film_stages_, exposure, film_out, frame_, threads);
+    expose_timer.stop();
+    return develop_material(film_stages_, exposure, film_out, frame_, threads, times);
 }
 
-std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window& out, int threads) const {
+std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window& out, int threads,
+                               StageTimes* times) const {
     const PrintExposure& enlarger = *print_;
+    StageTimer enlarger_timer(times, "enlarger");
     std::vector<Plane> paper_exposure =
         per_pixel(negative, negative[0].window, enlarger.paper_layers(), threads, [&](const double* d, double* h) {
             enlarger.expose(d, h);
             for (int j = 0; j < enlarger.paper_layers(); ++j) h[j] = std::clamp(h[j], 0.0, kMaxInput);
         });
-    std::vector<Plane> paper_density = develop_material(paper_stages_, paper_exposure, out, frame_, threads);
+    enlarger_timer.stop();
+    std::vector<Plane> paper_density = develop_material(paper_stages_, paper_exposure, out, frame_, threads, times);
     const Stock& paper = paper_stages_.stock;
+    StageTimer view_timer(times, "view");
     return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view_print(paper, d, rgb); });
 }
 
@@ -248,7 +281,7 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
 // g the density grain at the pixel's developed density (standard deviation sigma) and
 // gamma the curve's slope at mid grey: a log-normal factor of mean exactly 1, so a flat
 // patch keeps its mean. Negative input values keep their sign.
-std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, int threads) const {
+std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, int threads, StageTimes* times) const {
     const MaterialStages& m = film_stages_;
     const Window film_in = out.grown(m.halo_px()).intersected(frame_);
     const double mid_grey_log_h = std::log10(0.18 * film_exposure_scale_);
@@ -260,7 +293,7 @@ std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, in
         for (int y = film_in.y0; y < film_in.y1; ++y)
             for (int x = film_in.x0; x < film_in.x1; ++x)
                 h.at(x, y) = float(sanitize(in.at(x, y)[std::min(c, in.channels - 1)]) * film_exposure_scale_);
-        Plane spread = spread_exposure(m, layer, h, out, frame_, threads);
+        Plane spread = spread_exposure(m, layer, h, out, frame_, threads, times);
         const float normalise = float(1.0 / (1.0 + (m.halation[layer].is_noop() ? 0.0 : m.halation[layer].strength)));
         const auto& grain = m.grain[layer];
         if (grain && !fields[layer]) fields[layer] = grain_field(*grain, out, threads);
@@ -289,7 +322,16 @@ std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, in
     return result;
 }
 
-void Plan::run(const ConstImageView& in, const ImageView& out, int threads) const {
+void StageTimes::add(const std::string& stage, double s) {
+    for (auto& entry : seconds)
+        if (entry.first == stage) {
+            entry.second += s;
+            return;
+        }
+    seconds.emplace_back(stage, s);
+}
+
+void Plan::run(const ConstImageView& in, const ImageView& out, int threads, StageTimes* times) const {
     const Window out_window = out.window.intersected(frame_);
     if (out_window.empty()) return;
     if (!in.window.contains(input_window(out_window)))
@@ -298,12 +340,13 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads) cons
 
     std::vector<Plane> result;
     if (settings_.output == OutputMode::texture) {
-        result = texture(in, out_window, threads);
+        result = texture(in, out_window, threads, times);
     } else if (print_) {
         const Window film_out = out_window.grown(paper_stages_.halo_px()).intersected(frame_);
-        result = print(develop_film(in, film_out, threads), out_window, threads);
+        result = print(develop_film(in, film_out, threads, times), out_window, threads, times);
     } else {
-        result = develop_film(in, out_window, threads);
+        result = develop_film(in, out_window, threads, times);
+        StageTimer timer(times, "convert");
         for (size_t l = 0; l < result.size(); ++l) {
             double d_min = film_stages_.stock.layers[l].density_curve.y_min();
             for (float& v : result[l].pixels) {
@@ -316,6 +359,7 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads) cons
     }
 
     // A single-layer result is written to all three channels.
+    StageTimer timer(times, "write");
     bool copy_alpha = in.channels >= 4 && out.channels >= 4;
     parallel_for(out_window.y0, out_window.y1, threads, [&](int y0, int y1) {
         for (int y = y0; y < y1; ++y)

@@ -21,9 +21,11 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/image.h"
+#include "core/quality.h"
 #include "core/stages/grain.h"
 #include "core/stages/halation.h"
 #include "core/stages/print.h"
@@ -64,6 +66,8 @@ struct DevelopSettings {
     // Enlarger colour filtration in CC units (density x 100) of yellow, magenta and cyan
     // filters in the lamp's light, on top of the printer lights.
     std::array<double, 3> filtration_ymc{0.0, 0.0, 0.0};
+    // How each stage is computed (core/quality.h).
+    Quality quality = Quality::high;
     uint64_t seed = 0;
     int frame = 0;
     double frame_width_mm = 0.0;  // width of the film frame; 0 = the film stock's format
@@ -87,6 +91,12 @@ struct MaterialStages {
     int halo_px() const;
 };
 
+// Seconds a run spent in each stage (summed over layers), for the benchmark.
+struct StageTimes {
+    std::vector<std::pair<std::string, double>> seconds;  // in pipeline order
+    void add(const std::string& stage, double s);
+};
+
 class Plan {
 public:
     // Throws std::invalid_argument naming the problem for unusable settings.
@@ -97,16 +107,19 @@ public:
     Window input_window(const Window& output) const;
     // Renders `out.window` from `in`, which must cover input_window(out.window). Writes
     // channels 0-2 of `out`; copies a 4th channel (alpha) from `in` when both have one.
-    void run(const ConstImageView& in, const ImageView& out, int threads) const;
+    // With `times`, adds the seconds spent in each stage.
+    void run(const ConstImageView& in, const ImageView& out, int threads, StageTimes* times = nullptr) const;
 
     // The stages in order and those left out, one line each, for -v.
     std::vector<std::string> describe() const;
 
 
 private:
-    std::vector<Plane> develop_film(const ConstImageView& in, const Window& film_out, int threads) const;
-    std::vector<Plane> print(const std::vector<Plane>& negative, const Window& out, int threads) const;
-    std::vector<Plane> texture(const ConstImageView& in, const Window& out, int threads) const;
+    std::vector<Plane> develop_film(const ConstImageView& in, const Window& film_out, int threads,
+                                    StageTimes* times) const;
+    std::vector<Plane> print(const std::vector<Plane>& negative, const Window& out, int threads,
+                             StageTimes* times) const;
+    std::vector<Plane> texture(const ConstImageView& in, const Window& out, int threads, StageTimes* times) const;
 
     DevelopSettings settings_;
     Window frame_;

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <iterator>
 #include <vector>
 
 #include "plugin/ofx_host.h"
@@ -16,6 +17,7 @@ constexpr const char* kFilmFile = "filmFile";
 constexpr const char* kPaper = "paper";
 constexpr const char* kPaperFile = "paperFile";
 constexpr const char* kOutput = "output";
+constexpr const char* kQuality = "quality";
 constexpr const char* kExposure = "exposure";
 constexpr const char* kPrintExposure = "printExposure";
 constexpr const char* kPrinterLights = "printerLights";
@@ -252,6 +254,12 @@ void define_parameters(OfxParamSetHandle params) {
                   "developed density per layer. Scan: Cineon-style log code values / 1023. Texture: the input with "
                   "the film's grain, MTF and halation only",
                   stocks, outputs, 0);
+    std::vector<std::string> qualities;
+    for (Quality q : kQualities) qualities.push_back(quality_name(q));
+    define_choice(params, kQuality, "Quality",
+                  "How each stage is computed: reference (from its definition; slow), high, fast or preview; "
+                  "darkroom bench measures each against the reference",
+                  stocks, qualities, int(DevelopSettings{}.quality));
 
     const char* exposure = "exposureGroup";
     define_group(params, exposure, "Exposure and printing", true);
@@ -333,6 +341,7 @@ NodeSettings read_parameters(OfxImageEffectHandle instance, OfxTime time) {
     n.film_from_file = film_option == (int)films.size();
     n.film = n.film_from_file ? stock_file(r, kFilm, kFilmFile) : films[film_option]->id;
     s.output = kOutputs[r.checked_choice(kOutput, (int)kOutputs.size())].second;
+    s.quality = kQualities[r.checked_choice(kQuality, int(std::size(kQualities)))];
     // Only the print output uses a paper.
     int paper_option = r.checked_choice(kPaper, (int)papers.size() + 2);
     if (s.output == OutputMode::print) {

@@ -1,0 +1,28 @@
+#include "core/quality.h"
+
+namespace darkroom {
+
+namespace {
+
+// The settings of each tier; `darkroom bench` measures what each costs and how far it is
+// from the reference (README, "Quality tiers").
+constexpr QualityTier kTiers[] = {
+    {Quality::reference, "reference", ScatterMethod::direct, 0, 1, GrainMethod::boolean_model, 0, 0},
+    {Quality::high, "high", ScatterMethod::separable, 0, 1, GrainMethod::filtered_noise, 0, 0},
+    {Quality::fast, "fast", ScatterMethod::compact, 8, 4, GrainMethod::filtered_noise, 33, 1024},
+    {Quality::preview, "preview", ScatterMethod::compact, 4, 8, GrainMethod::filtered_noise, 17, 256},
+};
+
+}  // namespace
+
+const QualityTier& quality_tier(Quality q) { return kTiers[int(q)]; }
+
+const char* quality_name(Quality q) { return quality_tier(q).name; }
+
+std::optional<Quality> parse_quality(const std::string& name) {
+    for (const QualityTier& t : kTiers)
+        if (name == t.name) return t.quality;
+    return std::nullopt;
+}
+
+}  // namespace darkroom
