@@ -14,6 +14,7 @@ void add_grain_command(CLI::App& app);
 void add_plot_command(CLI::App& app);
 void add_bake_lut_command(CLI::App& app);
 void add_colorconfig_command(CLI::App& app);
+void add_bench_command(CLI::App& app);
 
 // The command line as typed, for the outputs' Software and ImageHistory metadata.
 void set_command_line(int argc, char** argv);

@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
     darkroom::cli::add_plot_command(app);
     darkroom::cli::add_bake_lut_command(app);
     darkroom::cli::add_colorconfig_command(app);
+    darkroom::cli::add_bench_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -1,0 +1,317 @@
+#include "bench/bench.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "core/demo_scene.h"
+#include "core/parallel.h"
+#include "core/plate/grain_analysis.h"
+
+namespace darkroom::bench {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+std::vector<StageTime> stage_list(const StageTimes& t, double scale = 1.0) {
+    std::vector<StageTime> out;
+    for (const auto& [stage, s] : t.seconds) out.push_back({stage, s * scale});
+    return out;
+}
+
+double stage_seconds(const std::vector<StageTime>& stages, const std::string& name) {
+    for (const StageTime& s : stages)
+        if (s.stage == name) return s.seconds;
+    return 0.0;
+}
+
+// The look the benchmark develops: film to print with grain, MTF and halation on.
+DevelopSettings look(Quality q, uint64_t seed) {
+    DevelopSettings s;
+    s.quality = q;
+    s.seed = seed;
+    return s;
+}
+
+// Settings for the measurement targets, whose pixels are exposures (lux-seconds) and whose
+// result is the negative's density, at the benchmarked frame's pixel pitch.
+DevelopSettings density_target(Quality q, uint64_t seed, double pitch_um, int target_width_px) {
+    DevelopSettings s = look(q, seed);
+    s.output = OutputMode::density;
+    s.input_units = InputUnits::lux_seconds;
+    s.frame_width_mm = pitch_um * target_width_px / 1000.0;
+    return s;
+}
+
+// Renders `window` of the frame from the full-frame input `in`.
+Image render(const Plan& plan, const ConstImageView& in, const Window& window, int threads,
+             StageTimes* times = nullptr) {
+    Image out(window, 3);
+    plan.run(in, out.view(), threads, times);
+    return out;
+}
+
+// One whole-frame develop per tier, the fastest of `runs` after a warm-up.
+struct Timed {
+    double seconds = 0;
+    std::vector<StageTime> stages;
+};
+Timed time_frame(const Plan& plan, const Image& scene, Image& out, int runs, int threads) {
+    Timed best{INFINITY, {}};
+    for (int r = 0; r <= runs; ++r) {
+        StageTimes times;
+        auto start = Clock::now();
+        plan.run(scene.view(), out.view(), threads, &times);
+        double s = seconds_since(start);
+        if (r > 0 && s < best.seconds) best = {s, stage_list(times)};
+    }
+    return best;
+}
+
+// Sample windows along the frame's diagonal, window i centred in band i of the demo scene
+// (grey ramp, step wedge, fine detail, colour chart).
+std::vector<Window> sample_windows(int width, int height, int count, int side_px) {
+    const int w = std::min(side_px, width), h = std::min(side_px, height);
+    std::vector<Window> out;
+    for (int i = 0; i < count; ++i) {
+        int cx = int((i + 0.5) * width / count), cy = int((i + 0.5) * height / count);
+        int x0 = std::clamp(cx - w / 2, 0, width - w), y0 = std::clamp(cy - h / 2, 0, height - h);
+        out.push_back({x0, y0, x0 + w, y0 + h});
+    }
+    return out;
+}
+
+// Grain: a wedge of flat square patches one stop apart around mid grey, grain on (MTF and
+// halation off, so each patch is flat), the density analysed as a plate would be.
+constexpr int kWedgePatches = 7, kWedgePatchPx = 128, kWedgeBlockPx = 32;
+
+GrainProfile measure_grain(const Stock& film, Quality q, uint64_t seed, double pitch_um, int threads) {
+    const int width = kWedgePatches * kWedgePatchPx;
+    DevelopSettings s = density_target(q, seed, pitch_um, width);
+    s.mtf = false;
+    s.halation = 0;
+    Plan plan = Plan::compile(film, nullptr, s, {width, kWedgePatchPx});
+    Image wedge(width, kWedgePatchPx, 3);
+    const double h0 = mid_grey_exposure_lux_s(film.iso_speed);
+    for (int y = 0; y < kWedgePatchPx; ++y)
+        for (int x = 0; x < width; ++x) {
+            float h = float(h0 * std::exp2(x / kWedgePatchPx - kWedgePatches / 2));
+            for (int c = 0; c < 3; ++c) wedge.at(x, y)[c] = h;
+        }
+    Image density = render(plan, wedge.view(), wedge.window, threads);
+    GrainAnalysisSettings a;
+    a.channels = 3;
+    a.block_size_px = kWedgeBlockPx;
+    a.level_bins = kWedgePatches;
+    a.threads = threads;
+    return analyze_grain({density.view()}, a);
+}
+
+GrainErrors grain_errors(const GrainProfile& reference, const GrainProfile& test) {
+    GrainErrors e;
+    GrainMatch m = compare_grain_profiles(reference, test);
+    e.measured = true;
+    for (const ChannelMatch& c : m.channels) {
+        e.response_percent = std::max(e.response_percent, c.response_error_percent);
+        e.nps_db = std::max(e.nps_db, c.nps_distance_db);
+    }
+    e.correlation = m.max_correlation_difference;
+    return e;
+}
+
+}  // namespace
+
+// MTF on the density output: one-row sine targets of modulation 0.1 around a mid-grey
+// exposure (a one-row frame: rows clamp at the frame edge, so the 2D PSF acts as its line
+// spread function), read back to exposure through each layer's H&D curve, measured in the
+// middle half, away from the clamped ends. The frame is wide enough that the middle half
+// is further than the kernel's halo from both ends.
+std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality q, double pitch_um,
+                                                     const std::vector<double>& cycles_per_px, int threads) {
+    int width = 2048;
+    DevelopSettings s = density_target(q, 0, pitch_um, width);
+    s.grain = false;
+    s.halation = 0;
+    Plan plan = Plan::compile(film, nullptr, s, {width, 1});
+    int halo = width / 2 - plan.input_window({width / 2, 0, width / 2 + 1, 1}).x0;
+    if (halo >= width / 4) {
+        width = 4 * ((halo / 64 + 1) * 64);
+        s.frame_width_mm = pitch_um * width / 1000.0;
+        plan = Plan::compile(film, nullptr, s, {width, 1});
+    }
+    const double h0 = mid_grey_exposure_lux_s(film.iso_speed), modulation = 0.1;
+    const int x0 = width / 4, n = width / 2;
+    std::vector<std::vector<double>> mtf(film.layers.size());
+    for (double f : cycles_per_px) {
+        Image target(width, 1, 3);
+        std::vector<double> input(n);
+        for (int x = 0; x < width; ++x) {
+            double h = h0 * (1.0 + modulation * std::sin(2 * M_PI * f * (x + 0.5)));
+            for (int c = 0; c < 3; ++c) target.at(x, 0)[c] = float(h);
+            if (x >= x0 && x < x0 + n) input[x - x0] = double(target.at(x, 0)[0]);
+        }
+        const double input_modulation = sine_amplitude(input, f, x0) / h0;
+        Image density = render(plan, target.view(), target.window, threads);
+        for (size_t l = 0; l < film.layers.size(); ++l) {
+            const Curve& curve = film.layers[l].density_curve;
+            std::vector<double> exposure(n);
+            double mean = 0;
+            for (int i = 0; i < n; ++i) {
+                double log_h;
+                if (!curve.first_x_at(density.at(x0 + i, 0)[l], &log_h)) log_h = curve.x_max();
+                exposure[i] = std::pow(10.0, log_h);
+                mean += exposure[i] / n;
+            }
+            mtf[l].push_back(sine_amplitude(exposure, f, x0) / mean / input_modulation);
+        }
+    }
+    return mtf;
+}
+
+BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOptions& o) {
+    if (o.width < 16 || o.height < 16 || (long long)o.width * o.height > (1LL << 27))
+        throw std::invalid_argument("benchmark frame size must be 16x16 to 134 million pixels");
+    if (o.runs < 1 || o.sample_windows < 1 || o.sample_window_px < 8)
+        throw std::invalid_argument("benchmark needs 1+ runs and 1+ sample windows of 8+ pixels");
+    auto say = [&](const std::string& what) {
+        if (o.progress) o.progress(what);
+    };
+
+    BenchReport r;
+    r.machine = describe_machine();
+    r.threads = resolve_thread_count(o.threads);
+    r.width = o.width, r.height = o.height;
+    r.film = film.id, r.paper = paper.id;
+    r.runs = o.runs;
+    r.sample_windows = sample_windows(o.width, o.height, o.sample_windows, o.sample_window_px);
+    r.pixel_pitch_um = film.frame_width_mm * 1000.0 / o.width;
+    for (int k : {1, 2, 4, 8, 12, 16, 20, 24, 28, 32}) r.mtf_cycles_per_px.push_back(k / 64.0);
+    r.grain_wedge_patches = kWedgePatches, r.grain_wedge_patch_px = kWedgePatchPx;
+
+    std::vector<Quality> tiers{Quality::reference};
+    for (Quality q : o.tiers)
+        if (q != Quality::reference) tiers.push_back(q);
+
+    const Image scene = demo_scene(o.width, o.height);
+    const FrameGeometry frame{o.width, o.height};
+    // One compile before any is timed: the first pays for one-time set-up (the spectral
+    // upsampling basis), which is no tier's cost.
+    Plan::compile(film, &paper, look(Quality::high, o.seed), frame);
+    Image out(o.width, o.height, 3);
+    {
+        say("copy pass");
+        double best = INFINITY;
+        for (int run = 0; run <= o.runs; ++run) {
+            double s = copy_pass_seconds(scene.view(), out.view(), o.threads);
+            if (run > 0) best = std::min(best, s);
+        }
+        r.copy_seconds = best;
+    }
+
+    // Per tier, the sample windows' print and density (grain off) and the measurements.
+    struct WindowRenders {
+        std::vector<Image> print, density;
+    };
+    std::vector<WindowRenders> renders(tiers.size());
+    GrainProfile reference_grain;
+    for (size_t t = 0; t < tiers.size(); ++t) {
+        const Quality q = tiers[t];
+        TierResult tr;
+        tr.quality = q;
+        tr.name = quality_name(q);
+        DevelopSettings s = look(q, o.seed);
+        auto start = Clock::now();
+        Plan plan = Plan::compile(film, &paper, s, frame);
+        tr.compile_seconds = seconds_since(start);
+        if (q == Quality::reference) {
+            say(tr.name + ": " + std::to_string(r.sample_windows.size()) + " sample windows");
+            StageTimes times;
+            long long pixels = 0;
+            for (const Window& w : r.sample_windows) {
+                render(plan, scene.view(), w, o.threads, &times);
+                pixels += w.pixel_count();
+            }
+            double scale = double(frame.width) * frame.height / pixels;
+            tr.stages = stage_list(times, scale);
+            for (const StageTime& st : tr.stages) tr.seconds += st.seconds;
+            tr.extrapolated = true;
+        } else {
+            say(tr.name + ": whole frame, " + std::to_string(o.runs + 1) + " runs");
+            Timed timed = time_frame(plan, scene, out, o.runs, o.threads);
+            tr.seconds = timed.seconds;
+            tr.stages = timed.stages;
+        }
+
+        say(tr.name + ": errors on the sample windows, MTF, grain wedge");
+        DevelopSettings no_grain = s;
+        no_grain.grain = false;
+        Plan print_plan = Plan::compile(film, &paper, no_grain, frame);
+        no_grain.output = OutputMode::density;
+        Plan density_plan = Plan::compile(film, nullptr, no_grain, frame);
+        for (const Window& w : r.sample_windows) {
+            renders[t].print.push_back(render(print_plan, scene.view(), w, o.threads));
+            renders[t].density.push_back(render(density_plan, scene.view(), w, o.threads));
+        }
+        const WindowRenders& ref = renders[0];
+        ColourError worst;
+        double de_sum = 0;
+        for (size_t i = 0; i < r.sample_windows.size(); ++i) {
+            ColourError e = colour_error(renders[t].print[i].view(), ref.print[i].view());
+            de_sum += e.mean * e.pixels;
+            worst.pixels += e.pixels;
+            worst.max = std::max(worst.max, e.max);
+            tr.density_error = std::max(tr.density_error,
+                                        max_abs_difference(renders[t].density[i].view(), ref.density[i].view()));
+        }
+        worst.mean = de_sum / worst.pixels;
+        tr.print_error = worst;
+
+        tr.mtf = measure_density_mtf(film, q, r.pixel_pitch_um, r.mtf_cycles_per_px, o.threads);
+        if (!r.tiers.empty())  // the reference's own error stays 0
+            for (size_t l = 0; l < tr.mtf.size(); ++l)
+                for (size_t k = 0; k < tr.mtf[l].size(); ++k)
+                    tr.mtf_error = std::max(tr.mtf_error, std::abs(tr.mtf[l][k] - r.tiers[0].mtf[l][k]));
+
+        try {
+            if (q == Quality::reference) {
+                reference_grain = measure_grain(film, q, o.seed, r.pixel_pitch_um, o.threads);
+                // Another realisation of the reference: the measurement's own noise floor.
+                tr.grain = grain_errors(reference_grain, measure_grain(film, q, o.seed + 1, r.pixel_pitch_um, o.threads));
+            } else {
+                tr.grain = grain_errors(reference_grain, measure_grain(film, q, o.seed, r.pixel_pitch_um, o.threads));
+            }
+        } catch (const std::exception& e) {
+            tr.grain.problem = e.what();
+        }
+        r.tiers.push_back(std::move(tr));
+
+        if (q == Quality::fast) {
+            const TierResult& fast = r.tiers.back();
+            struct Off {
+                const char* stage;
+                void (*turn_off)(DevelopSettings&);
+            };
+            const Off offs[] = {{"grain", [](DevelopSettings& d) { d.grain = false; }},
+                                {"scatter", [](DevelopSettings& d) { d.mtf = false; }},
+                                {"halation", [](DevelopSettings& d) { d.halation = 0; }}};
+            for (const Off& off : offs) {
+                say(std::string("fast without ") + off.stage);
+                DevelopSettings d = s;
+                off.turn_off(d);
+                Timed timed = time_frame(Plan::compile(film, &paper, d, frame), scene, out, o.runs, o.threads);
+                r.disabled.push_back({off.stage, timed.seconds, timed.stages, stage_seconds(fast.stages, off.stage)});
+            }
+            r.target.evaluated = true;
+            r.target.copy_ratio = copy_ratio(fast.seconds, r.copy_seconds);
+            r.target.mean_de2000 = fast.print_error.mean;
+            r.target.grain_within = fast.grain.within(r.grain_tolerance);
+        }
+    }
+    return r;
+}
+
+}  // namespace darkroom::bench

@@ -1,0 +1,122 @@
+// `darkroom bench`: run time against error for every quality tier (core/quality.h).
+//
+// Timing: each tier develops the whole frame (the demo scene, core/demo_scene.h) through
+// the look (film to print, grain, MTF and halation on), one warm-up run then `runs` timed
+// runs, the fastest kept with its per-stage times (Plan::run's StageTimes). A plain copy
+// of the same float RGB buffer on the same threads is timed in the same run, so every
+// time is also a multiple of the copy. The reference tier is too slow for a whole frame:
+// it renders only the sample windows (a window equals that window of the full frame) and
+// its frame time is extrapolated from them by pixel count; each window also computes its
+// halo, so the extrapolation overstates it.
+//
+// Errors against the reference tier, on the sample windows of the same frame:
+// - print colour: mean and max CIEDE2000, grain off in both (grain realisations differ
+//   between tiers, so per-pixel colour is compared without it);
+// - negative: max |density difference| of the density output, grain off;
+// - MTF: sine targets at the frame's pixel pitch on the density output (grain and
+//   halation off), read back to exposure through the layer's H&D curve; the error is the
+//   largest |MTF - reference MTF| over layers and frequencies up to Nyquist;
+// - grain: a wedge of flat patches with grain on, each tier's density analysed by the
+//   plate-matching analysis (core/plate/grain_analysis.h) and compared with the
+//   reference's (core/plate/grain_compare.h). The reference is also compared with itself
+//   under another seed: that is the measurement's noise floor.
+// Disabled stages: the fast tier again with grain, MTF and halation off in turn.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "bench/metrics.h"
+#include "core/develop.h"
+#include "core/plate/grain_compare.h"
+#include "core/quality.h"
+
+namespace darkroom::bench {
+
+struct BenchOptions {
+    int width = 4096, height = 2160;  // the target frame
+    int threads = 0;                  // 0 = all cores
+    std::vector<Quality> tiers{std::begin(kQualities), std::end(kQualities)};  // reference is always run
+    int runs = 3;                     // timed whole-frame runs after one warm-up; the fastest is kept
+    int sample_windows = 4;           // along the frame's diagonal, one per band of the demo scene
+    int sample_window_px = 128;
+    uint64_t seed = 0;
+    std::function<void(const std::string&)> progress;  // told what runs next (may be empty)
+};
+
+struct StageTime {
+    std::string stage;
+    double seconds = 0;
+};
+
+struct GrainErrors {
+    bool measured = false;
+    std::string problem;  // why not, when not measured
+    double response_percent = 0, nps_db = 0, correlation = 0;  // worst channel
+    bool within(const GrainMatchTolerance& t) const {
+        return measured && response_percent <= t.response_percent && nps_db <= t.nps_db &&
+               correlation <= t.correlation;
+    }
+};
+
+struct TierResult {
+    Quality quality = Quality::high;
+    std::string name;
+    double compile_seconds = 0;
+    double seconds = 0;        // the whole frame's develop time (extrapolated when flagged)
+    bool extrapolated = false;
+    std::vector<StageTime> stages;
+    ColourError print_error;   // CIEDE2000 against the reference, grain off
+    double density_error = 0;  // max |D - D_reference| of the negative, grain off
+    double mtf_error = 0;      // max |MTF - MTF_reference|
+    std::vector<std::vector<double>> mtf;  // measured, per layer per frequency
+    GrainErrors grain;         // against the reference (for the reference: another seed)
+};
+
+// The fast tier with one stage turned off.
+struct DisabledStage {
+    std::string stage;         // as StageTimes names it
+    double seconds = 0;
+    std::vector<StageTime> stages;
+    double stage_seconds_when_on = 0;  // that stage's time in the fast tier's full run
+};
+
+struct TargetCheck {
+    bool evaluated = false;    // the fast tier was benchmarked
+    double max_copy_ratio = 10, max_mean_de2000 = 0.5;
+    double copy_ratio = 0, mean_de2000 = 0;
+    bool grain_within = false;
+    bool passes() const {
+        return evaluated && copy_ratio <= max_copy_ratio && mean_de2000 <= max_mean_de2000 && grain_within;
+    }
+};
+
+struct BenchReport {
+    Machine machine;
+    int threads = 0;
+    int width = 0, height = 0;
+    std::string film, paper;
+    int runs = 0;
+    double copy_seconds = 0;
+    std::vector<Window> sample_windows;
+    double pixel_pitch_um = 0;
+    std::vector<double> mtf_cycles_per_px;
+    int grain_wedge_patches = 0, grain_wedge_patch_px = 0;
+    GrainMatchTolerance grain_tolerance;
+    std::vector<TierResult> tiers;  // reference first
+    std::vector<DisabledStage> disabled;
+    TargetCheck target;
+};
+
+// The MTF the density output shows at the given frequencies (cycles per pixel, up to 0.5),
+// per film layer, at `pitch_um` with grain and halation off: one-row sine targets of
+// modulation 0.1 around mid-grey exposure, read back to exposure through each layer's H&D
+// curve and divided by the input's modulation measured the same way (sine_amplitude).
+std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality quality, double pitch_um,
+                                                     const std::vector<double>& cycles_per_px, int threads);
+
+// Throws std::invalid_argument for unusable options or stocks.
+BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOptions& options);
+
+}  // namespace darkroom::bench

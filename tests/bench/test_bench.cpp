@@ -1,0 +1,115 @@
+// The benchmark's measurements against their definitions (no timing is asserted).
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "bench/bench.h"
+#include "core/spectral.h"
+#include "core/stock.h"
+
+using namespace darkroom;
+using namespace darkroom::bench;
+
+namespace {
+
+Image constant_image(int w, int h, std::array<float, 3> rgb) {
+    Image img(w, h, 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) img.at(x, y)[c] = rgb[c];
+    return img;
+}
+
+Lab lab_of(const Rgb& rgb) { return xyz_to_lab(linear_srgb_to_xyz(rgb), linear_srgb_to_xyz({1, 1, 1})); }
+
+// A sampled, normalised Gaussian of standard deviation sigma_px applied to a sampled sine.
+std::vector<double> blurred_sine(double cycles_per_px, double sigma_px, int n) {
+    const int radius = int(std::ceil(8 * sigma_px));
+    std::vector<double> taps;
+    double sum = 0;
+    for (int k = -radius; k <= radius; ++k) sum += taps.emplace_back(std::exp(-0.5 * k * k / (sigma_px * sigma_px)));
+    std::vector<double> out(n);
+    for (int x = 0; x < n; ++x)
+        for (int k = -radius; k <= radius; ++k)
+            out[x] += taps[k + radius] / sum * std::sin(2 * M_PI * cycles_per_px * (x - k + 0.5));
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("identical images have zero colour and density error") {
+    Image a(40, 30, 3);
+    for (int y = 0; y < 30; ++y)
+        for (int x = 0; x < 40; ++x)
+            for (int c = 0; c < 3; ++c) a.at(x, y)[c] = float(0.01 + 0.9 * ((x * 7 + y * 13 + c * 5) % 17) / 16.0);
+    ColourError e = colour_error(a.view(), a.view());
+    CHECK(e.mean == 0.0);
+    CHECK(e.max == 0.0);
+    CHECK(e.pixels == 40 * 30);
+    CHECK(max_abs_difference(a.view(), a.view()) == 0.0);
+}
+
+TEST_CASE("a known colour shift gives the CIEDE2000 of the core function") {
+    const std::array<float, 3> base{0.18f, 0.12f, 0.05f}, shifted{0.19f, 0.12f, 0.045f};
+    Image reference = constant_image(20, 10, base), test = reference;
+    // The left half shifted: the mean is half the difference, the max all of it.
+    for (int y = 0; y < 10; ++y)
+        for (int x = 0; x < 10; ++x)
+            for (int c = 0; c < 3; ++c) test.at(x, y)[c] = shifted[c];
+    const double expected = ciede2000(lab_of({base[0], base[1], base[2]}), lab_of({shifted[0], shifted[1], shifted[2]}));
+    REQUIRE(expected > 0.5);
+    ColourError e = colour_error(test.view(), reference.view());
+    CHECK(e.max == Approx(expected).epsilon(1e-12));
+    CHECK(e.mean == Approx(expected / 2).epsilon(1e-12));
+    CHECK(max_abs_difference(test.view(), reference.view()) == Approx(0.01).margin(1e-7));
+}
+
+TEST_CASE("a sub-window is compared with the same pixels of the reference") {
+    Image reference = constant_image(32, 32, {0.5f, 0.5f, 0.5f});
+    Image window(Window{8, 8, 16, 16}, 3, 0.5f);
+    CHECK(colour_error(window.view(), reference.view()).max == 0.0);
+    Image outside(Window{28, 28, 36, 36}, 3, 0.5f);
+    CHECK_THROWS_AS(colour_error(outside.view(), reference.view()), std::invalid_argument);
+}
+
+TEST_CASE("the sine response of a Gaussian blur is its closed-form MTF") {
+    const double sigma_px = 2.0;
+    for (double f : {1 / 64.0, 4 / 64.0, 8 / 64.0, 12 / 64.0, 16 / 64.0, 32 / 64.0}) {
+        std::vector<double> input(1024);
+        for (int x = 0; x < 1024; ++x) input[x] = std::sin(2 * M_PI * f * (x + 0.5));
+        double measured = sine_amplitude(blurred_sine(f, sigma_px, 1024), f) / sine_amplitude(input, f);
+        // Fourier transform of a unit-area Gaussian: exp(-2 pi^2 sigma^2 f^2).
+        CHECK(measured == Approx(std::exp(-2 * M_PI * M_PI * sigma_px * sigma_px * f * f)).margin(1e-6));
+    }
+}
+
+TEST_CASE("the density MTF of a film whose MTF is a Gaussian is that Gaussian") {
+    // Every layer's MTF the response of a Gaussian PSF of 2 px at the pitch, sampled to
+    // twice the diagonal Nyquist frequency.
+    const double pitch_um = 6.0, sigma_mm = 2.0 * pitch_um / 1000.0;
+    std::vector<double> cycles_per_mm, response;
+    for (int i = 0; i <= 400; ++i) {
+        double f = i * 2.0 * std::sqrt(2.0) * 0.5 / (pitch_um / 1000.0) / 400;
+        cycles_per_mm.push_back(f);
+        response.push_back(std::exp(-2 * M_PI * M_PI * sigma_mm * sigma_mm * f * f));
+    }
+    Stock film = find_stock("kodak-vision3-250d");
+    for (Layer& layer : film.layers) layer.mtf = make_curve(cycles_per_mm, response, "Gaussian MTF");
+    const std::vector<double> frequencies{1 / 64.0, 4 / 64.0, 8 / 64.0, 16 / 64.0, 24 / 64.0, 32 / 64.0};
+    auto mtf = measure_density_mtf(film, Quality::high, pitch_um, frequencies, 2);
+    REQUIRE(mtf.size() == 3);
+    for (const auto& layer : mtf)
+        for (size_t k = 0; k < frequencies.size(); ++k) {
+            double f_px = frequencies[k];
+            CHECK(layer[k] == Approx(std::exp(-2 * M_PI * M_PI * 4.0 * f_px * f_px)).margin(0.01));
+        }
+}
+
+TEST_CASE("the copy pass copies the pixels, and a copy ratio is time over copy time") {
+    Image src(37, 23, 3), dst(37, 23, 3);
+    for (size_t i = 0; i < src.pixels.size(); ++i) src.pixels[i] = float(i) * 0.25f;
+    double s = copy_pass_seconds(src.view(), dst.view(), 3);
+    CHECK(s >= 0.0);
+    CHECK(dst.pixels == src.pixels);
+    CHECK(copy_ratio(0.3, 0.02) == Approx(15.0).epsilon(1e-15));
+    CHECK(copy_ratio(0.02, 0.02) == 1.0);
+}

@@ -1,0 +1,58 @@
+// darkroom bench, run as a user would: its JSON has every field, and bad flags are refused.
+#include <nlohmann/json.hpp>
+
+#include "cli_support.h"
+
+using namespace darkroom_test;
+
+TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field") {
+    // stdout only: the progress lines go to stderr.
+    Result r = shell("(" + std::string(DARKROOM_EXE) + " bench --size 64x36 --json --runs 1 --threads 2 2>/dev/null)");
+    REQUIRE(r.exit_code == 0);
+    nlohmann::json doc = nlohmann::json::parse(r.output);
+    for (const char* key : {"cpu", "cores", "threads"}) CHECK(doc["machine"].contains(key));
+    CHECK(doc["machine"]["threads"] == 2);
+    CHECK(doc["frame"]["width"] == 64);
+    CHECK(doc["frame"]["height"] == 36);
+    CHECK(doc["film"] == "kodak-vision3-250d");
+    CHECK(doc["paper"] == "kodak-2383");
+    CHECK(doc["copy_seconds"].get<double>() > 0);
+    for (const char* key : {"timed_runs", "warmup_runs", "sample_windows", "mtf_cycles_per_px", "grain_wedge",
+                            "grain_tolerance", "target", "disabled_stages"})
+        CHECK(doc.contains(key));
+    REQUIRE(doc["tiers"].size() == 4);
+    CHECK(doc["tiers"][0]["name"] == "reference");
+    CHECK(doc["tiers"][0]["extrapolated_from_sample_windows"] == true);
+    const double copy = doc["copy_seconds"];
+    for (const auto& tier : doc["tiers"]) {
+        for (const char* key : {"name", "compile_seconds", "seconds", "copy_ratio", "stages", "errors", "mtf"})
+            CHECK(tier.contains(key));
+        CHECK(tier["copy_ratio"].get<double>() == Approx(tier["seconds"].get<double>() / copy));
+        CHECK(!tier["stages"].empty());
+        const auto& e = tier["errors"];
+        for (const char* key : {"print_de2000_mean", "print_de2000_max", "negative_density_max", "mtf_max"})
+            CHECK(e[key].get<double>() >= 0);
+        for (const char* key : {"measured", "against", "response_percent", "nps_db", "correlation", "within_tolerance"})
+            CHECK(e["grain"].contains(key));
+    }
+    // The reference against itself (grain off): no colour, density or MTF error.
+    CHECK(doc["tiers"][0]["errors"]["print_de2000_max"] == 0.0);
+    CHECK(doc["tiers"][0]["errors"]["negative_density_max"] == 0.0);
+    CHECK(doc["tiers"][0]["errors"]["mtf_max"] == 0.0);
+    REQUIRE(doc["disabled_stages"].size() == 3);
+    for (const auto& d : doc["disabled_stages"])
+        for (const char* key : {"stage_off", "seconds", "copy_ratio", "stage_seconds_when_on", "stages"})
+            CHECK(d.contains(key));
+    for (const char* key : {"evaluated", "copy_ratio", "mean_de2000", "grain_within_tolerance", "pass"})
+        CHECK(doc["target"].contains(key));
+    CHECK(doc["target"]["evaluated"] == true);
+}
+
+TEST_CASE("darkroom bench refuses a bad size or tier") {
+    Result size = darkroom("bench --size 64by36");
+    CHECK(size.exit_code == 1);
+    CHECK_THAT(size.output, Catch::Contains("--size '64by36'"));
+    Result tier = darkroom("bench --size 64x36 --tiers fast,turbo");
+    CHECK(tier.exit_code == 1);
+    CHECK_THAT(tier.output, Catch::Contains("unknown tier 'turbo'"));
+}
