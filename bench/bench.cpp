@@ -303,7 +303,8 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
                 DevelopSettings d = s;
                 off.turn_off(d);
                 Timed timed = time_frame(Plan::compile(film, &paper, d, frame), scene, out, o.runs, o.threads);
-                r.disabled.push_back({off.stage, timed.seconds, timed.stages, stage_seconds(fast.stages, off.stage)});
+                r.disabled.push_back({off.stage, timed.seconds, timed.stages, stage_seconds(fast.stages, off.stage),
+                                      fast.seconds - timed.seconds});
             }
             r.target.evaluated = true;
             r.target.copy_ratio = copy_ratio(fast.seconds, r.copy_seconds);
@@ -311,6 +312,10 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
             r.target.grain_within = fast.grain.within(r.grain_tolerance);
         }
     }
+    std::vector<std::pair<double, double>> points;
+    for (const TierResult& t : r.tiers) points.emplace_back(t.seconds, t.print_error.mean);
+    std::vector<bool> optimal = pareto_optimal(points);
+    for (size_t t = 0; t < r.tiers.size(); ++t) r.tiers[t].pareto_optimal = optimal[t];
     return r;
 }
 

@@ -72,6 +72,7 @@ struct TierResult {
     double mtf_error = 0;      // max |MTF - MTF_reference|
     std::vector<std::vector<double>> mtf;  // measured, per layer per frequency
     GrainErrors grain;         // against the reference (for the reference: another seed)
+    bool pareto_optimal = false;  // in (seconds, mean print CIEDE2000) among the tiers run
 };
 
 // The fast tier with one stage turned off.
@@ -80,6 +81,7 @@ struct DisabledStage {
     double seconds = 0;
     std::vector<StageTime> stages;
     double stage_seconds_when_on = 0;  // that stage's time in the fast tier's full run
+    double saved_seconds = 0;          // the fast tier's full run less this one
 };
 
 struct TargetCheck {

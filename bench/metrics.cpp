@@ -79,6 +79,17 @@ double copy_pass_seconds(const ConstImageView& src, const ImageView& dst, int th
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+std::vector<bool> pareto_optimal(const std::vector<std::pair<double, double>>& points) {
+    std::vector<bool> optimal(points.size(), true);
+    for (size_t i = 0; i < points.size(); ++i)
+        for (const auto& other : points) {
+            bool no_worse = other.first <= points[i].first && other.second <= points[i].second;
+            bool better = other.first < points[i].first || other.second < points[i].second;
+            if (no_worse && better) optimal[i] = false;
+        }
+    return optimal;
+}
+
 Machine describe_machine() {
     Machine m{"unknown", int(std::thread::hardware_concurrency())};
     std::ifstream cpuinfo("/proc/cpuinfo");

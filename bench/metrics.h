@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/image.h"
@@ -38,6 +39,10 @@ double copy_pass_seconds(const ConstImageView& src, const ImageView& dst, int th
 
 // Benchmark times are also given as multiples of the copy pass.
 inline double copy_ratio(double seconds, double copy_seconds) { return seconds / copy_seconds; }
+
+// For points (seconds, error), whether each is Pareto-optimal: no other point is at least
+// as fast and as accurate and strictly better in one of the two.
+std::vector<bool> pareto_optimal(const std::vector<std::pair<double, double>>& seconds_error);
 
 struct Machine {
     std::string cpu;  // model name from /proc/cpuinfo ("unknown" when not readable)

@@ -90,7 +90,8 @@ nlohmann::json report_json(const bench::BenchReport& r) {
                                   {"negative_density_max", t.density_error},
                                   {"mtf_max", t.mtf_error},
                                   {"grain", grain}}},
-                                {"mtf", t.mtf}});
+                                {"mtf", t.mtf},
+                                {"pareto_optimal", t.pareto_optimal}});
     }
     for (const auto& d : r.disabled)
         doc["disabled_stages"].push_back({{"tier", "fast"},
@@ -98,6 +99,7 @@ nlohmann::json report_json(const bench::BenchReport& r) {
                                           {"seconds", d.seconds},
                                           {"copy_ratio", bench::copy_ratio(d.seconds, r.copy_seconds)},
                                           {"stage_seconds_when_on", d.stage_seconds_when_on},
+                                          {"saved_seconds", d.saved_seconds},
                                           {"stages", stages_json(d.stages, r.copy_seconds)}});
     doc["target"] = {{"evaluated", r.target.evaluated},
                      {"tier", "fast"},
@@ -179,6 +181,8 @@ void print_report(const bench::BenchReport& r) {
              "tolerance " + number_cell(r.grain_tolerance.nps_db, "%g"));
     tier_row("grain correlation diff", [&](const auto& t) { return grain_cell(t, &bench::GrainErrors::correlation); },
              "tolerance " + number_cell(r.grain_tolerance.correlation, "%g"));
+    tier_row("Pareto-optimal", [](const auto& t) { return std::string(t.pareto_optimal ? "yes" : "dominated"); },
+             "in (time, mean CIEDE2000)");
     for (const auto& t : r.tiers)
         if (!t.grain.measured) std::printf("grain of %s not measured: %s\n", t.name.c_str(), t.grain.problem.c_str());
     std::printf(
@@ -191,14 +195,13 @@ void print_report(const bench::BenchReport& r) {
         r.grain_wedge_patches, r.grain_wedge_patch_px);
 
     if (!r.disabled.empty()) {
-        const double fast_s = r.target.copy_ratio * copy_s;
         std::printf("\nfast tier with one stage off (whole frame):\n");
         print_row("stage off", {"develop", "saved", "stage's time when on", "stage when off"});
         for (const auto& d : r.disabled) {
             std::string when_off = "gone";
             for (const auto& s : d.stages)
                 if (s.stage == d.stage) when_off = number_cell(s.seconds * 1e3, "%.1f ms");
-            print_row("  " + d.stage, {ms_cell(d.seconds, copy_s), number_cell((fast_s - d.seconds) * 1e3, "%.1f ms"),
+            print_row("  " + d.stage, {ms_cell(d.seconds, copy_s), number_cell(d.saved_seconds * 1e3, "%.1f ms"),
                                        number_cell(d.stage_seconds_when_on * 1e3, "%.1f ms"), when_off});
         }
     }

@@ -113,3 +113,10 @@ TEST_CASE("the copy pass copies the pixels, and a copy ratio is time over copy t
     CHECK(copy_ratio(0.3, 0.02) == Approx(15.0).epsilon(1e-15));
     CHECK(copy_ratio(0.02, 0.02) == 1.0);
 }
+
+TEST_CASE("a tier is Pareto-optimal unless another is at least as fast and as accurate") {
+    // (seconds, mean CIEDE2000): a slow exact reference, a dominated tier (slower and worse
+    // than the third), a fast one, an equal copy of the fast one (neither dominates).
+    std::vector<bool> optimal = pareto_optimal({{100, 0}, {5, 0.4}, {2, 0.3}, {2, 0.3}, {1, 1.0}});
+    CHECK(optimal == std::vector<bool>{true, false, true, true, true});
+}

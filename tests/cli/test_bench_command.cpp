@@ -25,7 +25,7 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
     CHECK(doc["tiers"][0]["extrapolated_from_sample_windows"] == true);
     const double copy = doc["copy_seconds"];
     for (const auto& tier : doc["tiers"]) {
-        for (const char* key : {"name", "compile_seconds", "seconds", "copy_ratio", "stages", "errors", "mtf"})
+        for (const char* key : {"name", "compile_seconds", "seconds", "copy_ratio", "stages", "errors", "mtf", "pareto_optimal"})
             CHECK(tier.contains(key));
         CHECK(tier["copy_ratio"].get<double>() == Approx(tier["seconds"].get<double>() / copy));
         CHECK(!tier["stages"].empty());
@@ -41,7 +41,7 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
     CHECK(doc["tiers"][0]["errors"]["mtf_max"] == 0.0);
     REQUIRE(doc["disabled_stages"].size() == 3);
     for (const auto& d : doc["disabled_stages"])
-        for (const char* key : {"stage_off", "seconds", "copy_ratio", "stage_seconds_when_on", "stages"})
+        for (const char* key : {"stage_off", "seconds", "copy_ratio", "stage_seconds_when_on", "saved_seconds", "stages"})
             CHECK(d.contains(key));
     for (const char* key : {"evaluated", "copy_ratio", "mean_de2000", "grain_within_tolerance", "pass"})
         CHECK(doc["target"].contains(key));
