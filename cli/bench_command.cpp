@@ -205,7 +205,9 @@ void print_report(const bench::BenchReport& r) {
                                        number_cell(d.stage_seconds_when_on * 1e3, "%.1f ms"), when_off});
         }
     }
-    if (r.target.evaluated)
+    if (!r.target.evaluated)
+        std::printf("\ntarget (issue 8): not evaluated, the fast tier was not run\n");
+    else
         std::printf("\ntarget (issue 8, fast tier, %dx%d, %d threads): %.2fx copy (<= %g), mean CIEDE2000 %.3g (<= %g), "
                     "grain %s tolerances: %s\n",
                     r.width, r.height, r.threads, r.target.copy_ratio, r.target.max_copy_ratio, r.target.mean_de2000,
