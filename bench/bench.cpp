@@ -194,7 +194,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
 
     std::vector<Quality> tiers{Quality::reference};
     for (Quality q : o.tiers)
-        if (q != Quality::reference) tiers.push_back(q);
+        if (std::find(tiers.begin(), tiers.end(), q) == tiers.end()) tiers.push_back(q);
 
     const Image scene = demo_scene(o.width, o.height);
     const FrameGeometry frame{o.width, o.height};
