@@ -13,6 +13,8 @@ namespace darkroom {
 namespace {
 
 constexpr double kMaxInput = 1e30;
+// How far past a stock's curve the fast tiers' print tables reach (grain's excursions).
+constexpr double kTableDensityMargin = 0.3;
 constexpr double kLn10 = 2.302585092994046;
 // The scan output: Cineon-style 10-bit printing-density code values (Kodak Cineon: 0.002
 // density per code value, base+fog at code 95), written as code / 1023.
@@ -58,6 +60,7 @@ GrainSpec layer_grain(const GrainSpec& stock, const DevelopSettings& s, size_t c
 
 MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width_px, const DevelopSettings& s,
                             uint32_t stream_base, const char* role, std::vector<std::string>& skipped) {
+    const QualityTier& tier = quality_tier(s.quality);
     MaterialStages m;
     m.stock = stock;
     m.pixel_pitch_um = width_mm * 1000.0 / frame_width_px;
@@ -68,7 +71,7 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         m.rgb_weights.push_back(rgb_exposure_weights(layer.sensitivity, stock.exposure_illuminant));
 
         HalationKernel halation = design_halation(layer.halation.strength * s.halation, layer.halation.radius_um,
-                                                  m.pixel_pitch_um);
+                                                  m.pixel_pitch_um, tier.halation_decimation);
         if (!halation.is_noop())
             m.halation.push_back(halation);
         else {
@@ -82,7 +85,7 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
             skipped.push_back("scatter (" + where + "): MTF turned off");
         } else {
             double deviation = mtf_deviation_to_nyquist(layer.mtf, m.pixel_pitch_um);
-            ScatterKernel kernel = design_scatter_kernel(layer.mtf, m.pixel_pitch_um);
+            ScatterKernel kernel = design_scatter_kernel(layer.mtf, m.pixel_pitch_um, tier.scatter);
             m.scatter.push_back(kernel);
             if (deviation < kMtfNoOpTolerance)
                 skipped.push_back("scatter (" + where + "): MTF within " + fmt(deviation, 2) + " of 1 up to Nyquist" +
@@ -92,8 +95,10 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         }
 
         m.grain.push_back(std::nullopt);
+        if (tier.curve_table_bits > 0) m.curve_tables.emplace_back(layer.density_curve, tier.curve_table_bits);
         GrainModel g = design_grain(layer_grain(layer.grain, s, i), layer.density_curve.y_min(), m.pixel_pitch_um,
-                                    NoiseKey{s.seed, s.frame, stream_base + uint32_t(i)});
+                                    NoiseKey{s.seed, s.frame, stream_base + uint32_t(i)},
+                                    tier.grain == GrainMethod::hashed_noise);
         if (!s.grain)
             skipped.push_back("grain (" + where + "): grain turned off");
         else if (g.is_noop())
@@ -136,8 +141,20 @@ std::vector<Plane> develop_material(const MaterialStages& m, const std::vector<P
         Plane d = spread_exposure(m, i, exposure[i], out, frame, threads, times);
         {
             StageTimer timer(times, "develop");
-            const Curve& curve = m.stock.layers[i].density_curve;
-            for (float& v : d.pixels) v = float(curve(std::log10(double(v))));
+            // Exposure below 0 (a PSF's negative lobes) is no light.
+            parallel_for(out.y0, out.y1, threads, [&](int y0, int y1) {
+                for (int y = y0; y < y1; ++y) {
+                    float* row = d.row(y);
+                    if (!m.curve_tables.empty()) {
+                        const LogAxisTable& table = m.curve_tables[i];
+                        for (int x = 0; x < out.width(); ++x) row[x] = table(row[x]);
+                    } else {
+                        const Curve& curve = m.stock.layers[i].density_curve;
+                        for (int x = 0; x < out.width(); ++x)
+                            row[x] = float(curve(std::log10(std::max(double(row[x]), 1e-30))));
+                    }
+                }
+            });
         }
         if (m.grain[i]) {
             StageTimer timer(times, "grain");
@@ -159,6 +176,22 @@ std::vector<Plane> per_pixel(const std::vector<Plane>& in, const Window& window,
                 for (size_t l = 0; l < in.size(); ++l) values[l] = in[l].at(x, y);
                 f(values, result);
                 for (size_t c = 0; c < channels; ++c) out[c].at(x, y) = float(result[c]);
+            }
+    });
+    return out;
+}
+
+// per_pixel for the fast tiers' tables: three planes in, three out, in float.
+template <typename F>
+std::vector<Plane> per_pixel_table(const std::vector<Plane>& in, const Window& window, int threads, F f) {
+    std::vector<Plane> out(3, Plane(window));
+    parallel_for(window.y0, window.y1, threads, [&](int y0, int y1) {
+        float values[3], result[3];
+        for (int y = y0; y < y1; ++y)
+            for (int x = window.x0; x < window.x1; ++x) {
+                for (int l = 0; l < 3; ++l) values[l] = in[l].at(x, y);
+                f(values, result);
+                for (int c = 0; c < 3; ++c) out[c].at(x, y) = result[c];
             }
     });
     return out;
@@ -224,6 +257,28 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev});
+        const int nodes = quality_tier(settings.quality).print_table_nodes;
+        if (nodes > 0 && film.is_colour() && paper->is_colour()) {
+            // The tables span each layer's densities, widened for grain; beyond, they clamp.
+            auto density_range = [](const Stock& stock, std::array<double, 3>& lo, std::array<double, 3>& hi) {
+                for (int l = 0; l < 3; ++l) {
+                    lo[l] = stock.layers[l].density_curve.y_min() - kTableDensityMargin;
+                    hi[l] = stock.layers[l].density_curve.y_max() + kTableDensityMargin;
+                }
+            };
+            std::array<double, 3> lo, hi;
+            density_range(film, lo, hi);
+            const PrintExposure& enlarger = *p.print_;
+            p.enlarger_table_ = Table3D(lo, hi, nodes, [&](const double* d, double* log2_h) {
+                enlarger.expose(d, log2_h);
+                for (int j = 0; j < 3; ++j) log2_h[j] = std::log2(std::clamp(log2_h[j], 1e-30, kMaxInput));
+            });
+            density_range(*paper, lo, hi);
+            p.view_table_ = Table3D(lo, hi, nodes, [&](const double* d, double* log2_xyz) {
+                Xyz xyz = view_print_xyz(*paper, d);
+                for (int c = 0; c < 3; ++c) log2_xyz[c] = std::log2(std::max(xyz[c], 1e-30));
+            });
+        }
     } else if (paper) {
         p.skipped_.push_back("print: the output stops at the negative");
     }
@@ -262,15 +317,33 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
                                StageTimes* times) const {
     const PrintExposure& enlarger = *print_;
     StageTimer enlarger_timer(times, "enlarger");
-    std::vector<Plane> paper_exposure =
-        per_pixel(negative, negative[0].window, enlarger.paper_layers(), threads, [&](const double* d, double* h) {
-            enlarger.expose(d, h);
-            for (int j = 0; j < enlarger.paper_layers(); ++j) h[j] = std::clamp(h[j], 0.0, kMaxInput);
+    std::vector<Plane> paper_exposure;
+    if (enlarger_table_) {
+        paper_exposure = per_pixel_table(negative, negative[0].window, threads, [&](const float* d, float* h) {
+            (*enlarger_table_)(d, h);
+            for (int j = 0; j < 3; ++j) h[j] = fast_exp2(h[j]);
         });
+    } else {
+        paper_exposure =
+            per_pixel(negative, negative[0].window, enlarger.paper_layers(), threads, [&](const double* d, double* h) {
+                enlarger.expose(d, h);
+                for (int j = 0; j < enlarger.paper_layers(); ++j) h[j] = std::clamp(h[j], 0.0, kMaxInput);
+            });
+    }
     enlarger_timer.stop();
     std::vector<Plane> paper_density = develop_material(paper_stages_, paper_exposure, out, frame_, threads, times);
     const Stock& paper = paper_stages_.stock;
     StageTimer view_timer(times, "view");
+    if (view_table_) {
+        const Matrix3& m = print_xyz_to_rgb();
+        return per_pixel_table(paper_density, out, threads, [&](const float* d, float* rgb) {
+            float log2_xyz[3];
+            (*view_table_)(d, log2_xyz);
+            const float xyz[3] = {fast_exp2(log2_xyz[0]), fast_exp2(log2_xyz[1]), fast_exp2(log2_xyz[2])};
+            for (int c = 0; c < 3; ++c)
+                rgb[c] = float(m[c][0]) * xyz[0] + float(m[c][1]) * xyz[1] + float(m[c][2]) * xyz[2];
+        });
+    }
     return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view_print(paper, d, rgb); });
 }
 
@@ -386,7 +459,10 @@ std::vector<std::string> Plan::describe() const {
                                 "radius " + std::to_string(m.halation[i].radius) + " px");
             if (!m.scatter[i].is_identity())
                 lines.push_back("  scatter (" + l.name + "): MTF kernel radius " + std::to_string(m.scatter[i].radius) +
-                                " px");
+                                " px, " +
+                                (m.scatter[i].separable.empty()
+                                     ? std::string("direct 2D sum")
+                                     : std::to_string(m.scatter[i].separable.size()) + " separable terms"));
             lines.push_back("  develop (" + l.name + "): H&D curve, D " + fmt(l.density_curve.y_min()) + " to " +
                             fmt(l.density_curve.y_max()));
             if (m.grain[i])

@@ -30,6 +30,7 @@
 #include "core/stages/halation.h"
 #include "core/stages/print.h"
 #include "core/stages/scatter.h"
+#include "core/stages/tables.h"
 #include "core/stock.h"
 
 namespace darkroom {
@@ -88,6 +89,7 @@ struct MaterialStages {
     std::vector<HalationKernel> halation;            // per layer; no-op when skipped
     std::vector<ScatterKernel> scatter;              // per layer; identity when skipped
     std::vector<std::optional<GrainModel>> grain;    // per layer; none when skipped
+    std::vector<LogAxisTable> curve_tables;          // per layer, when the tier tabulates curves
     int halo_px() const;
 };
 
@@ -125,6 +127,9 @@ private:
     Window frame_;
     MaterialStages film_stages_, paper_stages_;
     std::optional<PrintExposure> print_;     // set when the output is a print
+    // The fast tiers' printing of a colour negative: film densities -> log2 paper exposures,
+    // print densities -> log2 XYZ (stages/tables.h).
+    std::optional<Table3D> enlarger_table_, view_table_;
     double film_exposure_scale_ = 1.0;       // lux-seconds per unit of input
     std::vector<std::string> skipped_;
 };

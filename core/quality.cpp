@@ -7,10 +7,10 @@ namespace {
 // The settings of each tier; `darkroom bench` measures what each costs and how far it is
 // from the reference (README, "Quality tiers").
 constexpr QualityTier kTiers[] = {
-    {Quality::reference, "reference", ScatterMethod::direct, 0, 1, GrainMethod::boolean_model, 0, 0},
-    {Quality::high, "high", ScatterMethod::separable, 0, 1, GrainMethod::filtered_noise, 0, 0},
-    {Quality::fast, "fast", ScatterMethod::compact, 8, 4, GrainMethod::filtered_noise, 33, 1024},
-    {Quality::preview, "preview", ScatterMethod::compact, 4, 8, GrainMethod::filtered_noise, 17, 256},
+    {Quality::reference, "reference", {0, 0.0}, 1, GrainMethod::boolean_model, 0, 0},
+    {Quality::high, "high", {0, kSeparableTolerance}, 1, GrainMethod::filtered_noise, 0, 0},
+    {Quality::fast, "fast", {8, 1e-3}, 4, GrainMethod::hashed_noise, 33, 8},
+    {Quality::preview, "preview", {4, 1e-2}, 8, GrainMethod::hashed_noise, 17, 5},
 };
 
 }  // namespace

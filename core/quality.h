@@ -7,8 +7,9 @@
 //              Newson et al. 2017) rendered at the film's scale
 //   high       the same spectral printing; the PSF as a sum of separable terms (every tap
 //              within 1e-6 of the largest); grain as filtered Gaussian noise
-//   fast       printing and viewing through 3D tables on layer densities, a compact PSF,
-//              halation on a coarser grid, tabulated H&D curves
+//   fast       printing and viewing through 3D tables on layer densities, the PSF tapered
+//              to a compact kernel, halation on a 4x coarser grid, tabulated H&D curves,
+//              grain noise from a hashed quantile table
 //   preview    as fast with smaller tables and kernels
 //
 // Every tier is measured against the reference by `darkroom bench`.
@@ -17,27 +18,31 @@
 #include <optional>
 #include <string>
 
+#include "core/stages/scatter.h"
+
 namespace darkroom {
 
 enum class Quality { reference, high, fast, preview };
 
-enum class ScatterMethod { direct, separable, compact };
-enum class GrainMethod { boolean_model, filtered_noise };
+enum class GrainMethod {
+    boolean_model,   // silver disks (stages/grain_boolean.h)
+    filtered_noise,  // Gaussian noise (Philox, Box-Muller) filtered to the grain's spectrum
+    hashed_noise,    // the same spectrum from hashed quantiles and a tabulated amplitude
+};
 
 struct QualityTier {
     Quality quality;
     const char* name;
-    ScatterMethod scatter;
-    // compact PSF: the kernel radius limit in pixels (the PSF is windowed to it)
-    int compact_scatter_radius_px;
-    // Halation on a grid this many times coarser (1 = the pixel grid)
-    int halation_decimation;
+    ScatterDesign scatter;    // the MTF's kernel (stages/scatter.h)
+    int halation_decimation;  // halation on a grid this many times coarser (1: the pixels)
     GrainMethod grain;
-    // Printing: 0 = per-pixel spectral integration; otherwise the nodes per axis of the 3D
-    // tables from negative densities to paper exposure and from print densities to colour
+    // Printing: 0 = per-pixel spectral integration in double; otherwise the nodes per
+    // axis of 3D tables from the negative's densities to the paper's log exposures and
+    // from the print's densities to its log XYZ.
     int print_table_nodes;
-    // H&D curves: 0 = evaluated per pixel; otherwise samples of a uniform table in log H
-    int curve_table_samples;
+    // H&D curves: 0 = evaluated per pixel; otherwise a table with 2^bits samples per
+    // octave of exposure (stages/tables.h).
+    int curve_table_bits;
 };
 
 const QualityTier& quality_tier(Quality q);

@@ -48,4 +48,26 @@ inline std::array<double, 2> normal_pair(const NoiseKey& key, int x, int y) {
 
 inline float standard_normal(const NoiseKey& key, int x, int y) { return (float)normal_pair(key, x, y)[0]; }
 
+// The fast tiers' noise: a 32-bit integer hash of (key, x, y) picks one of 2^16 equally
+// likely quantiles of the standard normal (so values reach about +-4.2 sigma). The hash
+// is the murmur3 finaliser (Appleby, MurmurHash3, public domain), applied per coordinate.
+inline uint32_t mix32(uint32_t h) {
+    h ^= h >> 16;
+    h *= 0x85EBCA6Bu;
+    h ^= h >> 13;
+    h *= 0xC2B2AE35u;
+    h ^= h >> 16;
+    return h;
+}
+// The part of the hash that is the same along a row: pass it to quantile_normal.
+inline uint32_t quantile_normal_row(const NoiseKey& key, int y) {
+    uint32_t h = mix32(uint32_t(key.seed) ^ mix32(uint32_t(key.seed >> 32) ^ mix32(uint32_t(key.frame) ^
+                                                                                  mix32(key.stream + 0x9E3779B9u))));
+    return mix32(h ^ uint32_t(y));
+}
+const float* normal_quantile_table();  // 2^16 entries, mean 0 and variance 1
+inline float quantile_normal(uint32_t row_hash, int x) {
+    return normal_quantile_table()[mix32(row_hash ^ mix32(uint32_t(x))) >> 16];
+}
+
 }  // namespace darkroom

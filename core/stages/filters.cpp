@@ -21,6 +21,24 @@ std::vector<float> pixel_integrated_gaussian(double sigma_px) {
     return taps;
 }
 
+void convolve_row(const float* in, const std::vector<float>& taps, int width, float* out) {
+    std::fill_n(out, width, 0.0f);
+    for (size_t k = 0; k < taps.size(); ++k) {
+        const float tap = taps[k];
+        const float* shifted = in + k;
+        for (int x = 0; x < width; ++x) out[x] += tap * shifted[x];
+    }
+}
+
+void convolve_column(const float* const* rows, const std::vector<float>& taps, int width, float* out) {
+    std::fill_n(out, width, 0.0f);
+    for (size_t k = 0; k < taps.size(); ++k) {
+        const float tap = taps[k];
+        const float* row = rows[k];
+        for (int x = 0; x < width; ++x) out[x] += tap * row[x];
+    }
+}
+
 void convolve_separable(const Plane& src, Plane& dst, const std::vector<float>& taps, const Window& frame,
                         int threads) {
     const int r = int(taps.size() / 2);
@@ -29,26 +47,19 @@ void convolve_separable(const Plane& src, Plane& dst, const std::vector<float>& 
     Window hw = Window{w.x0, w.y0 - r, w.x1, w.y1 + r}.intersected(Window{w.x0, frame.y0, w.x1, frame.y1});
     Plane horizontal(hw);
     parallel_for(hw.y0, hw.y1, threads, [&](int y_begin, int y_end) {
+        std::vector<float> padded(w.width() + 2 * r);
         for (int y = y_begin; y < y_end; ++y) {
             const float* in = src.row(y);
-            float* out = horizontal.row(y);
-            for (int x = w.x0; x < w.x1; ++x) {
-                double acc = 0;
-                for (int k = -r; k <= r; ++k)
-                    acc += double(taps[k + r]) * in[std::clamp(x + k, frame.x0, frame.x1 - 1) - src.window.x0];
-                out[x - w.x0] = float(acc);
-            }
+            for (int i = 0; i < (int)padded.size(); ++i)
+                padded[i] = in[std::clamp(w.x0 - r + i, frame.x0, frame.x1 - 1) - src.window.x0];
+            convolve_row(padded.data(), taps, w.width(), horizontal.row(y));
         }
     });
     parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
+        std::vector<const float*> rows(taps.size());
         for (int y = y_begin; y < y_end; ++y) {
-            float* out = dst.row(y);
-            for (int x = 0; x < w.width(); ++x) {
-                double acc = 0;
-                for (int k = -r; k <= r; ++k)
-                    acc += double(taps[k + r]) * horizontal.row(std::clamp(y + k, frame.y0, frame.y1 - 1))[x];
-                out[x] = float(acc);
-            }
+            for (int k = -r; k <= r; ++k) rows[k + r] = horizontal.row(std::clamp(y + k, frame.y0, frame.y1 - 1));
+            convolve_column(rows.data(), taps, w.width(), dst.row(y));
         }
     });
 }

@@ -13,6 +13,13 @@ namespace darkroom {
 // truncated at 4 sigma and normalised to unit sum (one tap when sigma_px is negligible).
 std::vector<float> pixel_integrated_gaussian(double sigma_px);
 
+// One row: out[x] = sum_k taps[k] in[x + k] for x in [0, width), `in` holding width +
+// taps - 1 values. Summed in float in the order of k for every x (vectorisable, and each
+// value independent of where the row starts).
+void convolve_row(const float* in, const std::vector<float>& taps, int width, float* out);
+// One row of a vertical pass: out[x] = sum_k taps[k] rows[k][x].
+void convolve_column(const float* const* rows, const std::vector<float>& taps, int width, float* out);
+
 // dst = separable convolution of src with taps (x then y), frame-clamped as above.
 void convolve_separable(const Plane& src, Plane& dst, const std::vector<float>& taps, const Window& frame, int threads);
 

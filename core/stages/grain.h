@@ -16,6 +16,7 @@
 
 #include "core/image.h"
 #include "core/random.h"
+#include "core/stages/tables.h"
 #include "core/stock.h"
 
 namespace darkroom {
@@ -32,6 +33,10 @@ struct GrainModel {
     float d_min = 0;               // net density is measured from here (as stored in planes)
     double density_exponent = 1.0 / 3.0;
     NoiseKey key;
+    // The fast tiers: noise from quantile_normal (core/random.h) instead of Philox and
+    // Box-Muller, and the amplitude sigma_per_pixel (D - d_min)^exponent from a table.
+    bool fast = false;
+    LogAxisTable amplitude;
 
     // Below this standard deviation (in density) at net density 1 the stage is skipped:
     // it would change transmittance by less than 2.3e-6 relative.
@@ -41,7 +46,7 @@ struct GrainModel {
     double pixel_sigma_at_unit_density() const;
 };
 
-GrainModel design_grain(const GrainSpec& spec, double d_min, double pixel_pitch_um, NoiseKey key);
+GrainModel design_grain(const GrainSpec& spec, double d_min, double pixel_pitch_um, NoiseKey key, bool fast = false);
 
 // The filtered noise field on a window: standard normal noise at absolute pixels,
 // convolved with the grain kernel. Its standard deviation per pixel is sum(kernel^2).

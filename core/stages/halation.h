@@ -15,15 +15,20 @@ namespace darkroom {
 
 struct HalationKernel {
     double strength = 0;
-    int radius = 0;           // taps span [-radius, radius]
+    int radius = 0;           // the halo in pixels: what a pixel's result reads around it
     std::vector<float> taps;  // 1D Gaussian, integrated over each pixel, unit sum
+    // Fast tiers: the Gaussian is applied on a grid this many times coarser (blocks aligned
+    // to the frame's origin, so every window agrees): block means, the Gaussian with its
+    // variance reduced by the blocks' and the interpolation's (d^2/12 + d^2/6), then
+    // bilinear interpolation back to the pixels. `taps` are then on the coarse grid.
+    int decimation = 1;
     // Below this added fraction the stage cannot change an 8-bit or half-float result.
     static constexpr double kNoOpStrength = 1e-5;
     bool is_noop() const { return strength < kNoOpStrength; }
 };
 
 // strength is the stock's, already multiplied by the user's scale.
-HalationKernel design_halation(double strength, double radius_um, double pixel_pitch_um);
+HalationKernel design_halation(double strength, double radius_um, double pixel_pitch_um, int decimation = 1);
 
 // dst = src + strength * gauss(src) on dst.window, reading src with coordinates clamped to
 // `frame`; src.window must cover (dst.window grown by the radius) intersected with frame.

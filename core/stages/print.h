@@ -68,5 +68,9 @@ private:
 
 // Linear Rec.709 of a developed print from its layer densities. Per pixel.
 void view_print(const Stock& paper, const double* paper_density, double* rgb);
+// The same print's CIE XYZ under D65 (always positive where it reflects any light), and
+// the matrix that takes it to view_print's Rec.709: the fast tiers tabulate log XYZ.
+Xyz view_print_xyz(const Stock& paper, const double* paper_density);
+const Matrix3& print_xyz_to_rgb();
 
 }  // namespace darkroom

@@ -66,7 +66,7 @@ namespace {
 // largest |eigenvalue| first, until the residual is within kSeparableTolerance of the
 // largest tap everywhere. Left empty when that needs so many terms that the direct sum is
 // cheaper (2 passes of 2r+1 taps per term against (2r+1)^2).
-void make_separable(ScatterKernel& kernel) {
+void make_separable(ScatterKernel& kernel, double tolerance) {
     const int side = 2 * kernel.radius + 1;
     std::vector<double> residual(kernel.taps.begin(), kernel.taps.end());
     double largest = 0;
@@ -75,7 +75,7 @@ void make_separable(ScatterKernel& kernel) {
     for (int term = 0; term < max_terms; ++term) {
         double worst = 0;
         for (double v : residual) worst = std::max(worst, std::abs(v));
-        if (worst <= kSeparableTolerance * largest) return;
+        if (worst <= tolerance * largest) return;
         // Start from the residual's strongest column; iterate e <- R e / |R e|.
         int column = 0;
         double best = -1;
@@ -122,9 +122,31 @@ void make_separable(ScatterKernel& kernel) {
     kernel.separable_sign.clear();
 }
 
+// Tapers the kernel to zero at max_radius (a raised cosine from half of it) and
+// renormalises it to unit sum.
+void taper(ScatterKernel& kernel, int max_radius) {
+    const int r = kernel.radius, side = 2 * r + 1, side_new = 2 * max_radius + 1;
+    std::vector<float> taps(side_new * side_new);
+    double sum = 0;
+    for (int y = -max_radius; y <= max_radius; ++y)
+        for (int x = -max_radius; x <= max_radius; ++x) {
+            double rho = std::hypot(x, y) / max_radius, weight = 1.0;
+            if (rho >= 1.0)
+                weight = 0.0;
+            else if (rho > 0.5)
+                weight = 0.5 * (1.0 + std::cos(M_PI * (rho - 0.5) / 0.5));
+            double v = weight * kernel.taps[(y + r) * side + (x + r)];
+            taps[(y + max_radius) * side_new + (x + max_radius)] = float(v);
+            sum += v;
+        }
+    for (float& v : taps) v = float(v / sum);
+    kernel.taps = std::move(taps);
+    kernel.radius = max_radius;
+}
+
 }  // namespace
 
-ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um) {
+ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design) {
     ScatterKernel kernel;
     if (mtf_deviation_to_nyquist(mtf, pixel_pitch_um) < kMtfNoOpTolerance) {
         kernel.taps = {1.0f};
@@ -152,7 +174,8 @@ ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um) {
         for (int y = -radius; y <= radius; ++y)
             for (int x = -radius; x <= radius; ++x)
                 kernel.taps[(y + radius) * side + (x + radius)] = float(tap(x, y) / sum);
-        make_separable(kernel);
+        if (design.max_radius_px > 0 && radius > design.max_radius_px) taper(kernel, design.max_radius_px);
+        if (design.separable_tolerance > 0) make_separable(kernel, design.separable_tolerance);
         return kernel;
     }
 }
@@ -166,7 +189,13 @@ void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Wi
         for (size_t k = 0; k < kernel.separable.size(); ++k) {
             convolve_separable(src, term, kernel.separable[k], frame, threads);
             const float sign = kernel.separable_sign[k];
-            for (size_t i = 0; i < term.pixels.size(); ++i) dst.pixels[i] += sign * term.pixels[i];
+            parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
+                for (int y = y_begin; y < y_end; ++y) {
+                    const float* t = term.row(y);
+                    float* out = dst.row(y);
+                    for (int x = 0; x < w.width(); ++x) out[x] += sign * t[x];
+                }
+            });
         }
         return;
     }

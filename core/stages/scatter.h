@@ -35,7 +35,18 @@ constexpr double kSeparableTolerance = 1e-6;
 constexpr double kMtfNoOpTolerance = 1e-4;
 double mtf_deviation_to_nyquist(const Curve& mtf, double pixel_pitch_um);
 
-ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um);
+// How a kernel is designed (core/quality.h picks one per tier).
+struct ScatterDesign {
+    // 0: the PSF's own extent (until its tail holds under 1e-3 of its weight); otherwise
+    // the PSF is tapered to zero at this radius (a raised cosine over its outer half) and
+    // renormalised: a compact approximation, measured by `darkroom bench`.
+    int max_radius_px = 0;
+    // Split into separable terms within this fraction of the largest tap; 0: never (the
+    // direct 2D sum).
+    double separable_tolerance = kSeparableTolerance;
+};
+
+ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design = {});
 
 // dst = src convolved with the kernel (through its separable terms when it has them), for
 // dst.window. Reads src with coordinates clamped

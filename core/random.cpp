@@ -1,0 +1,36 @@
+#include "core/random.h"
+
+#include <vector>
+
+namespace darkroom {
+
+// Quantiles z_i of the standard normal at (i + 0.5) / 2^16, by Newton's method on
+// Phi(z) = erfc(-z/sqrt 2)/2, then scaled so the table's variance is exactly 1.
+const float* normal_quantile_table() {
+    static const std::vector<float> table = [] {
+        const int n = 1 << 16;
+        std::vector<double> z(n);
+        for (int i = 0; i < n / 2; ++i) {
+            // From 0, right of every root in the convex half z < 0: Newton converges monotonically.
+            double p = (i + 0.5) / n, x = 0.0;
+            for (int iteration = 0; iteration < 60; ++iteration) {
+                double phi = 0.5 * std::erfc(-x / std::sqrt(2.0));
+                double density = std::exp(-0.5 * x * x) / std::sqrt(2.0 * M_PI);
+                double step = (phi - p) / density;
+                x -= step;
+                if (std::abs(step) < 1e-14) break;
+            }
+            z[i] = x;
+            z[n - 1 - i] = -x;
+        }
+        double variance = 0;
+        for (double v : z) variance += v * v;
+        variance /= n;
+        std::vector<float> scaled(n);
+        for (int i = 0; i < n; ++i) scaled[i] = float(z[i] / std::sqrt(variance));
+        return scaled;
+    }();
+    return table.data();
+}
+
+}  // namespace darkroom

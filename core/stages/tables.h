@@ -1,0 +1,52 @@
+// Tables for the fast quality tiers (core/quality.h): what the reference and high tiers
+// evaluate per pixel from its definition, sampled once per plan and interpolated.
+// `darkroom bench` measures what each costs against the per-pixel evaluation.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "core/curve.h"
+
+namespace darkroom {
+
+// f(v) for v >= 0 (NaN and v < 0 count as 0) from a Curve of f against log10 v (an H&D curve against the exposure H
+// itself): a table indexed by the float's exponent and its top mantissa bits, so each
+// octave of v has 2^mantissa_bits samples and the lookup needs no logarithm. Linear
+// between samples (in v), which within a sample's 1/2^bits relative span is within
+// (2^-bits)^2/8 of linear in log v; constant beyond the curve's ends, like Curve.
+class LogAxisTable {
+public:
+    LogAxisTable() = default;
+    LogAxisTable(const Curve& f_of_log10_v, int mantissa_bits);
+    float operator()(float v) const;
+
+private:
+    std::vector<float> samples_;
+    uint32_t first_bits_ = 0, last_bits_ = 0;  // float bit patterns of the first and last sample
+    int shift_ = 0;                             // 23 - mantissa_bits
+};
+
+// 2^x in float from the exponent and a polynomial in the fraction (relative error below
+// 2e-7 for |x| < 126); the fast tiers' exp10(x) = exp2(x log2 10).
+float fast_exp2(float x);
+
+// A function of three variables on a uniform grid (nodes^3 over [lo, hi] per axis),
+// interpolated trilinearly; inputs outside the grid are clamped to its faces.
+class Table3D {
+public:
+    using Function = std::function<void(const double* in, double* out)>;
+    Table3D() = default;
+    Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f);
+    void operator()(const float* in, float* out) const;
+    int nodes() const { return nodes_; }
+
+private:
+    int nodes_ = 0;
+    std::array<float, 3> lo_{}, scale_{};
+    std::vector<std::array<float, 3>> values_;  // x fastest
+};
+
+}  // namespace darkroom
