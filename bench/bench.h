@@ -4,7 +4,7 @@
 // the look (film to print, grain, MTF and halation on), one warm-up run then `runs` timed
 // runs, the fastest kept with its per-stage times (Plan::run's StageTimes). A plain copy
 // of the same float RGB buffer on the same threads is timed in the same run, so every
-// time is also a multiple of the copy. The reference tier is too slow for a whole frame:
+// time is also a multiple of the copy (its fastest of 20 runs). The reference tier is too slow for a whole frame:
 // it renders only the sample windows (a window equals that window of the full frame) and
 // its frame time is extrapolated from them by pixel count; each window also computes its
 // halo, so the extrapolation overstates it.
@@ -100,6 +100,7 @@ struct BenchReport {
     int width = 0, height = 0;
     std::string film, paper;
     int runs = 0;
+    int copy_runs = 0;  // the copy pass: fastest of this many after a warm-up
     double copy_seconds = 0;
     std::vector<Window> sample_windows;
     double pixel_pitch_um = 0;

@@ -61,6 +61,7 @@ nlohmann::json report_json(const bench::BenchReport& r) {
         {"timed_runs", r.runs},
         {"warmup_runs", 1},
         {"copy_seconds", r.copy_seconds},
+        {"copy_runs", r.copy_runs},
         {"sample_windows", windows},
         {"mtf_cycles_per_px", r.mtf_cycles_per_px},
         {"grain_wedge", {{"patches", r.grain_wedge_patches}, {"patch_px", r.grain_wedge_patch_px}}},
@@ -136,9 +137,9 @@ void print_report(const bench::BenchReport& r) {
     std::printf("darkroom bench: %s printed on %s, the %dx%d demo scene (%.3g um pitch), grain, MTF and halation on\n",
                 r.film.c_str(), r.paper.c_str(), r.width, r.height, r.pixel_pitch_um);
     std::printf("machine: %s, %d cores, %d threads used\n", r.machine.cpu.c_str(), r.machine.cores, r.threads);
-    std::printf("copy pass (float RGB, same threads, parallel over rows): %.2f ms. Times: fastest of %d runs after 1 "
-                "warm-up, in ms and x the copy pass\n\n",
-                copy_s * 1e3, r.runs);
+    std::printf("copy pass (float RGB, same threads, parallel over rows): %.2f ms, fastest of %d. Develop times: fastest "
+                "of %d runs after 1 warm-up, in ms and x the copy pass\n\n",
+                copy_s * 1e3, r.copy_runs, r.runs);
 
     std::vector<std::string> names;
     for (const auto& t : r.tiers) names.push_back(t.name + (t.extrapolated ? " (*)" : ""));

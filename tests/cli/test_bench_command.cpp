@@ -17,7 +17,7 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
     CHECK(doc["film"] == "kodak-vision3-250d");
     CHECK(doc["paper"] == "kodak-2383");
     CHECK(doc["copy_seconds"].get<double>() > 0);
-    for (const char* key : {"timed_runs", "warmup_runs", "sample_windows", "mtf_cycles_per_px", "grain_wedge",
+    for (const char* key : {"timed_runs", "warmup_runs", "copy_runs", "sample_windows", "mtf_cycles_per_px", "grain_wedge",
                             "grain_tolerance", "target", "disabled_stages"})
         CHECK(doc.contains(key));
     REQUIRE(doc["tiers"].size() == 4);
