@@ -69,6 +69,10 @@ struct DevelopSettings {
     std::array<double, 3> filtration_ymc{0.0, 0.0, 0.0};
     // How each stage is computed (core/quality.h).
     Quality quality = Quality::high;
+    // Leave out the stages that cannot change the result (and say why in describe()).
+    // false runs them with their neutral values, so tests and the benchmark can show that
+    // leaving them out changes no pixel and saves their time.
+    bool skip_noop_stages = true;
     uint64_t seed = 0;
     int frame = 0;
     double frame_width_mm = 0.0;  // width of the film frame; 0 = the film stock's format
@@ -79,6 +83,9 @@ struct DevelopSettings {
 // half-resolution proxy is a frame half as wide, so the pixel pitch doubles).
 struct FrameGeometry {
     int width = 0, height = 0;
+    // The input is grey (one colour channel): each layer's spectral exposure is then one
+    // scale of it, the sum of the layer's RGB weights.
+    bool monochrome = false;
 };
 
 // One material's run of the pipeline, precomputed.
@@ -86,7 +93,7 @@ struct MaterialStages {
     Stock stock;
     double pixel_pitch_um = 0;
     std::vector<std::array<double, 3>> rgb_weights;  // per layer: exposure per unit RGB
-    std::vector<HalationKernel> halation;            // per layer; no-op when skipped
+    std::vector<std::optional<HalationKernel>> halation;  // per layer; none when skipped
     std::vector<ScatterKernel> scatter;              // per layer; identity when skipped
     std::vector<std::optional<GrainModel>> grain;    // per layer; none when skipped
     std::vector<LogAxisTable> curve_tables;          // per layer, when the tier tabulates curves
@@ -131,6 +138,7 @@ private:
     // print densities -> log2 XYZ (stages/tables.h).
     std::optional<Table3D> enlarger_table_, view_table_;
     double film_exposure_scale_ = 1.0;       // lux-seconds per unit of input
+    bool monochrome_input_ = false;          // the spectral stage is one scale per layer
     std::vector<std::string> skipped_;
 };
 
