@@ -150,7 +150,7 @@ private:
     int grain_x0_ = 0;
     std::vector<uint64_t> covered_;  // one bit per sample, rows of words_ words
     int words_ = 0;
-    std::vector<double> contribution_;
+    std::vector<double> contribution_, row_sum_;
     std::vector<float> interior_x_, interior_y_;
     std::map<std::pair<int, int>, std::vector<double>> cdf_tables_;  // (raster side, sub-cell)
 
@@ -280,35 +280,35 @@ private:
         for (int dy = -reach; dy <= reach; ++dy)
             for (int dx = -reach; dx <= reach; ++dx) rasterize(grains(cx + dx, cy + dy), dx * c, dy * c, m, h, dx == 0 && dy == 0);
 
-        const int span = 2 * reach_px_ + 1;
         const std::vector<double>& qx = cdf_table(m, cx - px * n);
         const std::vector<double>& qy = cdf_table(m, cy - py * n);
-        contribution_.assign(size_t(span) * span, 0.0);  // [ky][kx]
-        std::vector<double> row_sum(size_t(kx1 - kx0 + 1));
+        const int columns = kx1 - kx0 + 1;
+        contribution_.assign(size_t(ky1 - ky0 + 1) * columns, 0.0);  // [ky - ky0][kx - kx0]
+        row_sum_.resize(size_t(columns));
         for (int j = 0; j < m; ++j) {
             const uint64_t* row = covered_.data() + size_t(j) * words_;
-            std::fill(row_sum.begin(), row_sum.end(), 0.0);
+            std::fill(row_sum_.begin(), row_sum_.end(), 0.0);
             // Uncovered runs [i0, i1) add their footprint weight.
             for (int i0 = next_sample(row, 0, false, m); i0 < m;) {
                 const int i1 = next_sample(row, i0, true, m);
                 for (int kx = kx0; kx <= kx1; ++kx) {
                     const double* q = qx.data() + size_t(kx + reach_px_) * (m + 1);
-                    row_sum[size_t(kx - kx0)] += q[i1] - q[i0];
+                    row_sum_[size_t(kx - kx0)] += q[i1] - q[i0];
                 }
                 i0 = i1 < m ? next_sample(row, i1, false, m) : m;
             }
             for (int ky = ky0; ky <= ky1; ++ky) {
                 const double* q = qy.data() + size_t(ky + reach_px_) * (m + 1);
-                double wy = q[j + 1] - q[j];
+                const double wy = q[j + 1] - q[j];
                 if (wy == 0) continue;
-                double* out = contribution_.data() + size_t(ky + reach_px_) * span + reach_px_;
-                for (int kx = kx0; kx <= kx1; ++kx) out[kx] += wy * row_sum[size_t(kx - kx0)];
+                double* out = contribution_.data() + size_t(ky - ky0) * columns;
+                for (int i = 0; i < columns; ++i) out[i] += wy * row_sum_[size_t(i)];
             }
         }
         for (int ky = ky0; ky <= ky1; ++ky)
             for (int kx = kx0; kx <= kx1; ++kx)
                 transmittance_[size_t(py + ky - band_.y0) * band_.width() + (px + kx - band_.x0)] +=
-                    contribution_[size_t(ky + reach_px_) * span + kx + reach_px_];
+                    contribution_[size_t(ky - ky0) * columns + (kx - kx0)];
     }
 
     // Marks the samples ((i + 0.5) h, (j + 0.5) h) of the cell's raster that a disk covers;

@@ -27,8 +27,12 @@
 // relative error in sigma^2 is about (2 pi f r)^2 at f = 1/48 per um, under 1 % for r < 1.5 um)
 // and the 48 um reading is small against the mean (second-order terms of the logarithm,
 // (sigma_48 ln 10)^2, under 0.2 %). At high density the covered fraction's holes are small
-// (F grows as e^c), so r falls quickly: about 0.2 um at net 1 and 0.06 um at net 3 for a
-// 500-speed negative.
+// (F grows as e^c), so r falls quickly: for Vision3 500T's green layer (rms 0.006, 1.2 um,
+// exponent 0.5) r is 0.19, 0.16, 0.10 and 0.06 um at net 0.5, 1, 2 and 3.
+// Per pixel the variance is W0 times the integral of w^2, which for s well below the pitch p
+// is W0 / p^2 (1 - 2 s / (sqrt(pi) p))^2: the filtered-noise model, which blurs white noise
+// of variance W0 / p^2 per pixel, reads higher there (by 13 % in sigma at s = 1.2, p = 12 um)
+// while both agree through the 48 um aperture and where s is a pixel or more.
 //
 // Limits, each documented where it applies:
 // - net <= 0: no grains (T = 1 except for grains of neighbouring cells that reach in).
@@ -42,21 +46,27 @@
 //
 // Rendering. The film is cut into square cells of absolute film coordinates (a pixel or
 // a fraction of one; a cell takes lambda and r from the density of the pixel it lies in,
-// as Newson et al. do). A cell's grains are a Poisson count and positions drawn from
-// core/random.h's Philox keyed by (seed, frame, stream, cell, grain index). Each cell is
-// sampled on its own regular raster of spacing h (uncovered or not at each sample, the
-// coverage by its own and neighbouring cells' disks); each sample carries the exact
-// integral of the pixel footprint w over its raster square, so the weights of a pixel sum
-// to 1 and E[T] = q exactly. Point sampling aliases the disks' edges into low frequencies:
-// by Poisson summation the sampled noise power is h^2 sum over the lattice of the
-// covariance, against its integral for the continuous model. The spacing is chosen per
-// density so that this relative error in W0 is below kAliasingPowerError (h = r/2 at low
-// density, about r/5 at net 3), and the finest spacing any disk reaching the cell needs is
-// used for the whole cell. Pixels are sums over cells in a fixed order of absolute cell
-// coordinates, so any thread count, band or window gives the same bits; a pixel depends on
-// the densities within halo_px pixels of it (cells beyond the plane's window take the
-// nearest pixel's density), so a window equals that window of a full frame when the plane
-// it is applied to covers the window grown by halo_px.
+// as Newson et al. do). A cell's grain count is Poisson (products of uniforms below a mean
+// of 10, Hoermann's PTRS above) and its centres uniform at 16-bit resolution, drawn from
+// core/random.h's Philox keyed by (seed, frame, stream, cell). Each cell is sampled on its
+// own regular raster of spacing h (uncovered or not at each sample, the coverage by its
+// own and neighbouring cells' disks); each sample carries the exact integral of the pixel
+// footprint w over its raster square, so the weights of a pixel sum to 1 and E[T] = q
+// exactly. Point sampling aliases the disks' edges into low frequencies: by Poisson
+// summation the sampled noise power is h^2 times the lattice sum of the covariance,
+// against its integral for the continuous model. The spacing is chosen per density so
+// that this relative error in W0 is below kAliasingPowerError: h = r/2 up to net 0.5,
+// r/2.5 at net 1, r/3.75 at net 2, r/5.5 at net 3; the finest spacing any disk reaching
+// the cell needs is used for the whole cell. Pixels are sums over cells in a fixed order of
+// absolute cell coordinates, so any thread count, band or window gives the same bits; a
+// pixel depends on the densities within halo_px pixels of it (cells beyond the plane's
+// window take the nearest pixel's density), so a window equals that window of a full frame
+// when the plane it is applied to covers the window grown by halo_px.
+//
+// Cost: about the number of disks times the raster rows each spans (2 r / h), so it grows
+// with density as lambda does. A 256 x 256 flat patch at 12 um pixels of a 500-speed
+// negative's grain (rms 0.006, 1.2 um) takes about 7, 19 and 100 CPU seconds at net 0.5,
+// 1 and 2 (1.3e9 disks at net 2).
 #pragma once
 
 #include <vector>
