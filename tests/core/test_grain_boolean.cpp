@@ -177,30 +177,32 @@ TEST_CASE("Boolean grain matches the filtered-noise model's plate profile", "[gr
 
 TEST_CASE("Boolean grain is the same for any window, band and thread count", "[grain][boolean][determinism]") {
     const GrainSpec spec{0.02, 1.0, 0.5};
-    const double pitch_um = 3.0;
-    BooleanGrain g = design_boolean_grain(spec, kDMin, pitch_um, NoiseKey{9, 4, 2});
-    // A picture: a density ramp with a hard-edged step, and a few pixels below d_min.
-    Plane full(Window{0, 0, 48, 40});
-    for (int y = 0; y < 40; ++y)
-        for (int x = 0; x < 48; ++x) full.at(x, y) = float(kDMin - 0.05 + 0.04 * x + (y > 20 ? 0.8 : 0.0));
-    Plane source = full, threaded = full;
-    apply_boolean_grain(full, g, 1);
-    apply_boolean_grain(threaded, g, 3);
-    CHECK(threaded.pixels == full.pixels);
+    // A cell per pixel, and two cells across a pixel.
+    for (double pitch_um : {3.0, 12.0}) {
+        BooleanGrain g = design_boolean_grain(spec, kDMin, pitch_um, NoiseKey{9, 4, 2});
+        // A picture: a density ramp with a hard-edged step, and a few pixels below d_min.
+        Plane full(Window{0, 0, 48, 40});
+        for (int y = 0; y < 40; ++y)
+            for (int x = 0; x < 48; ++x) full.at(x, y) = float(kDMin - 0.05 + 0.04 * x + (y > 20 ? 0.8 : 0.0));
+        Plane source = full, threaded = full;
+        apply_boolean_grain(full, g, 1);
+        apply_boolean_grain(threaded, g, 3);
+        CHECK(threaded.pixels == full.pixels);
 
-    // A window equals the full frame's pixels when its plane covers it plus the halo.
-    const Window window{13, 7, 31, 26};
-    Plane part(window.grown(g.halo_px));
-    for (int y = part.window.y0; y < part.window.y1; ++y)
-        for (int x = part.window.x0; x < part.window.x1; ++x) part.at(x, y) = source.at(x, y);
-    apply_boolean_grain(part, g, 2);
-    for (int y = window.y0; y < window.y1; ++y)
-        for (int x = window.x0; x < window.x1; ++x) REQUIRE(part.at(x, y) == full.at(x, y));
+        // A window equals the full frame's pixels when its plane covers it plus the halo.
+        const Window window{13, 7, 31, 26};
+        Plane part(window.grown(g.halo_px));
+        for (int y = part.window.y0; y < part.window.y1; ++y)
+            for (int x = part.window.x0; x < part.window.x1; ++x) part.at(x, y) = source.at(x, y);
+        apply_boolean_grain(part, g, 2);
+        for (int y = window.y0; y < window.y1; ++y)
+            for (int x = window.x0; x < window.x1; ++x) REQUIRE(part.at(x, y) == full.at(x, y));
 
-    // Another seed, frame or layer is another field.
-    Plane other = source;
-    apply_boolean_grain(other, design_boolean_grain(spec, kDMin, pitch_um, NoiseKey{9, 5, 2}), 1);
-    CHECK(other.pixels != full.pixels);
+        // Another seed, frame or layer is another field.
+        Plane other = source;
+        apply_boolean_grain(other, design_boolean_grain(spec, kDMin, pitch_um, NoiseKey{9, 5, 2}), 1);
+        CHECK(other.pixels != full.pixels);
+    }
 }
 
 TEST_CASE("Boolean grain: bad values give finite densities", "[grain][boolean]") {
