@@ -82,26 +82,28 @@ struct BooleanGrain {
     static constexpr double kMinRadiusUm = 0.02;
     static constexpr double kMaxRadiusUm = 3.0;
     static constexpr double kAliasingPowerError = 0.02;
-    // Below this density at which the footprint is zero, T reads as this (density 6).
+    // A pixel's transmittance reads as at least this (6 above the model's net density), so a
+    // footprint that disks cover entirely stays finite.
     static constexpr double kMinTransmittance = 1e-6;
 
     double pixel_pitch_um = 0;
-    double grain_size_um = 0;     // s, the Gaussian in the footprint
+    double grain_size_um = 0;       // s, the Gaussian in the footprint
     double footprint_reach_um = 0;  // 5 s
     float d_min = 0;
     NoiseKey key;
     bool noop = true;
 
     // Tables over net density in [0, kNetCap], node i at kNetCap * i / (nodes - 1).
-    std::vector<double> radius_um;              // r(net), clamped as above
-    std::vector<double> samples_per_um;         // raster samples per um the aliasing bound needs
+    std::vector<double> radius_um;       // r(net), clamped as above
+    std::vector<double> samples_per_um;  // raster samples per um the aliasing bound needs
 
     int cells_per_pixel = 1;    // cells across a pixel
     double cell_um = 0;         // cell side
     int grain_reach_cells = 1;  // disks reach at most this many cells beyond their own
     int halo_px = 0;            // pixels beyond a pixel whose densities it depends on
 
-    // Same meaning as GrainModel::is_noop: the filtered-noise model of this spec would be.
+    // Same meaning as GrainModel::is_noop: true where the filtered-noise model of this spec
+    // would be a no-op, or where the spec is unusable (not finite, negative size or exponent).
     bool is_noop() const { return noop; }
     // r and lambda (per um^2) at a net density (clamped to [0, kNetCap]).
     double radius_at(double net) const;
