@@ -93,12 +93,22 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         }
 
         m.grain.push_back(std::nullopt);
+        m.boolean_grain.push_back(std::nullopt);
         if (tier.curve_table_bits > 0) m.curve_tables.emplace_back(layer.density_curve, tier.curve_table_bits);
         GrainSpec spec = layer_grain(layer.grain, s, i);
         if (!s.grain) spec.rms_granularity = 0;
         GrainModel g = design_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um,
                                     NoiseKey{s.seed, s.frame, stream_base + uint32_t(i)},
                                     tier.grain == GrainMethod::hashed_noise);
+        // (The texture output takes its exposure fluctuation from the filtered-noise field.)
+        if (tier.grain == GrainMethod::boolean_model && s.output != OutputMode::texture) {
+            BooleanGrain boolean = design_boolean_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um,
+                                                        NoiseKey{s.seed, s.frame, stream_base + uint32_t(i)});
+            if (!boolean.is_noop() || !s.skip_noop_stages) {
+                m.boolean_grain.back() = boolean;
+                continue;
+            }
+        }
         if (!s.skip_noop_stages)
             m.grain.back() = g;
         else if (!s.grain)
@@ -139,19 +149,21 @@ std::vector<Plane> develop_material(const MaterialStages& m, const std::vector<P
                                     const Window& frame, int threads, StageTimes* times) {
     std::vector<Plane> density;
     for (size_t i = 0; i < exposure.size(); ++i) {
-        Plane d = spread_exposure(m, i, exposure[i], out, frame, threads, times);
+        // The Boolean grain of a pixel depends on the densities around it: develop those too.
+        const Window developed = m.boolean_grain[i] ? out.grown(m.boolean_grain[i]->halo_px).intersected(frame) : out;
+        Plane d = spread_exposure(m, i, exposure[i], developed, frame, threads, times);
         {
             StageTimer timer(times, "develop");
             // Exposure below 0 (a PSF's negative lobes) is no light.
-            parallel_for(out.y0, out.y1, threads, [&](int y0, int y1) {
+            parallel_for(developed.y0, developed.y1, threads, [&](int y0, int y1) {
                 for (int y = y0; y < y1; ++y) {
                     float* row = d.row(y);
                     if (!m.curve_tables.empty()) {
                         const LogAxisTable& table = m.curve_tables[i];
-                        for (int x = 0; x < out.width(); ++x) row[x] = table(row[x]);
+                        for (int x = 0; x < developed.width(); ++x) row[x] = table(row[x]);
                     } else {
                         const Curve& curve = m.stock.layers[i].density_curve;
-                        for (int x = 0; x < out.width(); ++x)
+                        for (int x = 0; x < developed.width(); ++x)
                             row[x] = float(curve(std::log10(std::max(double(row[x]), 1e-30))));
                     }
                 }
@@ -160,6 +172,13 @@ std::vector<Plane> develop_material(const MaterialStages& m, const std::vector<P
         if (m.grain[i]) {
             StageTimer timer(times, "grain");
             apply_grain(d, *m.grain[i], threads);
+        }
+        if (m.boolean_grain[i]) {
+            StageTimer timer(times, "grain");
+            apply_boolean_grain(d, *m.boolean_grain[i], threads);
+            Plane cropped(out);
+            for (int y = out.y0; y < out.y1; ++y) std::copy_n(d.row(y) + (out.x0 - developed.x0), out.width(), cropped.row(y));
+            d = std::move(cropped);
         }
         density.push_back(std::move(d));
     }
@@ -227,7 +246,8 @@ void validate(const DevelopSettings& s) {
 int MaterialStages::halo_px() const {
     int r = 0;
     for (size_t i = 0; i < scatter.size(); ++i)
-        r = std::max(r, scatter[i].radius + (halation[i] ? halation[i]->radius : 0));
+        r = std::max(r, scatter[i].radius + (halation[i] ? halation[i]->radius : 0) +
+                            (boolean_grain[i] ? boolean_grain[i]->halo_px : 0));
     return r;
 }
 
@@ -485,7 +505,11 @@ std::vector<std::string> Plan::describe() const {
             if (m.grain[i])
                 lines.push_back("  grain (" + l.name + "): " + fmt(m.grain[i]->pixel_sigma_at_unit_density()) +
                                 " D per pixel at net density 1, filter radius " + std::to_string(m.grain[i]->radius) +
-                                " px");
+                                " px" + (m.grain[i]->fast ? ", hashed quantile noise" : ""));
+            if (m.boolean_grain[i])
+                lines.push_back("  grain (" + l.name + "): silver disks (Boolean model), radius " +
+                                fmt(m.boolean_grain[i]->radius_at(1.0), 3) + " um at net density 1, " +
+                                fmt(m.boolean_grain[i]->intensity_at(1.0), 3) + " grains per um^2");
         }
     };
     if (settings_.input_units == InputUnits::lux_seconds)

@@ -27,6 +27,7 @@
 #include "core/image.h"
 #include "core/quality.h"
 #include "core/stages/grain.h"
+#include "core/stages/grain_boolean.h"
 #include "core/stages/halation.h"
 #include "core/stages/print.h"
 #include "core/stages/scatter.h"
@@ -96,6 +97,8 @@ struct MaterialStages {
     std::vector<std::optional<HalationKernel>> halation;  // per layer; none when skipped
     std::vector<ScatterKernel> scatter;              // per layer; identity when skipped
     std::vector<std::optional<GrainModel>> grain;    // per layer; none when skipped
+    // per layer, the reference tier's grain instead (then `grain` is none)
+    std::vector<std::optional<BooleanGrain>> boolean_grain;
     std::vector<LogAxisTable> curve_tables;          // per layer, when the tier tabulates curves
     int halo_px() const;
 };

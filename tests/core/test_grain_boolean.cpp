@@ -138,7 +138,7 @@ TEST_CASE("Boolean grain: each pixel integrates the grain over its footprint", "
     // Grain far finer than the pixel: its density variance per pixel is W0 times the
     // integral of the squared footprint, (box * Gaussian)^2, which in each axis is
     // (1 - 2 s / (sqrt(pi) p)) / p, with W0 = (sigma_48 / aperture integral)^2. The
-    // filtered-noise model, which blurs pixel-sized white noise instead, reads higher.
+    // filtered-noise model's kernel has the pixel averages' autocorrelation, so it agrees.
     // Fine grain keeps the logarithm linear (the pixels' transmittance varies by 7 %).
     const GrainSpec spec{0.01, 1.5, 0.5};
     const double pitch_um = 12.0, net = 1.0;
@@ -148,7 +148,7 @@ TEST_CASE("Boolean grain: each pixel integrates the grain over its footprint", "
     const double expected = sqrt_w0 / pitch_um * per_axis;
     CHECK(pixel_std(d) == Approx(expected).epsilon(0.03));  // 96^2 pixels: 0.7 % standard error
     GrainModel filtered = design_grain(spec, kDMin, pitch_um, NoiseKey{1, 0, 0});
-    CHECK(grain_sigma_at(filtered, kDMin + net) == Approx(sqrt_w0 / pitch_um).epsilon(0.01));
+    CHECK(grain_sigma_at(filtered, kDMin + net) == Approx(expected).epsilon(0.01));
 }
 
 TEST_CASE("Boolean grain matches the filtered-noise model's plate profile", "[grain][boolean][plate]") {
