@@ -150,7 +150,8 @@ void add_plate_grain(const LookOptions& look, Image& out) {
 
 Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window) {
     const ColourIO colour(look.colour, look.settings.output, look.verbose);
-    Plan plan = compile_look(look, FrameGeometry{in.window.width(), in.window.height()});
+    // One or two channels (Y, Y+A) are grey: the plan reads channel 0 as R, G and B.
+    Plan plan = compile_look(look, FrameGeometry{in.window.width(), in.window.height(), in.channels < 3});
     Image out(out_window, std::max(3, in.channels));
     if (colour.input_conversion().is_noop()) {
         plan.run(in, out.view(), look.threads);

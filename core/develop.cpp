@@ -72,13 +72,11 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
 
         HalationKernel halation = design_halation(layer.halation.strength * s.halation, layer.halation.radius_um,
                                                   m.pixel_pitch_um, tier.halation_decimation);
-        if (!halation.is_noop())
-            m.halation.push_back(halation);
-        else {
-            m.halation.push_back(HalationKernel{});
-            if (layer.halation.strength > 0)
-                skipped.push_back("halation (" + where + "): " + (s.halation == 0 ? "turned off" : "below 1e-5"));
-        }
+        m.halation.push_back(std::nullopt);
+        if (!halation.is_noop() || !s.skip_noop_stages)
+            m.halation.back() = halation;
+        else if (layer.halation.strength > 0)
+            skipped.push_back("halation (" + where + "): " + (s.halation == 0 ? "turned off" : "below 1e-5"));
 
         if (!s.mtf) {
             m.scatter.push_back(ScatterKernel{0, {1.0f}, {}, {}});
@@ -95,11 +93,25 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         }
 
         m.grain.push_back(std::nullopt);
+        m.boolean_grain.push_back(std::nullopt);
         if (tier.curve_table_bits > 0) m.curve_tables.emplace_back(layer.density_curve, tier.curve_table_bits);
-        GrainModel g = design_grain(layer_grain(layer.grain, s, i), layer.density_curve.y_min(), m.pixel_pitch_um,
+        GrainSpec spec = layer_grain(layer.grain, s, i);
+        if (!s.grain) spec.rms_granularity = 0;
+        GrainModel g = design_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um,
                                     NoiseKey{s.seed, s.frame, stream_base + uint32_t(i)},
                                     tier.grain == GrainMethod::hashed_noise);
-        if (!s.grain)
+        // (The texture output takes its exposure fluctuation from the filtered-noise field.)
+        if (tier.grain == GrainMethod::boolean_model && s.output != OutputMode::texture) {
+            BooleanGrain boolean = design_boolean_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um,
+                                                        NoiseKey{s.seed, s.frame, stream_base + uint32_t(i)});
+            if (!boolean.is_noop() || !s.skip_noop_stages) {
+                m.boolean_grain.back() = boolean;
+                continue;
+            }
+        }
+        if (!s.skip_noop_stages)
+            m.grain.back() = g;
+        else if (!s.grain)
             skipped.push_back("grain (" + where + "): grain turned off");
         else if (g.is_noop())
             skipped.push_back("grain (" + where + "): " + fmt(g.pixel_sigma_at_unit_density(), 2) +
@@ -115,11 +127,10 @@ Plane spread_exposure(const MaterialStages& m, size_t layer, const Plane& exposu
                       const Window& frame, int threads, StageTimes* times) {
     const Plane* source = &exposure;
     Plane halated;
-    const HalationKernel& halation = m.halation[layer];
-    if (!halation.is_noop()) {
+    if (m.halation[layer]) {
         StageTimer timer(times, "halation");
         halated = Plane(out.grown(m.scatter[layer].radius).intersected(frame));
-        apply_halation(exposure, halated, halation, frame, threads);
+        apply_halation(exposure, halated, *m.halation[layer], frame, threads);
         source = &halated;
     }
     StageTimer timer(times, "scatter");
@@ -138,19 +149,21 @@ std::vector<Plane> develop_material(const MaterialStages& m, const std::vector<P
                                     const Window& frame, int threads, StageTimes* times) {
     std::vector<Plane> density;
     for (size_t i = 0; i < exposure.size(); ++i) {
-        Plane d = spread_exposure(m, i, exposure[i], out, frame, threads, times);
+        // The Boolean grain of a pixel depends on the densities around it: develop those too.
+        const Window developed = m.boolean_grain[i] ? out.grown(m.boolean_grain[i]->halo_px).intersected(frame) : out;
+        Plane d = spread_exposure(m, i, exposure[i], developed, frame, threads, times);
         {
             StageTimer timer(times, "develop");
             // Exposure below 0 (a PSF's negative lobes) is no light.
-            parallel_for(out.y0, out.y1, threads, [&](int y0, int y1) {
+            parallel_for(developed.y0, developed.y1, threads, [&](int y0, int y1) {
                 for (int y = y0; y < y1; ++y) {
                     float* row = d.row(y);
                     if (!m.curve_tables.empty()) {
                         const LogAxisTable& table = m.curve_tables[i];
-                        for (int x = 0; x < out.width(); ++x) row[x] = table(row[x]);
+                        for (int x = 0; x < developed.width(); ++x) row[x] = table(row[x]);
                     } else {
                         const Curve& curve = m.stock.layers[i].density_curve;
-                        for (int x = 0; x < out.width(); ++x)
+                        for (int x = 0; x < developed.width(); ++x)
                             row[x] = float(curve(std::log10(std::max(double(row[x]), 1e-30))));
                     }
                 }
@@ -159,6 +172,13 @@ std::vector<Plane> develop_material(const MaterialStages& m, const std::vector<P
         if (m.grain[i]) {
             StageTimer timer(times, "grain");
             apply_grain(d, *m.grain[i], threads);
+        }
+        if (m.boolean_grain[i]) {
+            StageTimer timer(times, "grain");
+            apply_boolean_grain(d, *m.boolean_grain[i], threads);
+            Plane cropped(out);
+            for (int y = out.y0; y < out.y1; ++y) std::copy_n(d.row(y) + (out.x0 - developed.x0), out.width(), cropped.row(y));
+            d = std::move(cropped);
         }
         density.push_back(std::move(d));
     }
@@ -226,7 +246,8 @@ void validate(const DevelopSettings& s) {
 int MaterialStages::halo_px() const {
     int r = 0;
     for (size_t i = 0; i < scatter.size(); ++i)
-        r = std::max(r, scatter[i].radius + (halation[i].is_noop() ? 0 : halation[i].radius));
+        r = std::max(r, scatter[i].radius + (halation[i] ? halation[i]->radius : 0) +
+                            (boolean_grain[i] ? boolean_grain[i]->halo_px : 0));
     return r;
 }
 
@@ -247,6 +268,9 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     p.frame_ = Window{0, 0, frame.width, frame.height};
     double film_width_mm = settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm;
     p.film_stages_ = build_stages(film, film_width_mm, frame.width, settings, 0, "film", p.skipped_);
+    p.monochrome_input_ = frame.monochrome && settings.skip_noop_stages;
+    if (p.monochrome_input_ && settings.output != OutputMode::texture)
+        p.skipped_.push_back("spectral sensitivity: the input is grey, so each layer's exposure is one scale of it");
     p.film_exposure_scale_ = settings.input_units == InputUnits::lux_seconds
                                  ? 1.0
                                  : mid_grey_exposure_lux_s(film.iso_speed) / 0.18 * std::exp2(settings.exposure_ev);
@@ -297,6 +321,16 @@ std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& fi
     StageTimer expose_timer(times, "expose");
     for (const auto& w : film_stages_.rgb_weights) {
         Plane h(film_in);
+        if (monochrome_input_) {
+            const double scale = (w[0] + w[1] + w[2]) * film_exposure_scale_;
+            parallel_for(film_in.y0, film_in.y1, threads, [&](int y0, int y1) {
+                for (int y = y0; y < y1; ++y)
+                    for (int x = film_in.x0; x < film_in.x1; ++x)
+                        h.at(x, y) = float(std::clamp(sanitize(in.at(x, y)[0]) * scale, 0.0, kMaxInput));
+            });
+            exposure.push_back(std::move(h));
+            continue;
+        }
         parallel_for(film_in.y0, film_in.y1, threads, [&](int y0, int y1) {
             for (int y = y0; y < y1; ++y)
                 for (int x = film_in.x0; x < film_in.x1; ++x) {
@@ -367,7 +401,7 @@ std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, in
             for (int x = film_in.x0; x < film_in.x1; ++x)
                 h.at(x, y) = float(sanitize(in.at(x, y)[std::min(c, in.channels - 1)]) * film_exposure_scale_);
         Plane spread = spread_exposure(m, layer, h, out, frame_, threads, times);
-        const float normalise = float(1.0 / (1.0 + (m.halation[layer].is_noop() ? 0.0 : m.halation[layer].strength)));
+        const float normalise = float(1.0 / (1.0 + (m.halation[layer] ? m.halation[layer]->strength : 0.0)));
         const auto& grain = m.grain[layer];
         if (grain && !fields[layer]) fields[layer] = grain_field(*grain, out, threads);
         const Curve& curve = m.stock.layers[layer].density_curve;
@@ -451,12 +485,15 @@ std::vector<std::string> Plan::describe() const {
         for (size_t i = 0; i < m.stock.layers.size(); ++i) {
             const Layer& l = m.stock.layers[i];
             const auto& w = m.rgb_weights[i];
-            if (exposed_by_scene)
+            if (exposed_by_scene && !monochrome_input_)
                 lines.push_back("  spectral sensitivity (" + l.name + ", " + m.stock.exposure_illuminant_name +
                                 "): exposure = " + fmt(w[0]) + " R + " + fmt(w[1]) + " G + " + fmt(w[2]) + " B");
-            if (!m.halation[i].is_noop())
-                lines.push_back("  halation (" + l.name + "): " + fmt(m.halation[i].strength) + " of the exposure, " +
-                                "radius " + std::to_string(m.halation[i].radius) + " px");
+            if (m.halation[i])
+                lines.push_back("  halation (" + l.name + "): " + fmt(m.halation[i]->strength) + " of the exposure, " +
+                                "halo " + std::to_string(m.halation[i]->radius) + " px" +
+                                (m.halation[i]->decimation > 1
+                                     ? ", on a " + std::to_string(m.halation[i]->decimation) + "x coarser grid"
+                                     : std::string()));
             if (!m.scatter[i].is_identity())
                 lines.push_back("  scatter (" + l.name + "): MTF kernel radius " + std::to_string(m.scatter[i].radius) +
                                 " px, " +
@@ -468,7 +505,11 @@ std::vector<std::string> Plan::describe() const {
             if (m.grain[i])
                 lines.push_back("  grain (" + l.name + "): " + fmt(m.grain[i]->pixel_sigma_at_unit_density()) +
                                 " D per pixel at net density 1, filter radius " + std::to_string(m.grain[i]->radius) +
-                                " px");
+                                " px" + (m.grain[i]->fast ? ", hashed quantile noise" : ""));
+            if (m.boolean_grain[i])
+                lines.push_back("  grain (" + l.name + "): silver disks (Boolean model), radius " +
+                                fmt(m.boolean_grain[i]->radius_at(1.0), 3) + " um at net density 1, " +
+                                fmt(m.boolean_grain[i]->intensity_at(1.0), 3) + " grains per um^2");
         }
     };
     if (settings_.input_units == InputUnits::lux_seconds)

@@ -27,6 +27,7 @@
 #include "core/image.h"
 #include "core/quality.h"
 #include "core/stages/grain.h"
+#include "core/stages/grain_boolean.h"
 #include "core/stages/halation.h"
 #include "core/stages/print.h"
 #include "core/stages/scatter.h"
@@ -69,6 +70,10 @@ struct DevelopSettings {
     std::array<double, 3> filtration_ymc{0.0, 0.0, 0.0};
     // How each stage is computed (core/quality.h).
     Quality quality = Quality::high;
+    // Leave out the stages that cannot change the result (and say why in describe()).
+    // false runs them with their neutral values, so tests and the benchmark can show that
+    // leaving them out changes no pixel and saves their time.
+    bool skip_noop_stages = true;
     uint64_t seed = 0;
     int frame = 0;
     double frame_width_mm = 0.0;  // width of the film frame; 0 = the film stock's format
@@ -79,6 +84,9 @@ struct DevelopSettings {
 // half-resolution proxy is a frame half as wide, so the pixel pitch doubles).
 struct FrameGeometry {
     int width = 0, height = 0;
+    // The input is grey (one colour channel): each layer's spectral exposure is then one
+    // scale of it, the sum of the layer's RGB weights.
+    bool monochrome = false;
 };
 
 // One material's run of the pipeline, precomputed.
@@ -86,9 +94,11 @@ struct MaterialStages {
     Stock stock;
     double pixel_pitch_um = 0;
     std::vector<std::array<double, 3>> rgb_weights;  // per layer: exposure per unit RGB
-    std::vector<HalationKernel> halation;            // per layer; no-op when skipped
+    std::vector<std::optional<HalationKernel>> halation;  // per layer; none when skipped
     std::vector<ScatterKernel> scatter;              // per layer; identity when skipped
     std::vector<std::optional<GrainModel>> grain;    // per layer; none when skipped
+    // per layer, the reference tier's grain instead (then `grain` is none)
+    std::vector<std::optional<BooleanGrain>> boolean_grain;
     std::vector<LogAxisTable> curve_tables;          // per layer, when the tier tabulates curves
     int halo_px() const;
 };
@@ -131,6 +141,7 @@ private:
     // print densities -> log2 XYZ (stages/tables.h).
     std::optional<Table3D> enlarger_table_, view_table_;
     double film_exposure_scale_ = 1.0;       // lux-seconds per unit of input
+    bool monochrome_input_ = false;          // the spectral stage is one scale per layer
     std::vector<std::string> skipped_;
 };
 

@@ -30,6 +30,53 @@ double aperture_integral(double s_um, double d_um) {
     return std::sqrt(sum);
 }
 
+// The grain filter along one axis, in pixels. A pixel reads the continuous field (white
+// noise of power W0 through the Gaussian of std s) averaged over its width p: per axis
+// the window w = box(p) * G(s), whose autocorrelation at whole-pixel lags is
+//   a(n) = (triangle * G(sqrt 2 s / p))(n)     (in pixels, a(0) -> 1 as s -> 0).
+// The discrete filter k is the zero-phase one with that autocorrelation: its spectrum is
+// sqrt(A(f)), A the (non-negative, aliased) spectrum of a(n). So unit white noise per
+// pixel through k in x and y has the variance and neighbour correlations of the pixel
+// averages; for s of a pixel or more k is close to the pixel-integrated Gaussian.
+std::vector<float> pixel_averaged_grain_kernel(double s_px) {
+    const double sigma = std::sqrt(2.0) * s_px;
+    const int lags = int(std::ceil(6.0 * sigma)) + 2, radius = int(std::ceil(4.0 * s_px)) + 1;
+    std::vector<double> a(lags + 1);
+    for (int n = 0; n <= lags; ++n) {
+        // (triangle * G)(n) = integral over |t| < 1 of (1 - |t|) G(n - t) dt (Simpson).
+        const int steps = 400;
+        double sum = 0;
+        for (int i = 0; i <= steps; ++i) {
+            double t = -1.0 + 2.0 * i / steps;
+            double g = sigma < 1e-9 ? (std::abs(n - t) < 1e-12 ? 1.0 : 0.0)
+                                    : std::exp(-0.5 * (n - t) * (n - t) / (sigma * sigma)) /
+                                          (sigma * std::sqrt(2.0 * M_PI));
+            double weight = (i == 0 || i == steps) ? 1 : (i % 2 ? 4 : 2);
+            sum += weight * (1.0 - std::abs(t)) * g;
+        }
+        a[n] = sigma < 1e-9 ? (n == 0 ? 1.0 : 0.0) : sum * (2.0 / steps) / 3.0;
+    }
+    const int frequencies = 1024;
+    std::vector<double> root(frequencies + 1);
+    for (int i = 0; i <= frequencies; ++i) {
+        double f = 0.5 * i / frequencies, spectrum = a[0];
+        for (int n = 1; n <= lags; ++n) spectrum += 2.0 * a[n] * std::cos(2.0 * M_PI * f * n);
+        root[i] = std::sqrt(std::max(0.0, spectrum));
+    }
+    std::vector<double> k(2 * radius + 1);
+    double total = 0;
+    for (int j = 0; j <= radius; ++j) {
+        double sum = 0;  // k_j = 2 integral over [0, 1/2] of sqrt(A(f)) cos(2 pi f j) df (trapezoid)
+        for (int i = 0; i <= frequencies; ++i)
+            sum += (i == 0 || i == frequencies ? 0.5 : 1.0) * root[i] * std::cos(2.0 * M_PI * (0.5 * i / frequencies) * j);
+        k[radius + j] = k[radius - j] = 2.0 * sum * (0.5 / frequencies);
+    }
+    for (double v : k) total += v;
+    std::vector<float> taps;
+    for (double v : k) taps.push_back(float(v / total));  // unit sum: the 48 um reading is kept
+    return taps;
+}
+
 }  // namespace
 
 // The integral takes about a second (Bessel functions on a fine grid) and every plan of
@@ -60,8 +107,7 @@ GrainModel design_grain(const GrainSpec& spec, double d_min, double pitch_um, No
     g.key = key;
     double unit_noise_sigma48 = aperture_rms_per_unit_noise(spec.grain_size_um, kGranularityApertureUm);
     g.sigma_per_pixel = spec.rms_granularity / unit_noise_sigma48 / pitch_um;
-    // Gaussian of std s/pitch pixels, integrated over each pixel's extent.
-    g.kernel = pixel_integrated_gaussian(spec.grain_size_um / pitch_um);
+    g.kernel = pixel_averaged_grain_kernel(spec.grain_size_um / pitch_um);
     g.radius = int(g.kernel.size() / 2);
     if (fast) {
         // Net densities from 1e-6 (below which the grain is under 1e-6 of its size at 1.0

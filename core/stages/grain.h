@@ -7,8 +7,11 @@
 // 1.0 equals the data sheet's RMS granularity:
 //   sigma_48^2 = W0 * integral 2 pi f exp(-4 pi^2 s^2 f^2) [2 J1(pi d f)/(pi d f)]^2 df,
 // which for s -> 0 is Selwyn's sigma^2 A = W0 (seed paper eq. 8). On the pixel grid the
-// white noise has standard deviation sqrt(W0)/pitch per pixel, filtered by the Gaussian
-// box-integrated over each pixel, and scaled with net density as (D - Dmin)^exponent.
+// white noise has standard deviation sqrt(W0)/pitch per pixel, filtered by the kernel
+// whose autocorrelation is that of the field averaged over each pixel (grain.cpp), so the
+// per-pixel variance is W0 times the integral of the pixel window squared, as in the
+// Boolean model (grain_boolean.h), not W0/pitch^2; scaled with net density as
+// (D - Dmin)^exponent.
 // The noise is keyed on (seed, frame, layer, absolute pixel), so any window agrees.
 #pragma once
 

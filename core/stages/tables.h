@@ -30,7 +30,7 @@ private:
 };
 
 // 2^x in float from the exponent and a polynomial in the fraction (relative error below
-// 2e-7 for |x| < 126); the fast tiers' exp10(x) = exp2(x log2 10).
+// 3e-7, a few float roundings, for |x| < 126); the fast tiers' exp10(x) = exp2(x log2 10).
 float fast_exp2(float x);
 
 // A function of three variables on a uniform grid (nodes^3 over [lo, hi] per axis),

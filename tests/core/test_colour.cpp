@@ -173,8 +173,10 @@ TEST_CASE("texture leaves tone and colour unchanged on average and bypasses clea
 TEST_CASE("colour renders are the same for any thread count and window", "[colour][determinism]") {
     Stock film = test::test_colour_film(), paper = test::test_colour_paper();
     Image scene = demo_scene(96, 64);
+    for (Quality quality : kQualities)
     for (OutputMode mode : {OutputMode::print, OutputMode::scan, OutputMode::texture}) {
         DevelopSettings s;
+        s.quality = quality;
         s.output = mode;
         s.frame_width_mm = 3.0;  // kernels of several pixels: halos matter
         s.halation = 3.0;

@@ -118,6 +118,56 @@ TEST_CASE("a skipped stage gives the pixels of running it with its neutral value
     CHECK(render(flat_mtf, nullptr, s, scene).pixels == no_mtf.pixels);
 }
 
+TEST_CASE("leaving out the stages that cannot change a colour print changes no pixel", "[develop][skip]") {
+    Stock film = test::test_colour_film(), paper = test::test_colour_paper();
+    Image scene = demo_scene(64, 48);
+    for (Quality quality : {Quality::high, Quality::fast}) {
+        DevelopSettings s;
+        s.quality = quality;
+        s.frame_width_mm = 2.0;
+        s.halation = 0;
+        s.grain_amount = {0, 0, 0};
+        Plan skipping = Plan::compile(film, &paper, s, {64, 48});
+        s.skip_noop_stages = false;
+        Plan running = Plan::compile(film, &paper, s, {64, 48});
+        auto has = [](const Plan& p, const std::string& what) {
+            for (const std::string& line : p.describe())
+                if (line.find(what) != std::string::npos) return true;
+            return false;
+        };
+        CHECK(has(skipping, "skipped halation"));
+        CHECK(has(skipping, "skipped grain"));
+        CHECK_FALSE(has(running, "skipped halation"));
+        CHECK_FALSE(has(running, "skipped grain"));
+        Image a(scene.window, 3), b(scene.window, 3);
+        skipping.run(scene.view(), a.view(), 2);
+        running.run(scene.view(), b.view(), 2);
+        CHECK(a.pixels == b.pixels);
+    }
+}
+
+TEST_CASE("grey input skips the spectral stage and develops as R = G = B does", "[develop][skip]") {
+    Stock film = test::test_colour_film(), paper = test::test_colour_paper();
+    Image colour = demo_scene(48, 32);
+    Image grey(colour.window, 1), grey_rgb(colour.window, 3);
+    for (size_t i = 0; i < grey.pixels.size(); ++i) {
+        grey.pixels[i] = colour.pixels[3 * i + 1];
+        for (int c = 0; c < 3; ++c) grey_rgb.pixels[3 * i + c] = grey.pixels[i];
+    }
+    DevelopSettings s;
+    s.frame_width_mm = 2.0;
+    Plan rgb_plan = Plan::compile(film, &paper, s, {48, 32});
+    Plan grey_plan = Plan::compile(film, &paper, s, {48, 32, true});
+    bool says_why = false;
+    for (const std::string& line : grey_plan.describe()) says_why |= line.find("skipped spectral") != std::string::npos;
+    CHECK(says_why);
+    Image a(colour.window, 3), b(colour.window, 3);
+    rgb_plan.run(grey_rgb.view(), a.view(), 1);
+    grey_plan.run(grey.view(), b.view(), 1);
+    // The same exposure summed in another order: within float rounding, through the curves.
+    for (size_t i = 0; i < a.pixels.size(); ++i) REQUIRE(b.pixels[i] == Approx(a.pixels[i]).epsilon(1e-5).margin(1e-6));
+}
+
 TEST_CASE("non-finite and negative pixels have a defined treatment and finite output", "[develop][stability]") {
     Stock film = test::test_film(), paper = test::test_paper();
     const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();

@@ -1,0 +1,443 @@
+#include "core/stages/grain_boolean.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+
+#include "core/parallel.h"
+#include "core/stages/grain.h"
+
+namespace darkroom {
+
+namespace {
+
+const double kLn10 = std::log(10.0);
+constexpr int kTableNodes = 301;           // net density step 0.01
+constexpr double kCellLimitUm = 8.0;       // cells are at most this wide
+constexpr double kFootprintReachSigmas = 5.0;
+
+// Overlap area of two unit disks whose centres are u apart.
+double unit_disk_overlap(double u) {
+    if (u >= 2.0) return 0.0;
+    return 2.0 * std::acos(0.5 * u) - 0.5 * u * std::sqrt(4.0 - u * u);
+}
+
+// Raster samples per radius that keep the lattice sum of the covariance within
+// kAliasingPowerError of its integral at coverage c (the error falls about as (h/r)^3).
+double samples_per_radius(double c) {
+    const double exact = boolean_power_integral(c);
+    if (exact <= 0) return 2.0;
+    for (double k = 2.0; k < 16.0; k += 0.25)
+        if (std::abs(boolean_power_lattice_sum(c, 1.0 / k) / exact - 1.0) <= BooleanGrain::kAliasingPowerError)
+            return k;
+    return 16.0;
+}
+
+// F(c) and the raster density at every table node: they depend on the node grid only.
+struct CoverageTables {
+    std::vector<double> power_integral, samples_per_radius;
+};
+const CoverageTables& coverage_tables() {
+    static const CoverageTables tables = [] {
+        CoverageTables t;
+        for (int i = 0; i < kTableNodes; ++i) {
+            double c = BooleanGrain::kNetCap * i / (kTableNodes - 1) * kLn10;
+            t.power_integral.push_back(boolean_power_integral(c));
+            t.samples_per_radius.push_back(samples_per_radius(c));
+        }
+        return t;
+    }();
+    return tables;
+}
+
+double table_at(const std::vector<double>& table, double net) {
+    double pos = std::clamp(net, 0.0, BooleanGrain::kNetCap) / BooleanGrain::kNetCap * (kTableNodes - 1);
+    int i = std::min(int(pos), kTableNodes - 2);
+    double t = pos - i;
+    return table[i] + t * (table[i + 1] - table[i]);
+}
+
+int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// The density a cell's grains follow: NaN counts as d_min, infinities as the float range.
+double sanitized_density(float d, float d_min) {
+    if (std::isnan(d)) return d_min;
+    return std::clamp(double(d), -double(std::numeric_limits<float>::max()), double(std::numeric_limits<float>::max()));
+}
+
+double boolean_net(double density, float d_min) { return std::clamp(density - d_min, 0.0, BooleanGrain::kNetCap); }
+
+// The cumulative weight of a pixel's footprint along one axis: pixel [0, p] (um) convolved
+// with a Gaussian of std s truncated at +-5 s, integrated from -infinity to x.
+struct FootprintCdf {
+    double pitch_um, sigma_um;
+    double tail, norm, anchor;  // Phi(-5), 1 - 2 Phi(-5), J's value at -5 before shifting
+
+    FootprintCdf(double p, double s) : pitch_um(p), sigma_um(s) {
+        tail = phi_cdf(-kFootprintReachSigmas);
+        norm = 1.0 - 2.0 * tail;
+        anchor = antiderivative(-kFootprintReachSigmas);
+    }
+    static double phi_cdf(double t) { return 0.5 * std::erfc(-t / std::sqrt(2.0)); }
+    static double antiderivative(double t) { return t * phi_cdf(t) + std::exp(-0.5 * t * t) / std::sqrt(2.0 * M_PI); }
+    // J(t) = integral from -5 to t of the truncated Gaussian's CDF.
+    double integrated_cdf(double t) const {
+        const double r = kFootprintReachSigmas;
+        if (t <= -r) return 0.0;
+        if (t >= r) return integrated_cdf_inside(r) + (t - r);
+        return integrated_cdf_inside(t);
+    }
+    double integrated_cdf_inside(double t) const {
+        return (antiderivative(t) - anchor - tail * (t + kFootprintReachSigmas)) / norm;
+    }
+    double operator()(double x) const {
+        if (sigma_um <= 0) return std::clamp(x / pitch_um, 0.0, 1.0);
+        return sigma_um / pitch_um * (integrated_cdf(x / sigma_um) - integrated_cdf((x - pitch_um) / sigma_um));
+    }
+};
+
+struct CellGrains {
+    double radius_um = 0;
+    double samples_per_um = 0;
+    std::vector<float> x_um, y_um;  // centres from the cell's corner
+    size_t border = 0;              // the first `border` disks may reach beyond the cell
+};
+
+class BandRenderer {
+public:
+    BandRenderer(const Plane& input, const BooleanGrain& g) : in_(input), g_(g), cdf_(g.pixel_pitch_um, g.grain_size_um) {
+        Philox4x32 derived = philox4x32_10({uint32_t(g.key.frame), g.key.stream, 0x426f6f6cu, 0u}, uint32_t(g.key.seed),
+                                           uint32_t(g.key.seed >> 32));
+        key0_ = derived[0];
+        key1_ = derived[1];
+        position_tag_ = derived[2];
+        count_tag_ = derived[3];
+        reach_px_ = int(std::ceil(g.footprint_reach_um / g.pixel_pitch_um));
+    }
+
+    // Transmittance of pixels [in.x0, in.x1) x [y0, y1), row-major.
+    std::vector<double> render(int y0, int y1) {
+        const Window& w = in_.window;
+        band_ = Window{w.x0, y0, w.x1, y1};
+        transmittance_.assign(size_t(band_.pixel_count()), 0.0);
+        const double c = g_.cell_um, p = g_.pixel_pitch_um, reach = g_.footprint_reach_um;
+        const int cx0 = int(std::floor((w.x0 * p - reach) / c)), cx1 = int(std::ceil((w.x1 * p + reach) / c));
+        const int cy0 = int(std::floor((y0 * p - reach) / c)), cy1 = int(std::ceil((y1 * p + reach) / c));
+        // Strips of cells aligned to absolute coordinates keep the grains held in memory
+        // small; within a strip, rows top to bottom. A pixel's cells are thus always summed
+        // in (strip, row, column) order, whatever the band.
+        const int strip = std::max(1, int(96.0 / c));
+        for (int s = floor_div(cx0, strip); s * strip < cx1; ++s) {
+            const int sx0 = std::max(cx0, s * strip), sx1 = std::min(cx1, (s + 1) * strip);
+            render_strip(sx0, sx1, cy0, cy1);
+        }
+        return std::move(transmittance_);
+    }
+
+private:
+    const Plane& in_;
+    const BooleanGrain& g_;
+    FootprintCdf cdf_;
+    uint32_t key0_ = 0, key1_ = 0, position_tag_ = 0, count_tag_ = 0;
+    Philox4x32 bits_{};
+    int reach_px_ = 0;
+    Window band_;
+    std::vector<double> transmittance_;
+    // Grains of (2 reach + 1) cell rows, columns [grain_x0_, grain_x0_ + width), by row mod.
+    std::vector<std::vector<CellGrains>> ring_;
+    int grain_x0_ = 0;
+    std::vector<uint64_t> covered_;  // one bit per sample, rows of words_ words
+    int words_ = 0;
+    std::vector<double> contribution_, row_sum_;
+    std::vector<float> interior_x_, interior_y_;
+    std::map<std::pair<int, int>, std::vector<double>> cdf_tables_;  // (raster side, sub-cell)
+
+    float density_of_cell(int cx, int cy) const {
+        const Window& w = in_.window;
+        int px = std::clamp(floor_div(cx, g_.cells_per_pixel), w.x0, w.x1 - 1);
+        int py = std::clamp(floor_div(cy, g_.cells_per_pixel), w.y0, w.y1 - 1);
+        return in_.at(px, py);
+    }
+
+    void generate(CellGrains& cell, int cx, int cy) {
+        const double net = boolean_net(sanitized_density(density_of_cell(cx, cy), g_.d_min), g_.d_min);
+        cell.x_um.clear();
+        cell.y_um.clear();
+        cell.radius_um = g_.radius_at(net);
+        cell.samples_per_um = net > 0 ? table_at(g_.samples_per_um, net) : 0.0;
+        const double c = g_.cell_um, r = cell.radius_um;
+        const uint32_t count = poisson_count(g_.intensity_at(net) * c * c, cx, cy);
+        // Uniform centres, 16-bit coordinates (c / 65536 is under 0.2 nm): four per draw.
+        // Disks wholly inside the cell come after those that may reach its neighbours,
+        // which only scan the first `border`.
+        interior_x_.clear();
+        interior_y_.clear();
+        for (uint32_t i = 0; i < count; ++i) {
+            if (i % 4 == 0) bits_ = philox4x32_10({uint32_t(cx), uint32_t(cy), i / 4, position_tag_}, key0_, key1_);
+            const uint32_t xy = bits_[i % 4];
+            const float x = float(c * ((xy & 0xffffu) + 0.5) / 65536.0), y = float(c * ((xy >> 16) + 0.5) / 65536.0);
+            const bool inside = x >= r && y >= r && x <= c - r && y <= c - r;
+            (inside ? interior_x_ : cell.x_um).push_back(x);
+            (inside ? interior_y_ : cell.y_um).push_back(y);
+        }
+        cell.border = cell.x_um.size();
+        cell.x_um.insert(cell.x_um.end(), interior_x_.begin(), interior_x_.end());
+        cell.y_um.insert(cell.y_um.end(), interior_y_.begin(), interior_y_.end());
+    }
+
+    // The cell's grain count, Poisson of mean `mean`: products of uniforms below 10, else
+    // Hoermann's transformed rejection with squeeze (PTRS: "The transformed rejection
+    // method for generating Poisson random variables", Insurance: Mathematics and
+    // Economics 12, 1993), which takes about 1.15 pairs of uniforms whatever the mean.
+    uint32_t poisson_count(double mean, int cx, int cy) {
+        uint32_t draw = 0;
+        auto uniform = [&] {
+            if (draw % 4 == 0) bits_ = philox4x32_10({uint32_t(cx), uint32_t(cy), draw / 4, count_tag_}, key0_, key1_);
+            return (bits_[draw++ % 4] + 0.5) * (1.0 / 4294967296.0);
+        };
+        if (!(mean > 0)) return 0;
+        if (mean < 10) {
+            const double limit = std::exp(-mean);
+            uint32_t k = 0;
+            for (double product = uniform(); product > limit; product *= uniform()) ++k;
+            return k;
+        }
+        const double root = std::sqrt(mean), log_mean = std::log(mean);
+        const double b = 0.931 + 2.53 * root, a = -0.059 + 0.02483 * b;
+        const double inv_alpha = 1.1239 + 1.1328 / (b - 3.4), v_r = 0.9277 - 3.6224 / (b - 2);
+        for (;;) {
+            const double u = uniform() - 0.5, v = uniform(), us = 0.5 - std::abs(u);
+            const double k = std::floor((2 * a / us + b) * u + mean + 0.43);
+            if (us >= 0.07 && v <= v_r) return uint32_t(k);
+            if (k < 0 || (us < 0.013 && v > us)) continue;
+            if (std::log(v) + std::log(inv_alpha) - std::log(a / (us * us) + b) <= -mean + k * log_mean - log_factorial(k))
+                return uint32_t(k);
+        }
+    }
+
+    // ln k!: exact sums below 10, Stirling's series (error under 1e-10) above.
+    static double log_factorial(double k) {
+        if (k < 10) {
+            double sum = 0;
+            for (int i = 2; i <= int(k); ++i) sum += std::log(double(i));
+            return sum;
+        }
+        const double x = k + 1, x2 = x * x;
+        return (x - 0.5) * std::log(x) - x + 0.5 * std::log(2 * M_PI) + 1 / (12 * x) - 1 / (360 * x * x2) +
+               1 / (1260 * x * x2 * x2);
+    }
+
+    CellGrains& grains(int cx, int cy) {
+        const int rows = 2 * g_.grain_reach_cells + 1;
+        return ring_[size_t(((cy % rows) + rows) % rows)][size_t(cx - grain_x0_)];
+    }
+
+    void render_strip(int sx0, int sx1, int cy0, int cy1) {
+        const int reach = g_.grain_reach_cells, rows = 2 * reach + 1;
+        grain_x0_ = sx0 - reach;
+        const int width = sx1 - sx0 + 2 * reach;
+        ring_.assign(size_t(rows), std::vector<CellGrains>(size_t(width)));
+        for (int cy = cy0 - reach; cy < cy0 + reach; ++cy)
+            for (int i = 0; i < width; ++i) generate(grains(grain_x0_ + i, cy), grain_x0_ + i, cy);
+        for (int cy = cy0; cy < cy1; ++cy) {
+            for (int i = 0; i < width; ++i) generate(grains(grain_x0_ + i, cy + reach), grain_x0_ + i, cy + reach);
+            for (int cx = sx0; cx < sx1; ++cx) render_cell(cx, cy);
+        }
+    }
+
+    // Q(x) of each target pixel offset -reach..reach at the raster's m + 1 sample edges
+    // along one axis, for a cell at sub-cell position `sub` of its pixel.
+    const std::vector<double>& cdf_table(int m, int sub) {
+        auto key = std::make_pair(m, sub);
+        auto it = cdf_tables_.find(key);
+        if (it != cdf_tables_.end()) return it->second;
+        const double c = g_.cell_um, p = g_.pixel_pitch_um;
+        std::vector<double> t;
+        for (int k = -reach_px_; k <= reach_px_; ++k)
+            for (int i = 0; i <= m; ++i) t.push_back(cdf_(sub * c + c * i / m - k * p));
+        return cdf_tables_.emplace(key, std::move(t)).first->second;
+    }
+
+    void render_cell(int cx, int cy) {
+        const int n = g_.cells_per_pixel, reach = g_.grain_reach_cells;
+        const int px = floor_div(cx, n), py = floor_div(cy, n);
+        // Target pixels this cell can reach that lie in the band.
+        const int kx0 = std::max(-reach_px_, band_.x0 - px), kx1 = std::min(reach_px_, band_.x1 - 1 - px);
+        const int ky0 = std::max(-reach_px_, band_.y0 - py), ky1 = std::min(reach_px_, band_.y1 - 1 - py);
+        if (kx0 > kx1 || ky0 > ky1) return;
+
+        double samples_per_um = 0;
+        for (int dy = -reach; dy <= reach; ++dy)
+            for (int dx = -reach; dx <= reach; ++dx)
+                samples_per_um = std::max(samples_per_um, grains(cx + dx, cy + dy).samples_per_um);
+        const double c = g_.cell_um;
+        const int m = std::max(1, int(std::ceil(c * samples_per_um)));
+        const double h = c / m;
+        words_ = (m + 63) / 64;
+        covered_.assign(size_t(m) * words_, 0);
+        for (int dy = -reach; dy <= reach; ++dy)
+            for (int dx = -reach; dx <= reach; ++dx) rasterize(grains(cx + dx, cy + dy), dx * c, dy * c, m, h, dx == 0 && dy == 0);
+
+        const std::vector<double>& qx = cdf_table(m, cx - px * n);
+        const std::vector<double>& qy = cdf_table(m, cy - py * n);
+        const int columns = kx1 - kx0 + 1;
+        contribution_.assign(size_t(ky1 - ky0 + 1) * columns, 0.0);  // [ky - ky0][kx - kx0]
+        row_sum_.resize(size_t(columns));
+        for (int j = 0; j < m; ++j) {
+            const uint64_t* row = covered_.data() + size_t(j) * words_;
+            std::fill(row_sum_.begin(), row_sum_.end(), 0.0);
+            // Uncovered runs [i0, i1) add their footprint weight.
+            for (int i0 = next_sample(row, 0, false, m); i0 < m;) {
+                const int i1 = next_sample(row, i0, true, m);
+                for (int kx = kx0; kx <= kx1; ++kx) {
+                    const double* q = qx.data() + size_t(kx + reach_px_) * (m + 1);
+                    row_sum_[size_t(kx - kx0)] += q[i1] - q[i0];
+                }
+                i0 = i1 < m ? next_sample(row, i1, false, m) : m;
+            }
+            for (int ky = ky0; ky <= ky1; ++ky) {
+                const double* q = qy.data() + size_t(ky + reach_px_) * (m + 1);
+                const double wy = q[j + 1] - q[j];
+                if (wy == 0) continue;
+                double* out = contribution_.data() + size_t(ky - ky0) * columns;
+                for (int i = 0; i < columns; ++i) out[i] += wy * row_sum_[size_t(i)];
+            }
+        }
+        for (int ky = ky0; ky <= ky1; ++ky)
+            for (int kx = kx0; kx <= kx1; ++kx)
+                transmittance_[size_t(py + ky - band_.y0) * band_.width() + (px + kx - band_.x0)] +=
+                    contribution_[size_t(ky - ky0) * columns + (kx - kx0)];
+    }
+
+    // Marks the samples ((i + 0.5) h, (j + 0.5) h) of the cell's raster that a disk covers;
+    // the disks' centres are offset by (ox, oy) um from the cell's corner. Neighbours'
+    // disks are scanned only if they may reach beyond their own cell.
+    void rasterize(const CellGrains& cell, double ox, double oy, int m, double h, bool own) {
+        const double inv_h = 1.0 / h, r = cell.radius_um * inv_h, r2 = r * r, extent = m;
+        const size_t count = own ? cell.x_um.size() : cell.border;
+        for (size_t k = 0; k < count; ++k) {
+            // In sample units, sample (i, j) at (i + 0.5, j + 0.5): shifted by 0.5 to (i, j).
+            const double gx = (ox + cell.x_um[k]) * inv_h - 0.5, gy = (oy + cell.y_um[k]) * inv_h - 0.5;
+            if (gx + r < -0.5 || gx - r > extent || gy + r < -0.5 || gy - r > extent) continue;
+            const int j0 = first_index_at_or_above(gy - r), j1 = std::min(m - 1, last_index_at_or_below(gy + r));
+            for (int j = j0; j <= j1; ++j) {
+                const double dy = j - gy, half2 = r2 - dy * dy;
+                if (half2 < 0) continue;
+                const double half = std::sqrt(half2);
+                const int i0 = first_index_at_or_above(gx - half), i1 = std::min(m - 1, last_index_at_or_below(gx + half));
+                if (i1 >= i0) cover(covered_.data() + size_t(j) * words_, i0, i1);
+            }
+        }
+    }
+    // Sets bits i0..i1 (inclusive) of a row.
+    static void cover(uint64_t* row, int i0, int i1) {
+        const int w0 = i0 >> 6, w1 = i1 >> 6;
+        const uint64_t first = ~0ull << (i0 & 63), last = ~0ull >> (63 - (i1 & 63));
+        if (w0 == w1) {
+            row[w0] |= first & last;
+            return;
+        }
+        row[w0] |= first;
+        for (int w = w0 + 1; w < w1; ++w) row[w] = ~0ull;
+        row[w1] |= last;
+    }
+    // The first sample at or after i that is covered (or not), m if none.
+    int next_sample(const uint64_t* row, int i, bool covered, int m) const {
+        int w = i >> 6;
+        uint64_t bits = (covered ? row[w] : ~row[w]) & (~0ull << (i & 63));
+        while (!bits) {
+            if (++w == words_) return m;
+            bits = covered ? row[w] : ~row[w];
+        }
+        return std::min(m, w * 64 + __builtin_ctzll(bits));
+    }
+    // max(0, ceil(v)) and floor(v), branch-free (the comparisons are unpredictable): the
+    // offset makes the truncation a floor for |v| below it (v is within m + 2 r samples).
+    static constexpr double kFloorOffset = 1 << 20;
+    static int first_index_at_or_above(double v) { return std::max(0, int(kFloorOffset) - int(kFloorOffset - v)); }
+    static int last_index_at_or_below(double v) { return int(v + kFloorOffset) - int(kFloorOffset); }
+};
+
+}  // namespace
+
+double boolean_power_integral(double c) {
+    // Midpoint rule in u over [0, 2]; g's (2 - u)^(3/2) end is smooth enough for 1e-7.
+    const int steps = 4000;
+    double sum = 0;
+    for (int i = 0; i < steps; ++i) {
+        double u = 2.0 * (i + 0.5) / steps;
+        sum += 2.0 * M_PI * u * std::expm1(c * unit_disk_overlap(u) / M_PI);
+    }
+    return sum * 2.0 / steps;
+}
+
+double boolean_power_lattice_sum(double c, double h_over_r) {
+    const int n = int(std::ceil(2.0 / h_over_r));
+    double sum = 0;
+    for (int j = -n; j <= n; ++j)
+        for (int i = -n; i <= n; ++i) sum += std::expm1(c * unit_disk_overlap(h_over_r * std::hypot(i, j)) / M_PI);
+    return sum * h_over_r * h_over_r;
+}
+
+double BooleanGrain::radius_at(double net) const { return table_at(radius_um, net); }
+
+double BooleanGrain::intensity_at(double net) const {
+    net = std::clamp(net, 0.0, kNetCap);
+    if (net <= 0) return 0.0;
+    double r = radius_at(net);
+    return net * kLn10 / (M_PI * r * r);
+}
+
+BooleanGrain design_boolean_grain(const GrainSpec& spec, double d_min, double pixel_pitch_um, NoiseKey key) {
+    BooleanGrain g;
+    g.pixel_pitch_um = pixel_pitch_um;
+    g.d_min = float(d_min);
+    g.key = key;
+    const bool valid = std::isfinite(spec.rms_granularity) && std::isfinite(spec.grain_size_um) &&
+                       std::isfinite(spec.density_exponent) && std::isfinite(pixel_pitch_um) && pixel_pitch_um > 0 &&
+                       spec.grain_size_um >= 0 && spec.density_exponent >= 0;
+    g.noop = !valid || spec.rms_granularity <= 0 || design_grain(spec, d_min, pixel_pitch_um, key).is_noop();
+    if (g.noop) return g;
+
+    g.grain_size_um = spec.grain_size_um;
+    g.footprint_reach_um = kFootprintReachSigmas * spec.grain_size_um;
+    const CoverageTables& tables = coverage_tables();
+    const double unit_noise_sigma48 = aperture_rms_per_unit_noise(spec.grain_size_um, kGranularityApertureUm);
+    for (int i = 0; i < kTableNodes; ++i) {
+        // Node 0 (no silver) takes the first node's radius: only its neighbourhood uses it.
+        const int node = std::max(i, 1);
+        const double net = BooleanGrain::kNetCap * node / (kTableNodes - 1);
+        const double sqrt_w0 = spec.rms_granularity * std::pow(net, spec.density_exponent) / unit_noise_sigma48;
+        const double r = std::clamp(kLn10 * sqrt_w0 / std::sqrt(tables.power_integral[node]),
+                                    BooleanGrain::kMinRadiusUm, BooleanGrain::kMaxRadiusUm);
+        g.radius_um.push_back(r);
+        g.samples_per_um.push_back(tables.samples_per_radius[node] / r);
+    }
+    g.cells_per_pixel = std::max(1, int(std::ceil(pixel_pitch_um / kCellLimitUm)));
+    g.cell_um = pixel_pitch_um / g.cells_per_pixel;
+    const double max_radius = *std::max_element(g.radius_um.begin(), g.radius_um.end());
+    g.grain_reach_cells = std::max(1, int(std::ceil(max_radius / g.cell_um)));
+    g.halo_px = int(std::ceil((g.footprint_reach_um + (g.grain_reach_cells + 1) * g.cell_um) / pixel_pitch_um));
+    return g;
+}
+
+void apply_boolean_grain(Plane& density, const BooleanGrain& g, int threads) {
+    if (g.is_noop() || density.window.empty()) return;
+    const Plane input = density;
+    const Window w = density.window;
+    parallel_for(w.y0, w.y1, threads, [&](int y0, int y1) {
+        BandRenderer renderer(input, g);
+        const std::vector<double> transmittance = renderer.render(y0, y1);
+        for (int y = y0; y < y1; ++y)
+            for (int x = w.x0; x < w.x1; ++x) {
+                const double d = sanitized_density(input.at(x, y), g.d_min);
+                const double t = transmittance[size_t(y - y0) * w.width() + (x - w.x0)];
+                density.at(x, y) =
+                    float(d - boolean_net(d, g.d_min) - std::log10(std::max(t, BooleanGrain::kMinTransmittance)));
+            }
+    });
+}
+
+}  // namespace darkroom

@@ -1,0 +1,145 @@
+// The quality tiers (core/quality.h): the fast tiers' tables and filters against what
+// they approximate, and the tiers' renders against the reference tier.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <random>
+
+#include "core/demo_scene.h"
+#include "core/develop.h"
+#include "core/spectral.h"
+#include "core/stages/halation.h"
+#include "core/stages/tables.h"
+#include "test_support.h"
+
+using namespace darkroom;
+
+namespace {
+
+// Mean and max CIEDE2000 between two linear Rec.709 images (D65 white).
+std::pair<double, double> delta_e(const Image& a, const Image& b) {
+    const Xyz white = white_point_xyz(illuminant_d65());
+    double sum = 0, worst = 0;
+    for (size_t i = 0; i < a.pixels.size(); i += 3) {
+        Rgb p{a.pixels[i], a.pixels[i + 1], a.pixels[i + 2]}, q{b.pixels[i], b.pixels[i + 1], b.pixels[i + 2]};
+        double e = ciede2000(xyz_to_lab(linear_srgb_to_xyz(p), white), xyz_to_lab(linear_srgb_to_xyz(q), white));
+        sum += e;
+        worst = std::max(worst, e);
+    }
+    return {sum / double(a.pixels.size() / 3), worst};
+}
+
+}  // namespace
+
+TEST_CASE("a curve tabulated against exposure follows the curve within its interpolation bound", "[quality][tables]") {
+    // A smooth H&D curve, so the bound is the table's alone: linear interpolation of a
+    // function of slope <= L over a bucket 2^-bits wide in relative exposure (log10 width
+    // h = log10(1 + 2^-bits)) errs by at most L h / 2.
+    Curve curve = sample_parametric_curve(ParametricCurve{}, -2.0, 0.1, -5.0, 1.0);
+    double slope = 0;
+    for (size_t i = 1; i < curve.x.size(); ++i)
+        slope = std::max(slope, std::abs((curve.y[i] - curve.y[i - 1]) / (curve.x[i] - curve.x[i - 1])));
+    for (int bits : {5, 8}) {
+        LogAxisTable table(curve, bits);
+        const double bound = slope * std::log10(1.0 + std::exp2(-bits)) / 2 + 1e-5;
+        double worst = 0;
+        for (double log_h = -6.0; log_h <= 2.0; log_h += 0.000731)
+            worst = std::max(worst, std::abs(table(float(std::pow(10.0, log_h))) - curve(log_h)));
+        CHECK(worst <= bound);
+        // No light (and a PSF's negative lobes, and NaN) is the curve's toe.
+        CHECK(table(0.0f) == Approx(curve.y.front()).margin(1e-6));
+        CHECK(table(-1.0f) == table(0.0f));
+        CHECK(table(std::nanf("")) == table(0.0f));
+        CHECK(table(std::numeric_limits<float>::infinity()) == Approx(curve.y.back()).margin(1e-6));
+    }
+}
+
+TEST_CASE("fast_exp2 is 2^x within 3e-7", "[quality][tables]") {
+    double worst = 0;
+    for (double x = -120.0; x <= 120.0; x += 0.00377)
+        worst = std::max(worst, std::abs(double(fast_exp2(float(x))) / std::exp2(double(float(x))) - 1.0));
+    CHECK(worst < 3e-7);
+}
+
+TEST_CASE("a 3D table reproduces a trilinear function and clamps outside its box", "[quality][tables]") {
+    auto f = [](const double* v, double* out) {
+        out[0] = 1 + 2 * v[0] - v[1] + 0.5 * v[2];
+        out[1] = v[0] * v[1] * v[2];
+        out[2] = 3 - v[0] * v[2] + v[1];
+    };
+    Table3D table({0, -1, 0.5}, {2, 1, 3}, 9, f);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int i = 0; i < 1000; ++i) {
+        double in[3] = {2 * u(rng), -1 + 2 * u(rng), 0.5 + 2.5 * u(rng)}, expected[3];
+        f(in, expected);
+        float in_f[3] = {float(in[0]), float(in[1]), float(in[2])}, out[3];
+        table(in_f, out);
+        for (int c = 0; c < 3; ++c) REQUIRE(out[c] == Approx(expected[c]).margin(1e-5));
+    }
+    float outside[3] = {-5, 7, 1}, clamped[3] = {0, 1, 1}, a[3], b[3];
+    table(outside, a);
+    table(clamped, b);
+    for (int c = 0; c < 3; ++c) CHECK(a[c] == b[c]);
+}
+
+TEST_CASE("halation on a coarser grid follows the exact Gaussian and any window agrees", "[quality][halation]") {
+    const Window frame{0, 0, 200, 150};
+    Plane light(frame);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0, 1);
+    // Highlights on a smooth ground. (Near the frame's edges the two differ by design: the
+    // exact filter repeats the edge pixel outwards, the coarse one the edge block's mean.)
+    for (int y = 0; y < 150; ++y)
+        for (int x = 0; x < 200; ++x) {
+            bool inside = x > 50 && x < 150 && y > 40 && y < 110;
+            light.at(x, y) = inside && u(rng) < 0.01f ? 50.0f : float(0.5 + 0.3 * std::sin(x / 17.0) * std::cos(y / 23.0));
+        }
+    const double strength = 0.5, radius_um = 150, pitch_um = 6.0;     // sigma 25 px
+    HalationKernel exact = design_halation(strength, radius_um, pitch_um, 1);
+    HalationKernel coarse = design_halation(strength, radius_um, pitch_um, 4);
+    REQUIRE(coarse.decimation == 4);
+    Plane a(frame), b(frame);
+    apply_halation(light, a, exact, frame, 2);
+    apply_halation(light, b, coarse, frame, 2);
+    // The halo's own error, relative to the halo (the added light): a highlight's halo is
+    // centred on its 4x4 block, up to 1.5 px off, which on a 25 px Gaussian's slope is
+    // about 2 % of the halo there.
+    double worst = 0, halo = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) {
+        worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
+        halo = std::max(halo, double(a.pixels[i] - light.pixels[i]));
+    }
+    CHECK(worst < 0.03 * halo);
+    for (Window w : {Window{0, 0, 1, 1}, Window{37, 21, 120, 77}, Window{150, 100, 200, 150}}) {
+        Plane part(w);
+        apply_halation(light, part, coarse, frame, 1);
+        for (int y = w.y0; y < w.y1; ++y)
+            for (int x = w.x0; x < w.x1; ++x) REQUIRE(part.at(x, y) == b.at(x, y));
+    }
+}
+
+TEST_CASE("every tier prints within its stated colour error of the reference tier", "[quality][print]") {
+    // The default look at a 4K frame's pixel pitch (6 um on Super 35), so every kernel is
+    // as wide as on a real frame; grain off, since grain realisations differ by tier.
+    Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    Image scene = demo_scene(96, 64);
+    DevelopSettings s;
+    s.grain = false;
+    s.frame_width_mm = 96 * 0.006;
+    s.print_width_mm = 96 * 0.0054;
+    s.quality = Quality::reference;
+    Image reference = test::render(film, &paper, s, scene, 2);
+    // high: the same spectral print, the PSF within 1e-6 per tap; fast: issue 8's 0.5.
+    for (auto [quality, mean_limit] : {std::pair{Quality::high, 0.01}, std::pair{Quality::fast, 0.5}}) {
+        s.quality = quality;
+        auto [mean, max] = delta_e(test::render(film, &paper, s, scene, 2), reference);
+        INFO(quality_name(quality) << ": mean " << mean << ", max " << max);
+        CHECK(mean <= mean_limit);
+    }
+}
+
+TEST_CASE("quality tiers are named, parsed and ordered reference first", "[quality]") {
+    for (Quality q : kQualities) CHECK(parse_quality(quality_name(q)) == q);
+    CHECK_FALSE(parse_quality("ultra"));
+    CHECK(kQualities[0] == Quality::reference);
+}
