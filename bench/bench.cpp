@@ -29,18 +29,27 @@ double stage_seconds(const std::vector<StageTime>& stages, const std::string& na
     return 0.0;
 }
 
-// The look the benchmark develops: film to print with grain, MTF and halation on.
-DevelopSettings look(Quality q, uint64_t seed) {
+// The target frame is this wide; every frame size is benchmarked at its pixel pitch.
+constexpr int kTargetWidthPx = 4096;
+
+// The look the benchmark develops: film to print with grain, MTF and halation on, at the
+// target frame's pixel pitch on film and paper, so a smaller --size is a piece of that
+// frame (per-pixel costs and errors as at 4K), not the whole format at a coarser pitch.
+DevelopSettings look(Quality q, uint64_t seed, const Stock& film, const Stock& paper, int width_px) {
     DevelopSettings s;
     s.quality = q;
     s.seed = seed;
+    s.frame_width_mm = film.frame_width_mm * width_px / kTargetWidthPx;
+    s.print_width_mm = paper.frame_width_mm * width_px / kTargetWidthPx;
     return s;
 }
 
 // Settings for the measurement targets, whose pixels are exposures (lux-seconds) and whose
 // result is the negative's density, at the benchmarked frame's pixel pitch.
 DevelopSettings density_target(Quality q, uint64_t seed, double pitch_um, int target_width_px) {
-    DevelopSettings s = look(q, seed);
+    DevelopSettings s;
+    s.quality = q;
+    s.seed = seed;
     s.output = OutputMode::density;
     s.input_units = InputUnits::lux_seconds;
     s.frame_width_mm = pitch_um * target_width_px / 1000.0;
@@ -193,7 +202,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
     r.runs = o.runs;
     r.copy_runs = kCopyRuns;
     r.sample_windows = sample_windows(o.width, o.height, o.sample_windows, o.sample_window_px);
-    r.pixel_pitch_um = film.frame_width_mm * 1000.0 / o.width;
+    r.pixel_pitch_um = film.frame_width_mm * 1000.0 / kTargetWidthPx;
     for (int k : {1, 2, 4, 8, 12, 16, 20, 24, 28, 32}) r.mtf_cycles_per_px.push_back(k / 64.0);
     r.grain_wedge_patches = kWedgePatches, r.grain_wedge_patch_px = kWedgePatchPx;
 
@@ -205,7 +214,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
     const FrameGeometry frame{o.width, o.height};
     // One compile before any is timed: the first pays for one-time set-up (the spectral
     // upsampling basis), which is no tier's cost.
-    Plan::compile(film, &paper, look(Quality::high, o.seed), frame);
+    Plan::compile(film, &paper, look(Quality::high, o.seed, film, paper, o.width), frame);
     Image out(o.width, o.height, 3);
     {
         say("copy pass");
@@ -228,22 +237,26 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
         TierResult tr;
         tr.quality = q;
         tr.name = quality_name(q);
-        DevelopSettings s = look(q, o.seed);
+        DevelopSettings s = look(q, o.seed, film, paper, o.width);
         auto start = Clock::now();
         Plan plan = Plan::compile(film, &paper, s, frame);
         tr.compile_seconds = seconds_since(start);
         if (q == Quality::reference) {
             say(tr.name + ": " + std::to_string(r.sample_windows.size()) + " sample windows");
             StageTimes times;
-            long long pixels = 0;
+            long long pixels = 0, with_halo = 0;
             for (const Window& w : r.sample_windows) {
                 render(plan, scene.view(), w, o.threads, &times);
                 pixels += w.pixel_count();
+                with_halo += plan.input_window(w).pixel_count();
             }
-            double scale = double(frame.width) * frame.height / pixels;
-            tr.stages = stage_list(times, scale);
+            const double frame_pixels = double(frame.width) * frame.height;
+            tr.stages = stage_list(times, frame_pixels / pixels);
             for (const StageTime& st : tr.stages) tr.seconds += st.seconds;
+            // Every stage computes at least the window and at most the window with its
+            // whole halo, so the frame's time lies between the two extrapolations.
             tr.extrapolated = true;
+            tr.extrapolated_lower_seconds = tr.seconds * pixels / with_halo;
         } else {
             say(tr.name + ": whole frame, " + std::to_string(o.runs + 1) + " runs");
             Timed timed = time_frame(plan, scene, out, o.runs, o.threads);
@@ -296,6 +309,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
 
         if (q == Quality::fast) {
             const TierResult& fast = r.tiers.back();
+            Image out_neutral(o.width, o.height, 3);
             struct Off {
                 const char* stage;
                 void (*turn_off)(DevelopSettings&);
@@ -308,8 +322,10 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
                 DevelopSettings d = s;
                 off.turn_off(d);
                 Timed timed = time_frame(Plan::compile(film, &paper, d, frame), scene, out, o.runs, o.threads);
+                d.skip_noop_stages = false;
+                Timed neutral = time_frame(Plan::compile(film, &paper, d, frame), scene, out_neutral, o.runs, o.threads);
                 r.disabled.push_back({off.stage, timed.seconds, timed.stages, stage_seconds(fast.stages, off.stage),
-                                      fast.seconds - timed.seconds});
+                                      fast.seconds - timed.seconds, neutral.seconds, out.pixels == out_neutral.pixels});
             }
             r.target.evaluated = true;
             r.target.copy_ratio = copy_ratio(fast.seconds, r.copy_seconds);

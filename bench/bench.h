@@ -1,13 +1,14 @@
 // `darkroom bench`: run time against error for every quality tier (core/quality.h).
 //
 // Timing: each tier develops the whole frame (the demo scene, core/demo_scene.h) through
-// the look (film to print, grain, MTF and halation on), one warm-up run then `runs` timed
+// the look (film to print, grain, MTF and halation on; at the pixel pitch of a 4096 px
+// wide frame whatever the size, so a smaller frame is a piece of the target), one warm-up run then `runs` timed
 // runs, the fastest kept with its per-stage times (Plan::run's StageTimes). A plain copy
 // of the same float RGB buffer on the same threads is timed in the same run, so every
 // time is also a multiple of the copy (its fastest of 20 runs). The reference tier is too slow for a whole frame:
 // it renders only the sample windows (a window equals that window of the full frame) and
-// its frame time is extrapolated from them by pixel count; each window also computes its
-// halo, so the extrapolation overstates it.
+// its frame time is extrapolated from them by pixel count, between bounds (each window
+// also computes its halo).
 //
 // Errors against the reference tier, on the sample windows of the same frame:
 // - print colour: mean and max CIEDE2000, grain off in both (grain realisations differ
@@ -20,7 +21,8 @@
 //   plate-matching analysis (core/plate/grain_analysis.h) and compared with the
 //   reference's (core/plate/grain_compare.h). The reference is also compared with itself
 //   under another seed: that is the measurement's noise floor.
-// Disabled stages: the fast tier again with grain, MTF and halation off in turn.
+// Disabled stages: the fast tier again with grain, MTF and halation off in turn, each left
+// out of the plan and, for comparison, kept in it at its neutral value.
 #pragma once
 
 #include <functional>
@@ -66,6 +68,10 @@ struct TierResult {
     double compile_seconds = 0;
     double seconds = 0;        // the whole frame's develop time (extrapolated when flagged)
     bool extrapolated = false;
+    // When extrapolated: `seconds` scales the windows' time by frame pixels / window pixels
+    // (an upper bound: the windows also compute their halos); this one by frame pixels /
+    // the pixels of the windows with their halos (a lower bound).
+    double extrapolated_lower_seconds = 0;
     std::vector<StageTime> stages;
     ColourError print_error;   // CIEDE2000 against the reference, grain off
     double density_error = 0;  // max |D - D_reference| of the negative, grain off
@@ -82,6 +88,11 @@ struct DisabledStage {
     std::vector<StageTime> stages;
     double stage_seconds_when_on = 0;  // that stage's time in the fast tier's full run
     double saved_seconds = 0;          // the fast tier's full run less this one
+    // The same settings with the stage kept in the plan at its neutral value
+    // (DevelopSettings::skip_noop_stages = false): what leaving it out saves, and whether
+    // the two give the same pixels (they must).
+    double neutral_seconds = 0;
+    bool identical_pixels = false;
 };
 
 struct TargetCheck {

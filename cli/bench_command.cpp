@@ -84,6 +84,7 @@ nlohmann::json report_json(const bench::BenchReport& r) {
                                 {"seconds", t.seconds},
                                 {"copy_ratio", bench::copy_ratio(t.seconds, r.copy_seconds)},
                                 {"extrapolated_from_sample_windows", t.extrapolated},
+                                {"extrapolated_lower_bound_seconds", t.extrapolated_lower_seconds},
                                 {"stages", stages_json(t.stages, r.copy_seconds)},
                                 {"errors",
                                  {{"print_de2000_mean", t.print_error.mean},
@@ -101,6 +102,8 @@ nlohmann::json report_json(const bench::BenchReport& r) {
                                           {"copy_ratio", bench::copy_ratio(d.seconds, r.copy_seconds)},
                                           {"stage_seconds_when_on", d.stage_seconds_when_on},
                                           {"saved_seconds", d.saved_seconds},
+                                          {"neutral_stage_kept_seconds", d.neutral_seconds},
+                                          {"identical_pixels_to_neutral_stage_kept", d.identical_pixels},
                                           {"stages", stages_json(d.stages, r.copy_seconds)}});
     doc["target"] = {{"evaluated", r.target.evaluated},
                      {"tier", "fast"},
@@ -134,7 +137,8 @@ void print_row(const std::string& label, const std::vector<std::string>& cells, 
 
 void print_report(const bench::BenchReport& r) {
     const double copy_s = r.copy_seconds;
-    std::printf("darkroom bench: %s printed on %s, the %dx%d demo scene (%.3g um pitch), grain, MTF and halation on\n",
+    std::printf("darkroom bench: %s printed on %s, the %dx%d demo scene at %.3g um on film (a 4096 px wide frame's "
+                "pitch), grain, MTF and halation on\n",
                 r.film.c_str(), r.paper.c_str(), r.width, r.height, r.pixel_pitch_um);
     std::printf("machine: %s, %d cores, %d threads used\n", r.machine.cpu.c_str(), r.machine.cores, r.threads);
     std::printf("copy pass (float RGB, same threads, parallel over rows): %.2f ms, fastest of %d. Develop times: fastest "
@@ -150,6 +154,9 @@ void print_report(const bench::BenchReport& r) {
         print_row(label, cells, note);
     };
     tier_row("develop, whole frame", [&](const auto& t) { return ms_cell(t.seconds, copy_s); });
+    tier_row("  (*) lower bound", [&](const auto& t) {
+        return t.extrapolated ? ms_cell(t.extrapolated_lower_seconds, copy_s) : std::string("");
+    });
     std::vector<std::string> stages;
     for (const auto& t : r.tiers)
         for (const auto& s : t.stages)
@@ -188,7 +195,8 @@ void print_report(const bench::BenchReport& r) {
         if (!t.grain.measured) std::printf("grain of %s not measured: %s\n", t.name.c_str(), t.grain.problem.c_str());
     std::printf(
         "\n(*) reference: rendered only on the sample windows; its times are the windows' times x frame pixels /\n"
-        "    window pixels, an extrapolation that overstates them (each window also computes its halo).\n"
+        "    window pixels, an upper bound (each window also computes its halo); the lower bound divides by the\n"
+        "    pixels of the windows with their halos instead.\n"
         "Colour and density errors are measured with grain off in both renders: grain realisations differ\n"
         "between tiers. Grain: a %d-patch wedge (%d px patches, one stop apart, MTF and halation off), each tier's\n"
         "density analysed as a plate and compared with the reference's; the reference column compares the\n"
@@ -197,14 +205,18 @@ void print_report(const bench::BenchReport& r) {
 
     if (!r.disabled.empty()) {
         std::printf("\nfast tier with one stage off (whole frame):\n");
-        print_row("stage off", {"develop", "saved", "stage's time when on", "stage when off"});
+        print_row("stage off", {"develop", "saved", "stage's time when on", "stage when off", "kept at neutral",
+                                "same pixels"});
         for (const auto& d : r.disabled) {
             std::string when_off = "gone";
             for (const auto& s : d.stages)
                 if (s.stage == d.stage) when_off = number_cell(s.seconds * 1e3, "%.1f ms");
             print_row("  " + d.stage, {ms_cell(d.seconds, copy_s), number_cell(d.saved_seconds * 1e3, "%.1f ms"),
-                                       number_cell(d.stage_seconds_when_on * 1e3, "%.1f ms"), when_off});
+                                       number_cell(d.stage_seconds_when_on * 1e3, "%.1f ms"), when_off,
+                                       ms_cell(d.neutral_seconds, copy_s), d.identical_pixels ? "yes" : "NO"});
         }
+        std::printf("(kept at neutral: the stage left in the plan with its neutral value, so that leaving it out is "
+                    "seen to save its time and change no pixel)\n");
     }
     if (!r.target.evaluated)
         std::printf("\ntarget (issue 8): not evaluated, the fast tier was not run\n");

@@ -23,6 +23,7 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
     REQUIRE(doc["tiers"].size() == 4);
     CHECK(doc["tiers"][0]["name"] == "reference");
     CHECK(doc["tiers"][0]["extrapolated_from_sample_windows"] == true);
+    CHECK(doc["tiers"][0]["extrapolated_lower_bound_seconds"].get<double>() <= doc["tiers"][0]["seconds"].get<double>());
     const double copy = doc["copy_seconds"];
     for (const auto& tier : doc["tiers"]) {
         for (const char* key : {"name", "compile_seconds", "seconds", "copy_ratio", "stages", "errors", "mtf", "pareto_optimal"})
@@ -41,8 +42,11 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
     CHECK(doc["tiers"][0]["errors"]["mtf_max"] == 0.0);
     REQUIRE(doc["disabled_stages"].size() == 3);
     for (const auto& d : doc["disabled_stages"])
-        for (const char* key : {"stage_off", "seconds", "copy_ratio", "stage_seconds_when_on", "saved_seconds", "stages"})
+        for (const char* key : {"stage_off", "seconds", "copy_ratio", "stage_seconds_when_on", "saved_seconds", "stages",
+                                "neutral_stage_kept_seconds", "identical_pixels_to_neutral_stage_kept"})
             CHECK(d.contains(key));
+    // Leaving a stage out changes no pixel.
+    for (const auto& d : doc["disabled_stages"]) CHECK(d["identical_pixels_to_neutral_stage_kept"] == true);
     for (const char* key : {"evaluated", "copy_ratio", "mean_de2000", "grain_within_tolerance", "pass"})
         CHECK(doc["target"].contains(key));
     CHECK(doc["target"]["evaluated"] == true);
