@@ -20,8 +20,6 @@ using namespace darkroom;
 
 namespace {
 
-using test::render;
-
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr OutputMode kModes[] = {OutputMode::print, OutputMode::negative, OutputMode::density, OutputMode::scan,
