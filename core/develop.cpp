@@ -400,7 +400,9 @@ std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, in
         Plane h(film_in);
         for (int y = film_in.y0; y < film_in.y1; ++y)
             for (int x = film_in.x0; x < film_in.x1; ++x)
-                h.at(x, y) = float(sanitize(in.at(x, y)[std::min(c, in.channels - 1)]) * film_exposure_scale_);
+                // Clamped as the film's exposure is: at +64 EV a 1e30 pixel would overflow a float.
+                h.at(x, y) = float(std::clamp(sanitize(in.at(x, y)[std::min(c, in.channels - 1)]) * film_exposure_scale_,
+                                              -kMaxInput, kMaxInput));
         Plane spread = spread_exposure(m, layer, h, out, frame_, threads, times);
         const float normalise = float(1.0 / (1.0 + (m.halation[layer] ? m.halation[layer]->strength : 0.0)));
         const auto& grain = m.grain[layer];

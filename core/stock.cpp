@@ -28,6 +28,9 @@ double speed_point_log_h(const Stock& stock) {
 namespace {
 
 constexpr double kHuge = 1e30;
+// A density curve may not fall by more than this between samples (rounding in a sampled
+// analytic curve, e.g. a written parametric one, stays far below it).
+constexpr double kFallTolerance = 1e-9;
 
 Curve read_curve(const FieldReader& r, const json& obj, const char* x_key, const char* y_key, double y_min,
                  double y_max) {
@@ -152,7 +155,7 @@ Curve read_softplus_curve(const FieldReader& r, const json& v) {
             double u = (x - at) / width;
             d += slope * width * (u > 30 ? u : std::log1p(std::exp(u)));
         }
-        if (!ys.empty() && d < ys.back() - 1e-9)
+        if (!ys.empty() && d < ys.back() - kFallTolerance)
             r.fail("the curve falls at log H " + std::to_string(x) + ": density must not decrease with exposure");
         xs.push_back(x);
         ys.push_back(d);
@@ -162,7 +165,14 @@ Curve read_softplus_curve(const FieldReader& r, const json& v) {
 
 Curve read_density_curve(const FieldReader& rc, const json& dc, const Stock& stock) {
     if (dc.contains("softplus")) return read_softplus_curve(rc.at("softplus"), dc["softplus"]);
-    if (!dc.contains("parametric")) return read_curve(rc, dc, "log_h", "density", 0.0, 10.0);
+    if (!dc.contains("parametric")) {
+        Curve c = read_curve(rc, dc, "log_h", "density", 0.0, 10.0);
+        // As for the softplus form: development never removes density as exposure grows.
+        for (size_t i = 1; i < c.x.size(); ++i)
+            if (c.y[i] < c.y[i - 1] - kFallTolerance)
+                rc.fail("the curve falls at log H " + std::to_string(c.x[i]) + ": density must not decrease with exposure");
+        return c;
+    }
     FieldReader rp = rc.at("parametric");
     const json& p = dc["parametric"];
     ParametricCurve pc;
@@ -192,6 +202,9 @@ Layer read_layer(const FieldReader& r, const json& v, const Stock& stock) {
     FieldReader rm = r.at("mtf");
     layer.mtf = read_curve(rm, r.field(v, "mtf"), "cycles_per_mm", "response", 0.0, 10.0);
     if (layer.mtf.x_min() < 0) rm.at("cycles_per_mm").fail("frequencies must be >= 0");
+    // Scattering is normalised to MTF(0) = 1 (it moves light, it does not absorb it): a
+    // response of 0 there leaves nothing to normalise (the kernel would be 0/0).
+    if (!(layer.mtf(0.0) > 0)) rm.at("response").fail("the response at 0 cycles/mm must be above 0");
 
     FieldReader rg = r.at("grain");
     const json& g = r.field(v, "grain");
@@ -292,6 +305,11 @@ Stock parse_stock_json(const std::string& text, const std::string& origin) {
     if (doc.contains("base_density")) {
         if (!s.is_colour()) r.at("base_density").fail("only colour stocks have a spectral base density");
         s.base_density = read_spectrum(r.at("base_density"), doc["base_density"], false);
+        // A negative density would transmit (or reflect) more light than falls on it.
+        for (int i = 0; i < kSpectralSamples; ++i)
+            if (s.base_density[i] < 0)
+                r.at("base_density").fail("negative at " + std::to_string(int(wavelength_nm(i))) +
+                                          " nm: a density cannot be below 0");
     } else {
         double d_min[3];
         for (size_t l = 0; l < s.layers.size(); ++l) d_min[l] = s.layers[l].density_curve.y_min();

@@ -167,7 +167,10 @@ void apply_grain(Plane& density, const GrainModel& g, int threads) {
             }
             for (int x = 0; x < density.window.width(); ++x) {
                 double net = std::max(0.0, double(d[x]) - g.d_min);
-                d[x] = float(d[x] + g.sigma_per_pixel * std::pow(net, g.density_exponent) * n[x]);
+                // Held at d_min: a Gaussian fluctuation wider than the net density would
+                // otherwise take away more silver (or dye) than developed, giving densities
+                // below base+fog or below 0 (transmitting or reflecting more than falls on it).
+                d[x] = float(std::max(double(g.d_min), d[x] + g.sigma_per_pixel * std::pow(net, g.density_exponent) * n[x]));
             }
         }
     });
