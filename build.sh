@@ -3,6 +3,10 @@
 #   ./build.sh demo   install packages, build, render the built-in demo into out/demo
 #   ./build.sh test   install packages, build, run every test
 #   ./build.sh build  install packages and build only
+#   ./build.sh sanitize          build into build-sanitize with AddressSanitizer and
+#                                UndefinedBehaviorSanitizer (gcc) and run every test there
+#   ./build.sh fuzz [SECONDS]    build the parsers' fuzz targets with clang's libFuzzer into
+#                                build-fuzz and fuzz each for SECONDS (default 60) from its corpus
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -10,12 +14,15 @@ PACKAGES=(build-essential cmake ninja-build pkg-config
           libopenimageio-dev openimageio-tools libopencolorio-dev opencolorio-tools libopenexr-dev
           libglm-dev catch2 nlohmann-json3-dev libcli11-dev libfmt-dev fonts-dejavu-core
           pybind11-dev python3-dev python3-numpy python3-openimageio python3-venv)
+# clang and its runtime libraries (libFuzzer, the sanitizers) for the fuzz step only.
+FUZZ_PACKAGES=(clang libclang-rt-14-dev)
+FUZZ_TARGETS=(fuzz_stock fuzz_look fuzz_grain_profile)
 BUILD_DIR=${BUILD_DIR:-build}
 JOBS=${JOBS:-$(nproc)}
 
 install_packages() {
   local missing=()
-  for p in "${PACKAGES[@]}"; do
+  for p in "${PACKAGES[@]}" "$@"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")
   done
   ((${#missing[@]} == 0)) && return
@@ -30,6 +37,10 @@ build() {
   cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@"
   cmake --build "$BUILD_DIR" -j "$JOBS"
 }
+
+# Any sanitizer report fails the run: UB aborts (-fno-sanitize-recover=all), leaks count.
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 
 case "${1:-}" in
   demo)
@@ -46,8 +57,29 @@ case "${1:-}" in
     install_packages
     build
     ;;
+  sanitize)
+    install_packages
+    # (without the Python module and its tests: Debian's python3 cannot load a sanitized module)
+    BUILD_DIR=build-sanitize build -DDARKROOM_SANITIZE=ON
+    ctest --test-dir build-sanitize --output-on-failure -j "$JOBS"
+    ;;
+  fuzz)
+    seconds=${2:-60}
+    install_packages "${FUZZ_PACKAGES[@]}"
+    CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=Release -DDARKROOM_FUZZ=ON
+    cmake --build build-fuzz -j "$JOBS" --target "${FUZZ_TARGETS[@]}"
+    for target in "${FUZZ_TARGETS[@]}"; do
+      corpus=tests/fuzz/corpus/${target#fuzz_}
+      # New inputs go to a scratch folder; the kept corpus changes only by hand (see tests/fuzz/README.md).
+      rm -rf "build-fuzz/new-corpus/$target" && mkdir -p "build-fuzz/new-corpus/$target"
+      echo "== $target: ${seconds} s from $corpus"
+      "build-fuzz/tests/fuzz/$target" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+        -dict=tests/fuzz/json.dict -artifact_prefix="build-fuzz/$target-" -print_final_stats=1 \
+        "build-fuzz/new-corpus/$target" "$corpus"
+    done
+    ;;
   *)
-    echo "usage: $0 demo|test|build" >&2
+    echo "usage: $0 demo|test|build|sanitize|fuzz [seconds]" >&2
     exit 2
     ;;
 esac

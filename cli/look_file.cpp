@@ -7,6 +7,7 @@
 
 #include "cli/atomic_file.h"
 #include "cli/user_error.h"
+#include "core/json_message.h"
 
 namespace darkroom::cli {
 
@@ -37,7 +38,8 @@ std::string to_input(const json& value, const std::string& where) {
         case json::value_t::number_integer:
         case json::value_t::number_unsigned:
         case json::value_t::number_float: return value.dump();
-        default: throw UserError(where + ": expected a string, number or true/false, got " + value.dump());
+        default:
+            throw UserError(where + ": expected a string, number or true/false, got " + darkroom::json_for_message(value));
     }
 }
 
@@ -71,12 +73,14 @@ LookFileFlags add_look_file_flags(CLI::App& cmd, std::string& look_path, std::st
 }
 
 void apply_look(CLI::App& cmd, const json& look, const std::string& source) {
-    if (!look.is_object() || look.value("format", "") != kLookFormat)
+    // Compared as JSON values: a format of another type, or a version too large for an int,
+    // is simply not this one.
+    if (!look.is_object() || !look.contains("format") || look["format"] != kLookFormat)
         throw UserError("look file '" + source + "': not a darkroom look (expected \"format\": \"" + kLookFormat + "\")");
-    if (!look.contains("version") || !look["version"].is_number_integer() || look["version"].get<int>() != kLookVersion)
+    if (!look.contains("version") || !look["version"].is_number_integer() || look["version"] != kLookVersion)
         throw UserError("look file '" + source + "': field 'version': this darkroom reads version " +
                         std::to_string(kLookVersion) + ", the file has " +
-                        (look.contains("version") ? look["version"].dump() : std::string("none")));
+                        (look.contains("version") ? darkroom::json_for_message(look["version"]) : std::string("none")));
     for (const auto& [key, value] : look.items())
         if (key != "format" && key != "version" && key != "settings")
             throw UserError("look file '" + source + "': unknown field '" + key + "' (settings go under \"settings\")");
@@ -96,6 +100,7 @@ void apply_look(CLI::App& cmd, const json& look, const std::string& source) {
             for (const json& element : value) inputs.push_back(to_input(element, where));
         else
             inputs.push_back(to_input(value, where));
+        if (inputs.empty()) throw UserError(where + ": an empty array (null leaves a setting unset)");
         try {
             if (opt->get_expected_min() == 0)  // a flag: true/false, possibly a negated one
                 opt->add_result(opt->get_flag_value(key, inputs.front()));
@@ -108,16 +113,22 @@ void apply_look(CLI::App& cmd, const json& look, const std::string& source) {
     }
 }
 
-void apply_look_file(CLI::App& cmd, const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw UserError("cannot open look file '" + path + "'");
+void apply_look_text(CLI::App& cmd, const std::string& text, const std::string& source) {
     json look;
     try {
-        look = json::parse(in);
-    } catch (const json::parse_error& e) {
-        throw UserError("look file '" + path + "' is not valid JSON: " + e.what());
+        look = json::parse(text);
+    } catch (const json::exception& e) {  // a syntax error, or a number too large for a double
+        throw UserError("look file '" + source + "' is not valid JSON: " + e.what());
     }
-    apply_look(cmd, look, path);
+    apply_look(cmd, look, source);
+}
+
+void apply_look_file(CLI::App& cmd, const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw UserError("cannot open look file '" + path + "'");
+    std::stringstream text;
+    text << in.rdbuf();
+    apply_look_text(cmd, text.str(), path);
 }
 
 json look_json(const CLI::App& cmd) {

@@ -31,6 +31,8 @@ LookFileFlags add_look_file_flags(CLI::App& command, std::string& look_path, std
 // Throws UserError naming `source` and the key for an unknown or invalid setting, a wrong
 // format or version.
 void apply_look(CLI::App& command, const nlohmann::json& look, const std::string& source);
+// The same for the text of a look file (UserError too if it is not JSON), and for a file.
+void apply_look_text(CLI::App& command, const std::string& text, const std::string& source);
 void apply_look_file(CLI::App& command, const std::string& path);
 
 // The look of `command` as parsed: every look option, given or default.

@@ -298,8 +298,9 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
                 for (int j = 0; j < 3; ++j) log2_h[j] = std::log2(std::clamp(log2_h[j], 1e-30, kMaxInput));
             });
             density_range(*paper, lo, hi);
+            const PrintView view(*paper);
             p.view_table_ = Table3D(lo, hi, nodes, [&](const double* d, double* log2_xyz) {
-                Xyz xyz = view_print_xyz(*paper, d);
+                Xyz xyz = view.xyz(d);
                 for (int c = 0; c < 3; ++c) log2_xyz[c] = std::log2(std::max(xyz[c], 1e-30));
             });
         }
@@ -366,7 +367,6 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
     }
     enlarger_timer.stop();
     std::vector<Plane> paper_density = develop_material(paper_stages_, paper_exposure, out, frame_, threads, times);
-    const Stock& paper = paper_stages_.stock;
     StageTimer view_timer(times, "view");
     if (view_table_) {
         const Matrix3& m = print_xyz_to_rgb();
@@ -378,7 +378,8 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
                 rgb[c] = float(m[c][0]) * xyz[0] + float(m[c][1]) * xyz[1] + float(m[c][2]) * xyz[2];
         });
     }
-    return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view_print(paper, d, rgb); });
+    const PrintView view(paper_stages_.stock);
+    return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view.rgb(d, rgb); });
 }
 
 // Texture: each channel c is treated as the exposure of film layer c (a single-layer film
@@ -399,7 +400,9 @@ std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, in
         Plane h(film_in);
         for (int y = film_in.y0; y < film_in.y1; ++y)
             for (int x = film_in.x0; x < film_in.x1; ++x)
-                h.at(x, y) = float(sanitize(in.at(x, y)[std::min(c, in.channels - 1)]) * film_exposure_scale_);
+                // Clamped as the film's exposure is: at +64 EV a 1e30 pixel would overflow a float.
+                h.at(x, y) = float(std::clamp(sanitize(in.at(x, y)[std::min(c, in.channels - 1)]) * film_exposure_scale_,
+                                              -kMaxInput, kMaxInput));
         Plane spread = spread_exposure(m, layer, h, out, frame_, threads, times);
         const float normalise = float(1.0 / (1.0 + (m.halation[layer] ? m.halation[layer]->strength : 0.0)));
         const auto& grain = m.grain[layer];

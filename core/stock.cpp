@@ -27,7 +27,11 @@ double speed_point_log_h(const Stock& stock) {
 
 namespace {
 
-constexpr double kHuge = 1e30;
+using stock_json::kHuge;
+using stock_json::kMaxDensity;
+// A density curve may not fall by more than this between samples (rounding in a sampled
+// analytic curve, e.g. a written parametric one, stays far below it).
+constexpr double kFallTolerance = 1e-9;
 
 Curve read_curve(const FieldReader& r, const json& obj, const char* x_key, const char* y_key, double y_min,
                  double y_max) {
@@ -95,7 +99,8 @@ Spectrum read_spectrum(const FieldReader& r, const json& v, bool allow_emulsion)
     auto nm = r.at("nm").numbers(r.field(v, "nm"), 100.0, 1500.0);
     const char* key = v.contains("log10_sensitivity") ? "log10_sensitivity" : v.contains("relative") ? "relative" : "values";
     bool is_log = std::string(key) == "log10_sensitivity";
-    auto values = r.at(key).numbers(r.field(v, key), is_log ? -30.0 : -kHuge, is_log ? 30.0 : kHuge);
+    auto values = r.at(key).numbers(r.field(v, key), is_log ? -stock_json::kMaxLog10Sensitivity : -kHuge,
+                                    is_log ? stock_json::kMaxLog10Sensitivity : kHuge);
     if (nm.size() != values.size())
         r.fail("'nm' has " + std::to_string(nm.size()) + " values but '" + key + "' has " +
                std::to_string(values.size()));
@@ -124,12 +129,28 @@ Spectrum peak_normalised(const FieldReader& r, Spectrum s) {
     return s;
 }
 
+// A curve sampled from a formula, checked like a table: its densities must lie within
+// [0, kMaxDensity] (rounding errors of up to 1e-9 are clamped), so that stock_to_json
+// writes what reads back.
+Curve within_density_range(const FieldReader& r, Curve c) {
+    for (size_t i = 0; i < c.y.size(); ++i) {
+        if (c.y[i] < -1e-9 || c.y[i] > kMaxDensity + 1e-9) {
+            std::ostringstream problem;
+            problem << "the curve reaches density " << c.y[i] << " at log H " << c.x[i] << ", outside [0, "
+                    << kMaxDensity << "]";
+            r.fail(problem.str());
+        }
+        c.y[i] = std::clamp(c.y[i], 0.0, kMaxDensity);
+    }
+    return c;
+}
+
 // D(x) = d_min + sum_k slope_k width_k ln(1 + exp((x - log_h_k) / width_k)), sampled every
 // 0.01 log H from 12 widths before the first knot (where the softplus is within 6e-6 of its
 // asymptote) to 12 widths, and at least 3 log H (10 stops), past the last: a curve that
 // still rises at the end of its data keeps its final slope that far, then is held.
 Curve read_softplus_curve(const FieldReader& r, const json& v) {
-    double d_min = r.at("d_min").number(r.field(v, "d_min"), 0.0, 10.0);
+    double d_min = r.at("d_min").number(r.field(v, "d_min"), 0.0, kMaxDensity);
     FieldReader rk = r.at("knots");
     const json& list = r.field(v, "knots");
     if (!list.is_array() || list.empty()) rk.fail("expected a non-empty array of {log_h, slope, width}");
@@ -152,30 +173,38 @@ Curve read_softplus_curve(const FieldReader& r, const json& v) {
             double u = (x - at) / width;
             d += slope * width * (u > 30 ? u : std::log1p(std::exp(u)));
         }
-        if (!ys.empty() && d < ys.back() - 1e-9)
+        if (!ys.empty() && d < ys.back() - kFallTolerance)
             r.fail("the curve falls at log H " + std::to_string(x) + ": density must not decrease with exposure");
         xs.push_back(x);
         ys.push_back(d);
     }
-    return make_curve(xs, ys, r.path());
+    return within_density_range(r, make_curve(xs, ys, r.path()));
 }
 
 Curve read_density_curve(const FieldReader& rc, const json& dc, const Stock& stock) {
     if (dc.contains("softplus")) return read_softplus_curve(rc.at("softplus"), dc["softplus"]);
-    if (!dc.contains("parametric")) return read_curve(rc, dc, "log_h", "density", 0.0, 10.0);
+    if (!dc.contains("parametric")) {
+        Curve c = read_curve(rc, dc, "log_h", "density", 0.0, kMaxDensity);
+        // As for the softplus form: development never removes density as exposure grows.
+        for (size_t i = 1; i < c.x.size(); ++i)
+            if (c.y[i] < c.y[i - 1] - kFallTolerance)
+                rc.fail("the curve falls at log H " + std::to_string(c.x[i]) + ": density must not decrease with exposure");
+        return c;
+    }
     FieldReader rp = rc.at("parametric");
     const json& p = dc["parametric"];
     ParametricCurve pc;
     pc.gamma = rp.at("gamma").number(rp.field(p, "gamma"), 0.01, 20.0);
-    pc.d_min = rp.at("d_min").number(rp.field(p, "d_min"), 0.0, 10.0);
-    pc.d_max = rp.at("d_max").number(rp.field(p, "d_max"), 0.0, 10.0);
+    pc.d_min = rp.at("d_min").number(rp.field(p, "d_min"), 0.0, kMaxDensity);
+    pc.d_max = rp.at("d_max").number(rp.field(p, "d_max"), 0.0, kMaxDensity);
     pc.toe = rp.at("toe").number(rp.field(p, "toe"), 0.001, 10.0);
     pc.shoulder = rp.at("shoulder").number(rp.field(p, "shoulder"), 0.001, 10.0);
     SpeedDefinition sd = speed_definition(stock.kind);
     if (pc.d_max <= pc.d_min + sd.density_over_fog)
         rp.at("d_max").fail("must exceed d_min + " + std::to_string(sd.density_over_fog));
     double hm = speed_point_log_h(stock);
-    return sample_parametric_curve(pc, hm, sd.density_over_fog, hm - 4.0, hm + (pc.d_max - pc.d_min) / pc.gamma + 4.0);
+    return within_density_range(
+        rp, sample_parametric_curve(pc, hm, sd.density_over_fog, hm - 4.0, hm + (pc.d_max - pc.d_min) / pc.gamma + 4.0));
 }
 
 Layer read_layer(const FieldReader& r, const json& v, const Stock& stock) {
@@ -192,6 +221,9 @@ Layer read_layer(const FieldReader& r, const json& v, const Stock& stock) {
     FieldReader rm = r.at("mtf");
     layer.mtf = read_curve(rm, r.field(v, "mtf"), "cycles_per_mm", "response", 0.0, 10.0);
     if (layer.mtf.x_min() < 0) rm.at("cycles_per_mm").fail("frequencies must be >= 0");
+    // Scattering is normalised to MTF(0) = 1 (it moves light, it does not absorb it): a
+    // response of 0 there leaves nothing to normalise (the kernel would be 0/0).
+    if (!(layer.mtf(0.0) > 0)) rm.at("response").fail("the response at 0 cycles/mm must be above 0");
 
     FieldReader rg = r.at("grain");
     const json& g = r.field(v, "grain");
@@ -292,6 +324,11 @@ Stock parse_stock_json(const std::string& text, const std::string& origin) {
     if (doc.contains("base_density")) {
         if (!s.is_colour()) r.at("base_density").fail("only colour stocks have a spectral base density");
         s.base_density = read_spectrum(r.at("base_density"), doc["base_density"], false);
+        // A negative density would transmit (or reflect) more light than falls on it.
+        for (int i = 0; i < kSpectralSamples; ++i)
+            if (s.base_density[i] < 0)
+                r.at("base_density").fail("negative at " + std::to_string(int(wavelength_nm(i))) +
+                                          " nm: a density cannot be below 0");
     } else {
         double d_min[3];
         for (size_t l = 0; l < s.layers.size(); ++l) d_min[l] = s.layers[l].density_curve.y_min();

@@ -27,10 +27,15 @@ std::pair<std::string, Spectrum> reference_illuminant(const std::string& name) {
     return {"3200K", blackbody(3200.0)};
 }
 
-double number_or_nan(const json& v) { return v.is_number() ? v.get<double>() : NAN; }
+// A sample: a number within [min, max], or NaN where the profile has none (null).
+double sample_or_nan(const FieldReader& r, const json& v, double min, double max) {
+    return v.is_number() ? r.number(v, min, max) : NAN;
+}
 
-// One column of an 81 x 3 table, or the whole of an 81 table (column < 0), on our grid.
-Spectrum spectral_column(const FieldReader& r, const json& data, const std::string& key, int column) {
+// One column of an 81 x 3 table, or the whole of an 81 table (column < 0), on our grid,
+// each value within [min, max].
+Spectrum spectral_column(const FieldReader& r, const json& data, const std::string& key, int column, double min,
+                         double max) {
     const json& table = r.field(data, key);
     if (!table.is_array() || table.size() != size_t(kSpectralSamples))
         r.at(key).fail("expected " + std::to_string(kSpectralSamples) + " rows (380-780 nm in 5 nm steps)");
@@ -38,7 +43,8 @@ Spectrum spectral_column(const FieldReader& r, const json& data, const std::stri
     for (int i = 0; i < kSpectralSamples; ++i) {
         const json& row = table[i];
         if (column >= 0 && (!row.is_array() || row.size() != 3)) r.at(key).at(i).fail("expected 3 columns (r, g, b)");
-        s[i] = number_or_nan(column >= 0 ? row[column] : row);
+        FieldReader ri = column >= 0 ? r.at(key).at(i).at(column) : r.at(key).at(i);
+        s[i] = sample_or_nan(ri, column >= 0 ? row[column] : row, min, max);
     }
     int first = 0, last = kSpectralSamples - 1;
     while (first < kSpectralSamples && !std::isfinite(s[first])) ++first;
@@ -90,9 +96,10 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
     for (int c = 0; c < 3; ++c) {
         Layer layer;
         layer.name = names[c];
-        Spectrum log_s = spectral_column(rd, data, "log_sensitivity", c);
+        Spectrum log_s = spectral_column(rd, data, "log_sensitivity", c, -stock_json::kMaxLog10Sensitivity,
+                                         stock_json::kMaxLog10Sensitivity);
         for (int i = 0; i < kSpectralSamples; ++i) layer.sensitivity[i] = std::pow(10.0, log_s[i]);
-        Spectrum dye = spectral_column(rd, data, "channel_density", c);
+        Spectrum dye = spectral_column(rd, data, "channel_density", c, -stock_json::kHuge, stock_json::kHuge);
         double peak_s = *std::max_element(layer.sensitivity.begin(), layer.sensitivity.end());
         double peak_d = *std::max_element(dye.begin(), dye.end());
         if (!(peak_s > 0) || !(peak_d > 0)) rd.fail(std::string("the ") + names[c] + " layer has no sensitivity or dye");
@@ -103,7 +110,11 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
         std::vector<double> xs, ys;
         for (size_t i = 0; i < log_h.size(); ++i) {
             const json& row = curves[i];
-            double d = row.is_array() && row.size() == 3 ? number_or_nan(row[c]) : NAN;
+            // Densities net of base, within [0, kMaxDensity]: negative ones are held at 0.
+            double d = row.is_array() && row.size() == 3
+                           ? sample_or_nan(rd.at("density_curves").at(i).at(c), row[c], -stock_json::kHuge,
+                                           stock_json::kMaxDensity)
+                           : NAN;
             if (std::isfinite(d)) xs.push_back(log_h[i]), ys.push_back(std::max(0.0, d));
         }
         try {
@@ -114,7 +125,7 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
         layer.mtf = make_curve({0.0, 1000.0}, {1.0, 1.0}, "flat MTF");
         s.layers.push_back(layer);
     }
-    s.base_density = spectral_column(rd, data, "base_density", -1);
+    s.base_density = spectral_column(rd, data, "base_density", -1, -stock_json::kHuge, stock_json::kHuge);
 
     SpeedDefinition sd = speed_definition(s.kind);
     const Curve& green = s.layers[1].density_curve;

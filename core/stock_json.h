@@ -8,11 +8,20 @@
 #include <string>
 #include <vector>
 
+#include "core/json_message.h"
 #include "core/stock.h"
 
 namespace darkroom::stock_json {
 
 using nlohmann::json;
+
+// The largest magnitude of a plain number in a stock file (table values, log H).
+inline constexpr double kHuge = 1e30;
+// Every density a stock's curves may reach, however they are given (tables, softplus knots,
+// the parametric form, an imported profile), so that a stock written by stock_to_json reads back.
+inline constexpr double kMaxDensity = 10.0;
+// log10 sensitivities are read within +-30, so that 10^x is a finite, non-zero double.
+inline constexpr double kMaxLog10Sensitivity = 30.0;
 
 // Reads fields of a JSON document, naming the file and the field path in every error.
 class FieldReader {
@@ -32,7 +41,7 @@ public:
         return *it;
     }
     double number(const json& v, double min, double max) const {
-        if (!v.is_number()) fail("expected a number, got " + v.dump());
+        if (!v.is_number()) fail("expected a number, got " + json_for_message(v));
         double d = v.get<double>();
         if (!std::isfinite(d) || d < min || d > max) {
             std::ostringstream s;
@@ -42,7 +51,7 @@ public:
         return d;
     }
     std::string text(const json& v) const {
-        if (!v.is_string()) fail("expected a string, got " + v.dump());
+        if (!v.is_string()) fail("expected a string, got " + json_for_message(v));
         return v.get<std::string>();
     }
     std::vector<double> numbers(const json& v, double min, double max) const {
@@ -57,11 +66,12 @@ private:
     std::string origin_, path_;
 };
 
-// The document in `text`; throws StockError naming `origin` if it is not valid JSON.
+// The document in `text`; throws StockError naming `origin` if it is not valid JSON (a
+// syntax error, or a number too large for a double: nlohmann-json's out_of_range).
 inline json parse_document(const std::string& text, const std::string& origin) {
     try {
         return json::parse(text);
-    } catch (const json::parse_error& e) {
+    } catch (const json::exception& e) {
         throw StockError(origin + ": not valid JSON: " + e.what());
     }
 }

@@ -1,12 +1,14 @@
 #include "core/plate/grain_profile.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <sstream>
 
+#include "core/json_message.h"
 #include "core/plate/noise_spectrum.h"
 
 namespace darkroom {
@@ -50,20 +52,43 @@ const json& member(const json& obj, const std::string& key, const std::string& o
     return *it;
 }
 
+// An integer in [min, max]. JSON integers can be larger than the C++ type, so the range is
+// checked before converting (a wrapped 2^32 + 1 must not read as 1).
+long long integer_value(const json& v, long long min, long long max, const std::string& origin,
+                        const std::string& field) {
+    bool in_range = false;
+    if (v.is_number_unsigned()) {
+        const unsigned long long u = v.get<unsigned long long>();
+        in_range = max >= 0 && u <= (unsigned long long)max && (min <= 0 || u >= (unsigned long long)min);
+    } else if (v.is_number_integer()) {
+        const long long i = v.get<long long>();
+        in_range = i >= min && i <= max;
+    }
+    if (!in_range)
+        fail(origin, field,
+             "expected an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "], got " +
+                 json_for_message(v));
+    return v.get<long long>();
+}
+
+double finite_number(const json& v, const std::string& origin, const std::string& field) {
+    if (!v.is_number() || !std::isfinite(v.get<double>()))
+        fail(origin, field, "expected a finite number, got " + json_for_message(v));
+    return v.get<double>();
+}
+
 std::vector<double> number_array(const json& v, const std::string& origin, const std::string& field) {
     if (!v.is_array() || v.empty()) fail(origin, field, "expected a non-empty array of numbers");
     std::vector<double> out;
-    for (size_t i = 0; i < v.size(); ++i) {
-        if (!v[i].is_number() || !std::isfinite(v[i].get<double>()))
-            fail(origin, field + "[" + std::to_string(i) + "]", "expected a finite number, got " + v[i].dump());
-        out.push_back(v[i].get<double>());
-    }
+    for (size_t i = 0; i < v.size(); ++i)
+        out.push_back(finite_number(v[i], origin, field + "[" + std::to_string(i) + "]"));
     return out;
 }
 
 std::string text_field(const json& obj, const std::string& key, const std::string& origin, const std::string& path) {
     const json& v = member(obj, key, origin, path);
-    if (!v.is_string()) fail(origin, path.empty() ? key : path + "." + key, "expected a string, got " + v.dump());
+    if (!v.is_string())
+        fail(origin, path.empty() ? key : path + "." + key, "expected a string, got " + json_for_message(v));
     return v.get<std::string>();
 }
 
@@ -118,9 +143,8 @@ GrainProfile parse_grain_profile_json(const std::string& text, const std::string
     }
     if (text_field(doc, "format", origin, "") != "darkroom-grain-profile")
         fail(origin, "format", "expected \"darkroom-grain-profile\"");
-    const json& version = member(doc, "version", origin, "");
-    if (!version.is_number_integer() || version.get<int>() != GrainProfile::kFormatVersion)
-        fail(origin, "version", "expected " + std::to_string(GrainProfile::kFormatVersion) + ", got " + version.dump());
+    integer_value(member(doc, "version", origin, ""), GrainProfile::kFormatVersion, GrainProfile::kFormatVersion, origin,
+                  "version");
 
     GrainProfile p;
     if (doc.contains("colorspace")) p.colorspace = text_field(doc, "colorspace", origin, "");
@@ -143,14 +167,17 @@ GrainProfile parse_grain_profile_json(const std::string& text, const std::string
         const json& response = member(cj, "response", origin, at);
         ch.level = number_array(member(response, "level", origin, at + ".response"), origin, at + ".response.level");
         ch.sigma = number_array(member(response, "sigma", origin, at + ".response"), origin, at + ".response.sigma");
-        if (response.contains("samples"))
-            for (double s : number_array(response["samples"], origin, at + ".response.samples"))
-                ch.samples.push_back((long long)s);
+        if (response.contains("samples")) {
+            const std::string field = at + ".response.samples";
+            const json& samples = response["samples"];
+            if (!samples.is_array()) fail(origin, field, "expected an array of pixel counts");
+            for (size_t i = 0; i < samples.size(); ++i)
+                ch.samples.push_back(
+                    integer_value(samples[i], 0, LLONG_MAX, origin, field + "[" + std::to_string(i) + "]"));
+        }
         const json& acf = member(cj, "autocorrelation", origin, at);
-        const json& radius = member(acf, "radius", origin, at + ".autocorrelation");
-        if (!radius.is_number_integer() || radius.get<int>() < 0 || radius.get<int>() > 64)
-            fail(origin, at + ".autocorrelation.radius", "expected an integer in [0, 64], got " + radius.dump());
-        ch.acf_radius = radius.get<int>();
+        ch.acf_radius = (int)integer_value(member(acf, "radius", origin, at + ".autocorrelation"), 0, 64, origin,
+                                           at + ".autocorrelation.radius");
         ch.autocorrelation =
             number_array(member(acf, "values", origin, at + ".autocorrelation"), origin, at + ".autocorrelation.values");
         p.channels.push_back(std::move(ch));
@@ -167,10 +194,24 @@ GrainProfile parse_grain_profile_json(const std::string& text, const std::string
     }
     if (doc.contains("analysis")) {
         const json& a = doc["analysis"];
-        p.block_size_px = a.value("block_size_px", 0);
-        p.blocks_used = a.value("blocks_used", 0LL);
-        for (const json& s : a.value("sparse_levels", json::array()))
-            p.sparse_levels.push_back({s.value("channel", ""), s.value("level", 0.0), s.value("samples", 0LL)});
+        if (!a.is_object()) fail(origin, "analysis", "expected an object");
+        if (a.contains("block_size_px"))
+            p.block_size_px = (int)integer_value(a["block_size_px"], 0, INT_MAX, origin, "analysis.block_size_px");
+        if (a.contains("blocks_used"))
+            p.blocks_used = integer_value(a["blocks_used"], 0, LLONG_MAX, origin, "analysis.blocks_used");
+        if (a.contains("sparse_levels")) {
+            const json& sparse = a["sparse_levels"];
+            if (!sparse.is_array()) fail(origin, "analysis.sparse_levels", "expected an array");
+            for (size_t i = 0; i < sparse.size(); ++i) {
+                const std::string at = "analysis.sparse_levels[" + std::to_string(i) + "]";
+                SparseLevel level;
+                level.channel = text_field(sparse[i], "channel", origin, at);
+                level.level = finite_number(member(sparse[i], "level", origin, at), origin, at + ".level");
+                level.samples =
+                    integer_value(member(sparse[i], "samples", origin, at), 0, LLONG_MAX, origin, at + ".samples");
+                p.sparse_levels.push_back(level);
+            }
+        }
     }
     validate_grain_profile(p, origin);
     return p;

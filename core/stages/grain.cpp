@@ -161,13 +161,17 @@ void apply_grain(Plane& density, const GrainModel& g, int threads) {
         for (int y = y_begin; y < y_end; ++y) {
             float* d = density.row(y);
             const float* n = field.row(y);
+            // Held at d_min: a Gaussian fluctuation wider than the net density would
+            // otherwise take away more silver (or dye) than developed, giving densities
+            // below base+fog or below 0 (transmitting or reflecting more than falls on it).
             if (g.fast) {
-                for (int x = 0; x < density.window.width(); ++x) d[x] += g.amplitude(std::max(0.0f, d[x] - g.d_min)) * n[x];
+                for (int x = 0; x < density.window.width(); ++x)
+                    d[x] = std::max(g.d_min, d[x] + g.amplitude(std::max(0.0f, d[x] - g.d_min)) * n[x]);
                 continue;
             }
             for (int x = 0; x < density.window.width(); ++x) {
                 double net = std::max(0.0, double(d[x]) - g.d_min);
-                d[x] = float(d[x] + g.sigma_per_pixel * std::pow(net, g.density_exponent) * n[x]);
+                d[x] = float(std::max(double(g.d_min), d[x] + g.sigma_per_pixel * std::pow(net, g.density_exponent) * n[x]));
             }
         }
     });

@@ -59,7 +59,7 @@ Plane grain_field(const GrainModel& grain, const Window& window, int threads);
 double grain_sigma_at(const GrainModel& grain, double density);
 
 // Adds grain to a density plane (its whole window):
-// D += sigma_per_pixel * (D - d_min)^density_exponent * field.
+// D += sigma_per_pixel * (D - d_min)^density_exponent * field, never below d_min.
 void apply_grain(Plane& density, const GrainModel& grain, int threads);
 
 }  // namespace darkroom

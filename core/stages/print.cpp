@@ -31,9 +31,10 @@ std::array<double, 3> neutral_print_densities(const Stock& paper, double aim) {
         d[0] = aim;  // a neutral silver print: its visual density is its density
         return d;
     }
+    const PrintView view(paper);
     auto residual = [&](const std::array<double, 3>& at) {
         double rgb[3];
-        view_print(paper, at.data(), rgb);
+        view.rgb(at.data(), rgb);
         std::array<double, 3> f;
         for (int k = 0; k < 3; ++k) f[k] = -std::log10(std::max(rgb[k], 1e-300)) - aim;
         return f;
@@ -148,22 +149,34 @@ void PrintExposure::expose(const double* negative_density, double* paper_exposur
     for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = sum[j];
 }
 
-void view_print(const Stock& paper, const double* paper_density, double* rgb) {
-    if (!paper.is_colour()) {
+PrintView::PrintView(const Stock& paper) : paper_(&paper) {
+    for (size_t l = 0; l < paper.layers.size() && l < 3; ++l) d_min_[l] = paper.layers[l].density_curve.y_min();
+}
+
+Spectrum PrintView::reflectance(const double* paper_density) const {
+    Spectrum d = paper_->base_density;
+    for (size_t l = 0; l < paper_->layers.size(); ++l) {
+        const double net = paper_density[l] - d_min_[l];
+        const Spectrum& dye = paper_->layers[l].dye_density;
+        for (int i = 0; i < kSpectralSamples; ++i) d[i] += net * dye[i];
+    }
+    for (double& v : d) v = std::exp(-kLn10 * v);
+    return d;
+}
+
+void PrintView::rgb(const double* paper_density, double* rgb) const {
+    if (!paper_->is_colour()) {
         double r = std::pow(10.0, -paper_density[0]);
         rgb[0] = rgb[1] = rgb[2] = r;
         return;
     }
-    Spectrum reflectance = spectral_density(paper, paper_density);
-    for (double& v : reflectance) v = std::exp(-kLn10 * v);
-    Rgb out = reflectance_to_linear_srgb(reflectance);
+    Rgb out = reflectance_to_linear_srgb(reflectance(paper_density));
     for (int k = 0; k < 3; ++k) rgb[k] = out[k];
 }
 
-Xyz view_print_xyz(const Stock& paper, const double* paper_density) {
-    Spectrum reflectance = spectral_density(paper, paper_density);
-    for (double& v : reflectance) v = std::exp(-kLn10 * v);
-    return reflectance_to_xyz(reflectance, illuminant_d65());
+Xyz PrintView::xyz(const double* paper_density) const {
+    static const Spectrum d65 = illuminant_d65();
+    return reflectance_to_xyz(reflectance(paper_density), d65);
 }
 
 namespace {

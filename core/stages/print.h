@@ -66,11 +66,22 @@ private:
     std::array<double, 3> aim_density_{}, light_lux_s_{};
 };
 
-// Linear Rec.709 of a developed print from its layer densities. Per pixel.
-void view_print(const Stock& paper, const double* paper_density, double* rgb);
-// The same print's CIE XYZ under D65 (always positive where it reflects any light), and
-// the matrix that takes it to view_print's Rec.709: the fast tiers tabulate log XYZ.
-Xyz view_print_xyz(const Stock& paper, const double* paper_density);
+// Viewing a developed print: its layer densities -> spectral reflectance (or a print
+// film's transmittance) 10^-Dp(l) -> colour under D65.
+class PrintView {
+public:
+    explicit PrintView(const Stock& paper);
+    // Linear Rec.709 (a perfect white is (1, 1, 1)). Per pixel.
+    void rgb(const double* paper_density, double* rgb) const;
+    // CIE XYZ (always positive where the print reflects any light); print_xyz_to_rgb()
+    // takes it to rgb(): the fast tiers tabulate log XYZ.
+    Xyz xyz(const double* paper_density) const;
+
+private:
+    Spectrum reflectance(const double* paper_density) const;
+    const Stock* paper_;
+    std::array<double, 3> d_min_{};
+};
 const Matrix3& print_xyz_to_rgb();
 
 }  // namespace darkroom

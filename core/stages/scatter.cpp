@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
+#include <tuple>
 
 #include "core/parallel.h"
 #include "core/stages/filters.h"
@@ -146,7 +149,9 @@ void taper(ScatterKernel& kernel, int max_radius) {
 
 }  // namespace
 
-ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design) {
+namespace {
+
+ScatterKernel design_uncached(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design) {
     ScatterKernel kernel;
     if (mtf_deviation_to_nyquist(mtf, pixel_pitch_um) < kMtfNoOpTolerance) {
         kernel.taps = {1.0f};
@@ -178,6 +183,25 @@ ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, con
         if (design.separable_tolerance > 0) make_separable(kernel, design.separable_tolerance);
         return kernel;
     }
+}
+
+}  // namespace
+
+// A design takes up to seconds (the DFT grid and the eigen-terms) and every frame of a
+// sequence asks for the same few: each is computed once per process.
+ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design) {
+    using Key = std::tuple<std::vector<double>, std::vector<double>, double, int, double>;
+    static std::mutex mutex;
+    static std::map<Key, ScatterKernel> cache;
+    Key key{mtf.x, mtf.y, pixel_pitch_um, design.max_radius_px, design.separable_tolerance};
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        auto it = cache.find(key);
+        if (it != cache.end()) return it->second;
+    }
+    ScatterKernel kernel = design_uncached(mtf, pixel_pitch_um, design);
+    std::lock_guard<std::mutex> lock(mutex);
+    return cache.emplace(key, std::move(kernel)).first->second;
 }
 
 void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads) {

@@ -94,4 +94,21 @@ TEST_CASE("a look file with an unknown key or version is refused with the key na
     look = look_json(command.app);
     look["version"] = 99;
     CHECK_THROWS_AS(apply_look(command.app, look, "shot.json"), UserError);
+    // Found by fuzzing: each of these escaped as another exception type, read out of bounds,
+    // or (the version 2^32 + 1) was read as version 1.
+    look["version"] = 4294967297;
+    CHECK_THROWS_AS(apply_look(command.app, look, "shot.json"), UserError);
+    look = look_json(command.app);
+    look["format"] = {{"darkroom-look", 1}};
+    CHECK_THROWS_AS(apply_look(command.app, look, "shot.json"), UserError);
+    look = look_json(command.app);
+    look["settings"]["grain"] = nlohmann::json::array();
+    CHECK_THROWS_WITH(apply_look(command.app, look, "shot.json"), Catch::Contains("'grain': an empty array"));
+    CHECK_THROWS_WITH(apply_look_text(command.app, R"({"format": "darkroom-look", "version": 1e999})", "shot.json"),
+                      Catch::Contains("shot.json") && Catch::Contains("not valid JSON"));
+    const std::string deep = std::string(200000, '[') + std::string(200000, ']');  // dump() would overflow the stack
+    CHECK_THROWS_WITH(
+        apply_look_text(command.app, R"({"format": "darkroom-look", "version": 1, "settings": {"film": [)" + deep + "]}}",
+                        "shot.json"),
+        Catch::Contains("'film': expected a string, number or true/false, got an array of size 1"));
 }

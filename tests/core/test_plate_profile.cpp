@@ -109,5 +109,17 @@ TEST_CASE("a corrupt or inconsistent profile gets an error naming the field", "[
     CHECK_THAT(with("\"channel_correlation\": [", "\"channel_correlation\": [[1, 0.4], "),
                Catch::Contains("channel_correlation"));
     CHECK_THAT(with("\"name\": \"R\"", "\"nom\": \"R\""), Catch::Contains("channels[0].name': missing"));
+    // Found by fuzzing: integers are range-checked before conversion (2^32 + 6 must not wrap
+    // to 6), the analysis section is checked like the rest, numbers beyond a double are errors.
+    CHECK_THAT(with("\"radius\": 6", "\"radius\": 4294967302"), Catch::Contains("channels[0].autocorrelation.radius"));
+    CHECK_THAT(with("\"version\": 1", "\"version\": 4294967297"), Catch::Contains("field 'version'"));
+    CHECK_THAT(with("\"samples\": [", "\"samples\": [1e300, "), Catch::Contains("channels[0].response.samples[0]"));
+    CHECK_THAT(with("\"block_size_px\": 64", "\"block_size_px\": 1e300"), Catch::Contains("analysis.block_size_px"));
+    CHECK_THAT(with("\"block_size_px\": 64", "\"block_size_px\": \"64\""), Catch::Contains("analysis.block_size_px"));
+    CHECK_THAT(with("\"analysis\": {", "\"analysis\": 5, \"unused\": {"), Catch::Contains("field 'analysis'"));
+    CHECK_THAT(with("\"level\": 0.95", "\"level\": \"high\""), Catch::Contains("analysis.sparse_levels[0].level"));
+    CHECK_THAT(error_of(R"({"format": "darkroom-grain-profile", "version": 1e999})"), Catch::Contains("not valid JSON"));
+    const std::string deep = std::string(200000, '[') + std::string(200000, ']');  // dump() would overflow the stack
+    CHECK_THAT(error_of("{\"format\": " + deep + "}"), Catch::Contains("field 'format': expected a string, got an array"));
     CHECK_THROWS_AS(load_grain_profile_file("/nonexistent/profile.json"), GrainProfileError);
 }

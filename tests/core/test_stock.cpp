@@ -20,6 +20,14 @@ TEST_CASE("bad stock files name the file, the field and the problem", "[stock]")
     const std::string good = test::test_film_json();
     auto replace = [&](const std::string& from, const std::string& to) { return test::replaced(good, from, to); };
     CHECK_THAT(error_of("{not json"), Catch::Contains("my.json") && Catch::Contains("not valid JSON"));
+    // A number too large for a double is nlohmann-json's out_of_range, not a parse_error (found by fuzzing).
+    CHECK_THAT(error_of(replace("\"iso_speed\": 200", "\"iso_speed\": 1e999")),
+               Catch::Contains("my.json") && Catch::Contains("not valid JSON"));
+    // A value nested 200000 deep where a string belongs: named by its kind, not dumped (dumping
+    // recursed once per level and overflowed the stack; found by fuzzing).
+    const std::string deep = std::string(200000, '[') + std::string(200000, ']');
+    CHECK_THAT(error_of(replace("\"kind\": \"negative\"", "\"kind\": " + deep)),
+               Catch::Contains("field 'kind': expected a string, got an array of size 1"));
     CHECK_THAT(error_of(replace("\"iso_speed\": 200", "\"iso_speed\": \"fast\"")),
                Catch::Contains("my.json: field 'iso_speed': expected a number"));
     CHECK_THAT(error_of(replace("\"iso_speed\": 200", "\"iso_speed\": -5")),

@@ -1,0 +1,67 @@
+// Stock files (core/stock.h): darkroom-stock versions 1 and 2 and spektrafilm profiles, all
+// through parse_stock_json. Rejection is a StockError; an accepted stock must be usable by
+// the model: one or three layers, curves that are functions, finite spectra with
+// sensitivities and dyes of peak 1, a positive speed; and stock_to_json must write it so
+// that it reads back.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "core/stock.h"
+#include "tests/fuzz/fuzz_check.h"
+
+namespace {
+
+using namespace darkroom;
+
+bool is_function(const Curve& c) {
+    if (c.x.size() < 2 || c.x.size() != c.y.size()) return false;
+    for (size_t i = 0; i < c.x.size(); ++i) {
+        if (!std::isfinite(c.x[i]) || !std::isfinite(c.y[i])) return false;
+        if (i > 0 && !(c.x[i] > c.x[i - 1])) return false;
+    }
+    return true;
+}
+
+bool is_finite(const Spectrum& s) {
+    return std::all_of(s.begin(), s.end(), [](double v) { return std::isfinite(v); });
+}
+
+bool has_peak_one(const Spectrum& s) {
+    return is_finite(s) && *std::max_element(s.begin(), s.end()) == 1.0 &&
+           *std::min_element(s.begin(), s.end()) >= 0.0;
+}
+
+void check_usable(const Stock& stock) {
+    fuzz_require(stock.layers.size() == 1 || stock.layers.size() == 3);
+    fuzz_require(std::isfinite(stock.iso_speed) && stock.iso_speed > 0);
+    fuzz_require(std::isfinite(speed_point_log_h(stock)));
+    fuzz_require(is_finite(stock.base_density) && is_finite(stock.exposure_illuminant));
+    for (const Layer& layer : stock.layers) {
+        fuzz_require(is_function(layer.density_curve));
+        fuzz_require(is_function(layer.mtf));
+        fuzz_require(has_peak_one(layer.sensitivity));
+        fuzz_require(has_peak_one(layer.dye_density));
+        fuzz_require(std::isfinite(layer.grain.rms_granularity) && std::isfinite(layer.grain.grain_size_um) &&
+                     std::isfinite(layer.grain.density_exponent));
+        fuzz_require(std::isfinite(layer.halation.strength) && std::isfinite(layer.halation.radius_um));
+    }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    const std::string text(reinterpret_cast<const char*>(data), size);
+    Stock stock;
+    try {
+        stock = parse_stock_json(text, "fuzz input");
+    } catch (const StockError&) {
+        return 0;
+    }
+    check_usable(stock);
+    const Stock written = parse_stock_json(stock_to_json(stock), "the fuzz input's stock, written");
+    fuzz_require(written.layers.size() == stock.layers.size());
+    return 0;
+}
