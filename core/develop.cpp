@@ -123,35 +123,35 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
 }
 
 // Halation then scatter of one layer's exposure (on its window) into `out`.
-Plane spread_exposure(const MaterialStages& m, size_t layer, const Plane& exposure, const Window& out,
-                      const Window& frame, int threads, StageTimes* times) {
-    const Plane* source = &exposure;
-    Plane halated;
+Plane spread_exposure(const MaterialStages& m, size_t layer, Plane exposure, const Window& out, const Window& frame,
+                      int threads, StageTimes* times) {
     if (m.halation[layer]) {
         StageTimer timer(times, "halation");
-        halated = Plane(out.grown(m.scatter[layer].radius).intersected(frame));
+        Plane halated(out.grown(m.scatter[layer].radius).intersected(frame));
         apply_halation(exposure, halated, *m.halation[layer], frame, threads);
-        source = &halated;
+        exposure = std::move(halated);
     }
-    StageTimer timer(times, "scatter");
-    Plane spread(out);
     if (!m.scatter[layer].is_identity()) {
-        scatter(*source, spread, m.scatter[layer], frame, threads);
-    } else {
-        for (int y = out.y0; y < out.y1; ++y)
-            std::copy_n(source->row(y) + (out.x0 - source->window.x0), out.width(), spread.row(y));
+        StageTimer timer(times, "scatter");
+        Plane spread(out);
+        scatter(exposure, spread, m.scatter[layer], frame, threads);
+        return spread;
     }
-    return spread;
+    if (exposure.window == out) return exposure;
+    Plane cropped(out);  // another layer's halo made the exposure larger than this one needs
+    for (int y = out.y0; y < out.y1; ++y)
+        std::copy_n(exposure.row(y) + (out.x0 - exposure.window.x0), out.width(), cropped.row(y));
+    return cropped;
 }
 
 // One material: exposure planes (one per layer) on their window -> density planes on `out`.
-std::vector<Plane> develop_material(const MaterialStages& m, const std::vector<Plane>& exposure, const Window& out,
+std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> exposure, const Window& out,
                                     const Window& frame, int threads, StageTimes* times) {
     std::vector<Plane> density;
     for (size_t i = 0; i < exposure.size(); ++i) {
         // The Boolean grain of a pixel depends on the densities around it: develop those too.
         const Window developed = m.boolean_grain[i] ? out.grown(m.boolean_grain[i]->halo_px).intersected(frame) : out;
-        Plane d = spread_exposure(m, i, exposure[i], developed, frame, threads, times);
+        Plane d = spread_exposure(m, i, std::move(exposure[i]), developed, frame, threads, times);
         {
             StageTimer timer(times, "develop");
             // Exposure below 0 (a PSF's negative lobes) is no light.
@@ -345,7 +345,7 @@ std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& fi
         exposure.push_back(std::move(h));
     }
     expose_timer.stop();
-    return develop_material(film_stages_, exposure, film_out, frame_, threads, times);
+    return develop_material(film_stages_, std::move(exposure), film_out, frame_, threads, times);
 }
 
 std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window& out, int threads,
@@ -366,7 +366,8 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
             });
     }
     enlarger_timer.stop();
-    std::vector<Plane> paper_density = develop_material(paper_stages_, paper_exposure, out, frame_, threads, times);
+    std::vector<Plane> paper_density =
+        develop_material(paper_stages_, std::move(paper_exposure), out, frame_, threads, times);
     StageTimer view_timer(times, "view");
     if (view_table_) {
         const Matrix3& m = print_xyz_to_rgb();
@@ -403,7 +404,7 @@ std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, in
                 // Clamped as the film's exposure is: at +64 EV a 1e30 pixel would overflow a float.
                 h.at(x, y) = float(std::clamp(sanitize(in.at(x, y)[std::min(c, in.channels - 1)]) * film_exposure_scale_,
                                               -kMaxInput, kMaxInput));
-        Plane spread = spread_exposure(m, layer, h, out, frame_, threads, times);
+        Plane spread = spread_exposure(m, layer, std::move(h), out, frame_, threads, times);
         const float normalise = float(1.0 / (1.0 + (m.halation[layer] ? m.halation[layer]->strength : 0.0)));
         const auto& grain = m.grain[layer];
         if (grain && !fields[layer]) fields[layer] = grain_field(*grain, out, threads);

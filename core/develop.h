@@ -69,7 +69,7 @@ struct DevelopSettings {
     // filters in the lamp's light, on top of the printer lights.
     std::array<double, 3> filtration_ymc{0.0, 0.0, 0.0};
     // How each stage is computed (core/quality.h).
-    Quality quality = Quality::high;
+    Quality quality = kDefaultQuality;
     // Leave out the stages that cannot change the result (and say why in describe()).
     // false runs them with their neutral values, so tests and the benchmark can show that
     // leaving them out changes no pixel and saves their time.

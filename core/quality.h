@@ -45,6 +45,11 @@ struct QualityTier {
     int curve_table_bits;
 };
 
+// The default of the command line, the plugin and the Python module: the fastest tier
+// within the colour budget (mean CIEDE2000 <= 0.5 against the reference), from the
+// benchmark's Pareto table (README, "Quality tiers").
+constexpr Quality kDefaultQuality = Quality::fast;
+
 const QualityTier& quality_tier(Quality q);
 const char* quality_name(Quality q);
 std::optional<Quality> parse_quality(const std::string& name);

@@ -23,6 +23,7 @@ Stock as_measured_material(const Stock& stock, size_t layer) {
 Image develop_density(const Stock& material, const Image& exposure, double pitch_um, bool grain, bool mtf,
                       const SensitometryOptions& o) {
     DevelopSettings s;
+    s.quality = Quality::high;  // the model as defined: per-pixel curves, the PSF to 1e-6
     s.output = OutputMode::density;
     s.input_units = InputUnits::lux_seconds;
     s.grain = grain;

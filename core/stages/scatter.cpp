@@ -65,6 +65,20 @@ constexpr int kMaxGrid = 256;
 
 namespace {
 
+// Scales the separable terms so that they sum to exactly 1, as the taps do: the terms
+// left out would otherwise change the image's mean (by up to the tolerance per tap).
+void unit_gain(ScatterKernel& kernel) {
+    double gain = 0;
+    for (size_t k = 0; k < kernel.separable.size(); ++k) {
+        double sum = 0;
+        for (float v : kernel.separable[k]) sum += v;
+        gain += kernel.separable_sign[k] * sum * sum;
+    }
+    const float scale = float(1.0 / std::sqrt(gain));
+    for (auto& term : kernel.separable)
+        for (float& v : term) v *= scale;
+}
+
 // Eigen-decomposition of the symmetric kernel matrix by power iteration with deflation,
 // largest |eigenvalue| first, until the residual is within kSeparableTolerance of the
 // largest tap everywhere. Left empty when that needs so many terms that the direct sum is
@@ -78,7 +92,10 @@ void make_separable(ScatterKernel& kernel, double tolerance) {
     for (int term = 0; term < max_terms; ++term) {
         double worst = 0;
         for (double v : residual) worst = std::max(worst, std::abs(v));
-        if (worst <= tolerance * largest) return;
+        if (worst <= tolerance * largest) {
+            unit_gain(kernel);
+            return;
+        }
         // Start from the residual's strongest column; iterate e <- R e / |R e|.
         int column = 0;
         double best = -1;
