@@ -101,14 +101,17 @@ TEST_CASE("a look file with an unknown key or version is refused with the key na
     look = look_json(command.app);
     look["format"] = {{"darkroom-look", 1}};
     CHECK_THROWS_AS(apply_look(command.app, look, "shot.json"), UserError);
+    // Fresh commands: the refused looks above set the settings before their bad key, and a
+    // setting already set is not read again.
+    Command empty_array({}), overflow({}), deep_value({});
     look = look_json(command.app);
     look["settings"]["grain"] = nlohmann::json::array();
-    CHECK_THROWS_WITH(apply_look(command.app, look, "shot.json"), Catch::Contains("'grain': an empty array"));
-    CHECK_THROWS_WITH(apply_look_text(command.app, R"({"format": "darkroom-look", "version": 1e999})", "shot.json"),
+    CHECK_THROWS_WITH(apply_look(empty_array.app, look, "shot.json"), Catch::Contains("'grain': an empty array"));
+    CHECK_THROWS_WITH(apply_look_text(overflow.app, R"({"format": "darkroom-look", "version": 1e999})", "shot.json"),
                       Catch::Contains("shot.json") && Catch::Contains("not valid JSON"));
     const std::string deep = std::string(200000, '[') + std::string(200000, ']');  // dump() would overflow the stack
     CHECK_THROWS_WITH(
-        apply_look_text(command.app, R"({"format": "darkroom-look", "version": 1, "settings": {"film": [)" + deep + "]}}",
-                        "shot.json"),
+        apply_look_text(deep_value.app,
+                        R"({"format": "darkroom-look", "version": 1, "settings": {"film": [)" + deep + "]}}", "shot.json"),
         Catch::Contains("'film': expected a string, number or true/false, got an array of size 1"));
 }
