@@ -185,33 +185,18 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
     return density;
 }
 
-// Applies f(layer densities, result) to every pixel of `window`, result planes of `channels`.
-template <typename F>
+// Applies f(layer densities, result) to every pixel of `window`, result planes of
+// `channels`; in double (the spectral tiers) or float (the fast tiers' tables).
+template <typename Real, typename F>
 std::vector<Plane> per_pixel(const std::vector<Plane>& in, const Window& window, size_t channels, int threads, F f) {
     std::vector<Plane> out(channels, Plane(window));
     parallel_for(window.y0, window.y1, threads, [&](int y0, int y1) {
-        double values[3], result[3];
+        Real values[3], result[3];
         for (int y = y0; y < y1; ++y)
             for (int x = window.x0; x < window.x1; ++x) {
                 for (size_t l = 0; l < in.size(); ++l) values[l] = in[l].at(x, y);
                 f(values, result);
                 for (size_t c = 0; c < channels; ++c) out[c].at(x, y) = float(result[c]);
-            }
-    });
-    return out;
-}
-
-// per_pixel for the fast tiers' tables: three planes in, three out, in float.
-template <typename F>
-std::vector<Plane> per_pixel_table(const std::vector<Plane>& in, const Window& window, int threads, F f) {
-    std::vector<Plane> out(3, Plane(window));
-    parallel_for(window.y0, window.y1, threads, [&](int y0, int y1) {
-        float values[3], result[3];
-        for (int y = y0; y < y1; ++y)
-            for (int x = window.x0; x < window.x1; ++x) {
-                for (int l = 0; l < 3; ++l) values[l] = in[l].at(x, y);
-                f(values, result);
-                for (int c = 0; c < 3; ++c) out[c].at(x, y) = result[c];
             }
     });
     return out;
@@ -354,13 +339,13 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
     StageTimer enlarger_timer(times, "enlarger");
     std::vector<Plane> paper_exposure;
     if (enlarger_table_) {
-        paper_exposure = per_pixel_table(negative, negative[0].window, threads, [&](const float* d, float* h) {
+        paper_exposure = per_pixel<float>(negative, negative[0].window, 3, threads, [&](const float* d, float* h) {
             (*enlarger_table_)(d, h);
             for (int j = 0; j < 3; ++j) h[j] = fast_exp2(h[j]);
         });
     } else {
         paper_exposure =
-            per_pixel(negative, negative[0].window, enlarger.paper_layers(), threads, [&](const double* d, double* h) {
+            per_pixel<double>(negative, negative[0].window, enlarger.paper_layers(), threads, [&](const double* d, double* h) {
                 enlarger.expose(d, h);
                 for (int j = 0; j < enlarger.paper_layers(); ++j) h[j] = std::clamp(h[j], 0.0, kMaxInput);
             });
@@ -371,7 +356,7 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
     StageTimer view_timer(times, "view");
     if (view_table_) {
         const Matrix3& m = print_xyz_to_rgb();
-        return per_pixel_table(paper_density, out, threads, [&](const float* d, float* rgb) {
+        return per_pixel<float>(paper_density, out, 3, threads, [&](const float* d, float* rgb) {
             float log2_xyz[3];
             (*view_table_)(d, log2_xyz);
             const float xyz[3] = {fast_exp2(log2_xyz[0]), fast_exp2(log2_xyz[1]), fast_exp2(log2_xyz[2])};
@@ -380,7 +365,7 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
         });
     }
     const PrintView view(paper_stages_.stock);
-    return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view.rgb(d, rgb); });
+    return per_pixel<double>(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view.rgb(d, rgb); });
 }
 
 // Texture: each channel c is treated as the exposure of film layer c (a single-layer film
