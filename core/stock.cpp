@@ -129,11 +129,14 @@ Spectrum peak_normalised(const FieldReader& r, Spectrum s) {
     return s;
 }
 
-// A curve sampled from a formula, checked like a table: its densities must lie within
-// [0, kMaxDensity] (rounding errors of up to 1e-9 are clamped), so that stock_to_json
-// writes what reads back.
-Curve within_density_range(const FieldReader& r, Curve c) {
+// Every density curve, tabulated or sampled from a formula, is checked the same way so that
+// stock_to_json writes what reads back: its densities lie within [0, kMaxDensity] (rounding
+// errors of up to 1e-9 are clamped), and they never fall as exposure grows (development never
+// removes density; a parametric curve with a sharp toe and a broad shoulder would).
+Curve checked_density_curve(const FieldReader& r, Curve c) {
     for (size_t i = 0; i < c.y.size(); ++i) {
+        if (i > 0 && c.y[i] < c.y[i - 1] - kFallTolerance)
+            r.fail("the curve falls at log H " + std::to_string(c.x[i]) + ": density must not decrease with exposure");
         if (c.y[i] < -1e-9 || c.y[i] > kMaxDensity + 1e-9) {
             std::ostringstream problem;
             problem << "the curve reaches density " << c.y[i] << " at log H " << c.x[i] << ", outside [0, "
@@ -173,23 +176,16 @@ Curve read_softplus_curve(const FieldReader& r, const json& v) {
             double u = (x - at) / width;
             d += slope * width * (u > 30 ? u : std::log1p(std::exp(u)));
         }
-        if (!ys.empty() && d < ys.back() - kFallTolerance)
-            r.fail("the curve falls at log H " + std::to_string(x) + ": density must not decrease with exposure");
         xs.push_back(x);
         ys.push_back(d);
     }
-    return within_density_range(r, make_curve(xs, ys, r.path()));
+    return checked_density_curve(r, make_curve(xs, ys, r.path()));
 }
 
 Curve read_density_curve(const FieldReader& rc, const json& dc, const Stock& stock) {
     if (dc.contains("softplus")) return read_softplus_curve(rc.at("softplus"), dc["softplus"]);
     if (!dc.contains("parametric")) {
-        Curve c = read_curve(rc, dc, "log_h", "density", 0.0, kMaxDensity);
-        // As for the softplus form: development never removes density as exposure grows.
-        for (size_t i = 1; i < c.x.size(); ++i)
-            if (c.y[i] < c.y[i - 1] - kFallTolerance)
-                rc.fail("the curve falls at log H " + std::to_string(c.x[i]) + ": density must not decrease with exposure");
-        return c;
+        return checked_density_curve(rc, read_curve(rc, dc, "log_h", "density", 0.0, kMaxDensity));
     }
     FieldReader rp = rc.at("parametric");
     const json& p = dc["parametric"];
@@ -203,7 +199,7 @@ Curve read_density_curve(const FieldReader& rc, const json& dc, const Stock& sto
     if (pc.d_max <= pc.d_min + sd.density_over_fog)
         rp.at("d_max").fail("must exceed d_min + " + std::to_string(sd.density_over_fog));
     double hm = speed_point_log_h(stock);
-    return within_density_range(
+    return checked_density_curve(
         rp, sample_parametric_curve(pc, hm, sd.density_over_fog, hm - 4.0, hm + (pc.d_max - pc.d_min) / pc.gamma + 4.0));
 }
 

@@ -42,6 +42,12 @@ TEST_CASE("bad stock files name the file, the field and the problem", "[stock]")
                Catch::Contains("layers[0].mtf") && Catch::Contains("7 values but 'response' has 6"));
     CHECK_THAT(error_of(replace("\"d_max\": 2.6", "\"d_max\": 0.3")),
                Catch::Contains("layers[0].density_curve.parametric.d_max"));
+    // A sharp toe under a broad shoulder: the shoulder's softplus bends down before the toe
+    // rises, so the formula's density falls below the toe (found by fuzzing: it was accepted,
+    // then its written table was refused).
+    CHECK_THAT(error_of(replace("\"toe\": 0.12, \"shoulder\": 0.2", "\"toe\": 0.001, \"shoulder\": 0.5")),
+               Catch::Contains("field 'layers[0].density_curve.parametric': the curve falls at log H") &&
+                   Catch::Contains("density must not decrease with exposure"));
     CHECK_THAT(error_of(replace("\"kind\": \"negative\"", "\"kind\": \"slide\"")),
                Catch::Contains("field 'kind'") && Catch::Contains("unknown kind"));
 }
