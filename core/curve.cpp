@@ -61,6 +61,27 @@ Curve make_curve(std::vector<double> x, std::vector<double> y, const std::string
     return c;
 }
 
+std::vector<double> nearest_non_decreasing(const std::vector<double>& y) {
+    struct Block {
+        double sum;
+        size_t count;
+        double mean() const { return sum / double(count); }
+    };
+    std::vector<Block> blocks;
+    for (double v : y) {
+        blocks.push_back({v, 1});
+        while (blocks.size() > 1 && blocks[blocks.size() - 2].mean() > blocks.back().mean()) {
+            Block last = blocks.back();
+            blocks.pop_back();
+            blocks.back().sum += last.sum;
+            blocks.back().count += last.count;
+        }
+    }
+    std::vector<double> fit;
+    for (const Block& b : blocks) fit.insert(fit.end(), b.count, b.mean());
+    return fit;
+}
+
 static double softplus(double u) { return u > 30 ? u : std::log1p(std::exp(u)); }
 
 static double parametric_density(const ParametricCurve& p, double a, double log_h) {

@@ -27,6 +27,11 @@ struct Curve {
 // Sorts and validates samples; throws std::invalid_argument naming `what` on bad data.
 Curve make_curve(std::vector<double> x, std::vector<double> y, const std::string& what);
 
+// The non-decreasing sequence nearest to y in least squares (isotonic regression by pool
+// adjacent violators: each run that falls is replaced by its mean). Digitised data-sheet
+// curves dip by a few 1e-4 D where the trace is flat; this removes the dips and nothing else.
+std::vector<double> nearest_non_decreasing(const std::vector<double>& y);
+
 // The parametric characteristic curve: a straight line of slope `gamma` between a toe and
 // a shoulder, each rounded by a softplus of width `toe`/`shoulder` (in density units):
 //   D(x) = Dmin + toe*sp(gamma*(x - a)/toe) - shoulder*sp(gamma*(x - b)/shoulder),

@@ -18,6 +18,9 @@ using stock_json::json;
 
 namespace {
 
+// The largest correction to a digitised density curve that counts as tracing noise (D).
+constexpr double kMaxDigitisingDip = 0.01;
+
 // The illuminants spektrafilm names: daylight, tungsten, and a printer's tungsten-halogen
 // lamp behind a KG3 heat filter (taken as a 3200 K blackbody).
 std::pair<std::string, Spectrum> reference_illuminant(const std::string& name) {
@@ -122,6 +125,16 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
         } catch (const std::invalid_argument& e) {
             throw StockError(e.what());
         }
+        // Digitised curves dip where the trace is flat (by at most 1e-3 D in the published
+        // profiles); darkroom-stock files may not fall, so the import smooths dips up to
+        // kMaxDigitisingDip away and refuses a curve that falls further.
+        Curve& dc = layer.density_curve;
+        const std::vector<double> rising = nearest_non_decreasing(dc.y);
+        for (size_t i = 0; i < dc.y.size(); ++i)
+            if (std::abs(rising[i] - dc.y[i]) > kMaxDigitisingDip)
+                rd.at("density_curves").fail(std::string("the ") + names[c] + " curve falls at log H " +
+                                             std::to_string(dc.x[i]) + ": density must not decrease with exposure");
+        dc.y = rising;
         layer.mtf = make_curve({0.0, 1000.0}, {1.0, 1.0}, "flat MTF");
         s.layers.push_back(layer);
     }

@@ -1,4 +1,5 @@
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 
 #include "core/curve.h"
@@ -49,4 +50,30 @@ TEST_CASE("parametric curve: speed point, straight-line slope and limits", "[cur
     // In the middle of the straight part the slope is gamma.
     double mid = speed_log_h + 0.5 * (2.15 / 0.6);
     CHECK((c(mid + 0.1) - c(mid - 0.1)) / 0.2 == Approx(0.6).epsilon(0.01));
+}
+
+TEST_CASE("nearest_non_decreasing is the isotonic least-squares fit", "[curve]") {
+    // Closed forms: a falling pair pools to its mean; a pooled block that still falls
+    // against the one before pools with it too.
+    using V = std::vector<double>;
+    CHECK(nearest_non_decreasing(V{1, 3, 2, 4}) == V{1, 2.5, 2.5, 4});
+    CHECK(nearest_non_decreasing(V{3, 2, 1}) == V{2, 2, 2});
+    CHECK(nearest_non_decreasing(V{0, 4, 3, 0.5, 5}) == V{0, 2.5, 2.5, 2.5, 5});
+    CHECK(nearest_non_decreasing(V{0, 1, 1, 2}) == V{0, 1, 1, 2});  // already rising: unchanged
+    CHECK(nearest_non_decreasing(V{}).empty());
+    // Least squares: no non-decreasing sequence on a grid around the fit is closer.
+    const V y{0.2, 0.5, 0.45, 0.9, 0.85, 0.8, 1.4};
+    const V fit = nearest_non_decreasing(y);
+    auto distance = [&](const V& v) {
+        double d = 0;
+        for (size_t i = 0; i < y.size(); ++i) d += (v[i] - y[i]) * (v[i] - y[i]);
+        return d;
+    };
+    for (size_t i = 1; i < fit.size(); ++i) REQUIRE(fit[i] >= fit[i - 1]);
+    for (size_t i = 0; i < fit.size(); ++i)
+        for (double step : {-0.01, 0.01}) {
+            V moved = fit;
+            moved[i] += step;
+            if (std::is_sorted(moved.begin(), moved.end())) CHECK(distance(moved) > distance(fit));
+        }
 }

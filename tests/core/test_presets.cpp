@@ -1,7 +1,9 @@
 // The built-in colour presets against the manufacturers' published curves, read at run time
 // from ../shared/reference-data (digitised data sheets; never copied into the project).
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -184,6 +186,32 @@ TEST_CASE("narrow-band light at each wavelength gives the published relative sen
             CHECK(worst <= 0.35);
         }
     }
+}
+
+TEST_CASE("every negative-working spektrafilm profile imports within its tracing noise and round-trips",
+          "[presets][reference-data]") {
+    if (!have_reference_data()) return;
+    int imported = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(kReference + "/spektrafilm-profiles")) {
+        const std::string name = entry.path().filename().string();
+        if (entry.path().extension() != ".json") continue;
+        nlohmann::json profile = read_profile(name);
+        if (profile["info"]["type"] != "negative") continue;
+        INFO(name);
+        const Stock stock = import_spektrafilm_profile(profile.dump(), name);
+        ++imported;
+        const Stock written = parse_stock_json(stock_to_json(stock), name + ", written");
+        for (int layer = 0; layer < 3; ++layer) {
+            const Curve& curve = stock.layers[layer].density_curve;
+            CHECK(written.layers[layer].density_curve.y == curve.y);
+            CHECK(std::is_sorted(curve.y.begin(), curve.y.end()));
+            // The import removes the trace's dips (up to 1e-3 D) and nothing else: within 2e-3 D
+            // of each sample.
+            for (const auto& [log_h, density] : profile_column({"", "", name}, "log_exposure", "density_curves", layer, 0.0))
+                CHECK(std::abs(curve(log_h) - std::max(0.0, density)) <= 2e-3);
+        }
+    }
+    CHECK(imported >= 9);
 }
 
 TEST_CASE("a grey ramp printed with automatic printer lights stays near neutral", "[presets][print]") {
