@@ -62,7 +62,8 @@ size_t count_non_finite(const Image& image) {
     return size_t(std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
 }
 
-void develop_frame(const DevelopOptions& o, const FrameJob& job, int threads, bool print_plan, FrameReport& report) {
+void develop_frame(const DevelopOptions& o, PlanCache& plans, const FrameJob& job, int threads, bool print_plan,
+                   FrameReport& report) {
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_image(job.input);
     report.read_seconds = seconds_since(start);
@@ -74,7 +75,8 @@ void develop_frame(const DevelopOptions& o, const FrameJob& job, int threads, bo
     look.settings.frame = job.frame;
     look.verbose = print_plan;
     look.threads = threads;
-    const Image out = develop_image(look, in.pixels.view(), output_window(o, in.pixels.window));
+    const Plan plan = plans.plan_for(frame_geometry(in.pixels.view()), job.frame);
+    const Image out = develop_image(look, plan, in.pixels.view(), output_window(o, in.pixels.window));
     report.develop_seconds = seconds_since(start);
 
     start = std::chrono::steady_clock::now();
@@ -82,7 +84,8 @@ void develop_frame(const DevelopOptions& o, const FrameJob& job, int threads, bo
     report.write_seconds = seconds_since(start);
 }
 
-FrameReport process_frame(const DevelopOptions& o, const FrameJob& job, int threads, bool print_plan) {
+FrameReport process_frame(const DevelopOptions& o, PlanCache& plans, const FrameJob& job, int threads,
+                          bool print_plan) {
     FrameReport report;
     report.frame = job.frame;
     report.input = job.input;
@@ -94,7 +97,7 @@ FrameReport process_frame(const DevelopOptions& o, const FrameJob& job, int thre
         if (!fs::exists(job.input)) report.warnings.push_back("input '" + job.input + "' does not exist");
     } else {
         try {
-            develop_frame(o, job, threads, print_plan, report);
+            develop_frame(o, plans, job, threads, print_plan, report);
         } catch (const std::exception& e) {
             report.status = FrameReport::Status::failed;
             report.error = e.what();
@@ -113,11 +116,14 @@ void run_frames(const DevelopOptions& o, const std::vector<FrameJob>& jobs, int 
     if (o.look.verbose)
         std::cerr << "threads: " << threads << " (" << workers << " frame" << (workers > 1 ? "s" : "")
                   << " at once, " << threads_per_frame << " per frame)\n";
+    LookOptions plan_look = o.look;
+    plan_look.threads = threads_per_frame;
+    PlanCache plans(plan_look);  // prints each plan it compiles with -v
     std::atomic<size_t> next{0};
     std::atomic<bool> stop{false};
     auto work = [&] {
         for (size_t i = next++; i < jobs.size() && !stop; i = next++) {
-            FrameReport report = process_frame(o, jobs[i], threads_per_frame, o.look.verbose && i == 0);
+            FrameReport report = process_frame(o, plans, jobs[i], threads_per_frame, o.look.verbose && i == 0);
             if (report.status == FrameReport::Status::failed && !o.run.skip_bad_frames) stop = true;
             progress.add(std::move(report));
         }

@@ -148,10 +148,25 @@ void add_plate_grain(const LookOptions& look, Image& out) {
 
 }  // namespace
 
+FrameGeometry frame_geometry(const ConstImageView& in) {
+    return FrameGeometry{in.window.width(), in.window.height(), in.channels < 3};
+}
+
+Plan PlanCache::plan_for(const FrameGeometry& frame, int frame_number) {
+    // Held while compiling: the other frames of this size need the same plan.
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto key = std::make_tuple(frame.width, frame.height, frame.monochrome);
+    auto it = plans_.find(key);
+    if (it == plans_.end()) it = plans_.emplace(key, compile_look(look_, frame)).first;
+    return it->second.for_frame(frame_number);
+}
+
 Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window) {
+    return develop_image(look, compile_look(look, frame_geometry(in)), in, out_window);
+}
+
+Image develop_image(const LookOptions& look, const Plan& plan, const ConstImageView& in, const Window& out_window) {
     const ColourIO colour(look.colour, look.settings.output, look.verbose);
-    // One or two channels (Y, Y+A) are grey: the plan reads channel 0 as R, G and B.
-    Plan plan = compile_look(look, FrameGeometry{in.window.width(), in.window.height(), in.channels < 3});
     Image out(out_window, std::max(3, in.channels));
     if (colour.input_conversion().is_noop()) {
         plan.run(in, out.view(), look.threads);

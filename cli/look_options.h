@@ -10,7 +10,10 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <map>
+#include <mutex>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -58,9 +61,30 @@ CLI::Option* add_choice(CLI::App& command, const std::string& flag, Enum& value,
 // Resolves the stocks and compiles the plan for a frame; prints it with -v.
 Plan compile_look(const LookOptions& look, const FrameGeometry& frame);
 
-// Develops `out_window` of the full frame `in` (window (0, 0, width, height)) with `look`.
-// The output has max(3, input channels) channels; those past RGB (alpha, depth, mattes) are
-// not film's business and pass through. The one path for the program and the Python module.
+// The frame an input image is: its size, and grey when it has one or two channels (Y, Y+A),
+// whose channel 0 the plan reads as R, G and B.
+FrameGeometry frame_geometry(const ConstImageView& in);
+
+// The plans of one look for a sequence: compiled once per frame geometry (a compile takes
+// seconds, about as long as developing a 2K frame) and moved to each frame's grain
+// (Plan::for_frame). Shared by the threads developing frames.
+class PlanCache {
+public:
+    explicit PlanCache(LookOptions look) : look_(std::move(look)) {}
+    Plan plan_for(const FrameGeometry& frame, int frame_number);
+
+private:
+    LookOptions look_;
+    std::mutex mutex_;
+    std::map<std::tuple<int, int, bool>, Plan> plans_;
+};
+
+// Develops `out_window` of the full frame `in` (window (0, 0, width, height)) with `look`
+// through `plan` (compiled for `look` and this frame). The output has max(3, input channels)
+// channels; those past RGB (alpha, depth, mattes) are not film's business and pass through.
+// The one path for the program and the Python module.
+Image develop_image(const LookOptions& look, const Plan& plan, const ConstImageView& in, const Window& out_window);
+// The same, compiling the plan.
 Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window);
 
 }  // namespace darkroom::cli

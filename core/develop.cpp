@@ -295,6 +295,18 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     return p;
 }
 
+Plan Plan::for_frame(int frame) const {
+    Plan p = *this;
+    p.settings_.frame = frame;
+    for (MaterialStages* m : {&p.film_stages_, &p.paper_stages_}) {
+        for (auto& g : m->grain)
+            if (g) g->key.frame = frame;
+        for (auto& g : m->boolean_grain)
+            if (g) g->key.frame = frame;
+    }
+    return p;
+}
+
 Window Plan::input_window(const Window& output) const {
     int halo = film_stages_.halo_px() + (print_ ? paper_stages_.halo_px() : 0);
     return output.grown(halo).intersected(frame_);

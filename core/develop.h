@@ -122,9 +122,12 @@ public:
     // With `times`, adds the seconds spent in each stage.
     void run(const ConstImageView& in, const ImageView& out, int threads, StageTimes* times = nullptr) const;
 
+    // The same plan for another frame of a sequence: only the grain's noise depends on the
+    // frame, so a sequence compiles once (seconds) and copies the plan per frame.
+    Plan for_frame(int frame) const;
+
     // The stages in order and those left out, one line each, for -v.
     std::vector<std::string> describe() const;
-
 
 private:
     std::vector<Plane> develop_film(const ConstImageView& in, const Window& film_out, int threads,

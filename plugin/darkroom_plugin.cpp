@@ -76,7 +76,9 @@ struct RenderError : std::runtime_error {
 
 struct Instance {
     std::mutex mutex;
-    // Compiled plans by their inputs; a render and its region-of-interest query share one.
+    // Compiled plans by their inputs (frame included); a render and its region-of-interest
+    // query share one. The plans of other frames are copies of one compiled plan
+    // (Plan::for_frame): scrubbing a sequence compiles once.
     std::map<std::string, std::shared_ptr<const Plan>> plans;
     std::map<std::string, std::shared_ptr<const ocio::ColorConverter>> converters;
 };
@@ -106,23 +108,32 @@ std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, cons
     key << stock_key(n.film, n.film_from_file) << '|' << stock_key(n.paper, n.paper_from_file) << '|' << frame.width
         << 'x' << frame.height << '|' << s.exposure_ev << ',' << s.print_exposure_ev << ',' << int(s.output) << ','
         << int(s.input_units) << ',' << s.grain << ',' << s.mtf << ',' << s.halation << ',' << s.seed << ','
-        << s.frame << ',' << s.frame_width_mm << ',' << s.print_width_mm;
+        << s.frame_width_mm << ',' << s.print_width_mm << ',' << quality_name(s.quality) << ','
+        << s.skip_noop_stages << ',' << frame.monochrome;
     for (int c = 0; c < 3; ++c)
         key << ',' << s.grain_amount[c] << ',' << s.grain_size[c] << ',' << s.grain_density_exponent[c] << ','
             << s.printer_lights[c] << ',' << s.filtration_ymc[c];
+    const std::string any_frame = key.str(), this_frame = any_frame + "|frame " + std::to_string(s.frame);
+    std::shared_ptr<const Plan> compiled;
     {
         std::lock_guard<std::mutex> lock(inst.mutex);
-        auto it = inst.plans.find(key.str());
+        auto it = inst.plans.find(this_frame);
         if (it != inst.plans.end()) return it->second;
+        it = inst.plans.find(any_frame);
+        if (it != inst.plans.end()) compiled = it->second;
     }
-    Stock film = load_stock(n.film, n.film_from_file);
-    Stock paper = n.paper.empty() ? Stock{} : load_stock(n.paper, n.paper_from_file);
-    auto plan = std::make_shared<const Plan>(Plan::compile(film, n.paper.empty() ? nullptr : &paper, s, frame));
+    if (!compiled) {
+        Stock film = load_stock(n.film, n.film_from_file);
+        Stock paper = n.paper.empty() ? Stock{} : load_stock(n.paper, n.paper_from_file);
+        compiled = std::make_shared<const Plan>(Plan::compile(film, n.paper.empty() ? nullptr : &paper, s, frame));
+    }
+    auto plan = std::make_shared<const Plan>(compiled->for_frame(s.frame));
     std::lock_guard<std::mutex> lock(inst.mutex);
     // Plans of other frames and settings are dropped once a few accumulate (each holds
-    // kernels and tables, not images, so a handful is cheap).
+    // kernels and tables, not images, so a handful is cheap); the compiled one is kept.
     if (inst.plans.size() >= 8) inst.plans.clear();
-    inst.plans.emplace(key.str(), plan);
+    inst.plans[any_frame] = compiled;
+    inst.plans[this_frame] = plan;
     return plan;
 }
 

@@ -98,6 +98,28 @@ TEST_CASE("same settings give identical pixels for any thread count and window",
     CHECK(render(film, &paper, s, scene).pixels != frame3.pixels);
 }
 
+TEST_CASE("a plan compiled once and moved to another frame renders that frame's pixels", "[develop]") {
+    Stock film = test::test_colour_film(), paper = test::test_colour_paper();
+    Image scene = demo_scene(32, 24);
+    for (Quality quality : kQualities) {
+        INFO(quality_name(quality));
+        DevelopSettings s;
+        s.quality = quality;
+        s.seed = 5;
+        s.frame_width_mm = 1.0;
+        s.print_width_mm = 5.0;
+        const Plan first = Plan::compile(film, &paper, s, {32, 24});
+        s.frame = 9;
+        const Plan compiled = Plan::compile(film, &paper, s, {32, 24});
+        Image moved(scene.window, 3), direct(scene.window, 3), frame0(scene.window, 3);
+        first.for_frame(9).run(scene.view(), moved.view(), 2);
+        compiled.run(scene.view(), direct.view(), 2);
+        first.run(scene.view(), frame0.view(), 2);
+        CHECK(moved.pixels == direct.pixels);
+        CHECK(moved.pixels != frame0.pixels);  // the grain is the frame's own
+    }
+}
+
 TEST_CASE("a skipped stage gives the pixels of running it with its neutral value", "[develop]") {
     Image scene = demo_scene(64, 48);
     DevelopSettings s = density_settings();

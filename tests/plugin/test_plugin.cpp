@@ -336,6 +336,23 @@ TEST_CASE("grain depends on the frame and the seed, never on the order frames ar
     CHECK(same_bits(a->render(3, {0, 0, w, h}).output, a->render(4, {0, 0, w, h}).output));
 }
 
+TEST_CASE("changing Quality on an instance renders that tier, as a new instance does", "[plugin]") {
+    const int w = 48, h = 40;
+    Frame source = Frame::from_top_down(scene(w, h, 4), w, h, 4);
+    auto switched = make_instance(), fresh = make_instance();
+    for (auto* inst : {switched.get(), fresh.get()}) {
+        set_common_look(*inst);
+        inst->set_source(source);
+    }
+    switched->set_int("quality", switched->choice_index("quality", "fast"));
+    RenderResult fast = switched->render(3, {0, 0, w, h});
+    switched->set_int("quality", switched->choice_index("quality", "high"));
+    fresh->set_int("quality", fresh->choice_index("quality", "high"));
+    RenderResult high = switched->render(3, {0, 0, w, h});
+    CHECK(same_bits(high.output, fresh->render(3, {0, 0, w, h}).output));
+    CHECK_FALSE(same_bits(high.output, fast.output));  // the plan of the other tier is not reused
+}
+
 TEST_CASE("settings that change nothing are reported as identity", "[plugin]") {
     auto inst = make_instance();
     inst->set_source(Frame::from_top_down(scene(16, 16, 4), 16, 16, 4));
