@@ -185,21 +185,34 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
     return density;
 }
 
-// Applies f(layer densities, result) to every pixel of `window`, result planes of
-// `channels`; in double (the spectral tiers) or float (the fast tiers' tables).
-template <typename Real, typename F>
-std::vector<Plane> per_pixel(const std::vector<Plane>& in, const Window& window, size_t channels, int threads, F f) {
+// Applies f(layer density rows, result rows, width) to each row of `window`, result planes
+// of `channels`: whole rows, so that the fast tiers' exponentials vectorise.
+template <typename F>
+std::vector<Plane> per_row(const std::vector<Plane>& in, const Window& window, size_t channels, int threads, F f) {
     std::vector<Plane> out(channels, Plane(window));
     parallel_for(window.y0, window.y1, threads, [&](int y0, int y1) {
-        Real values[3], result[3];
-        for (int y = y0; y < y1; ++y)
-            for (int x = window.x0; x < window.x1; ++x) {
-                for (size_t l = 0; l < in.size(); ++l) values[l] = in[l].at(x, y);
-                f(values, result);
-                for (size_t c = 0; c < channels; ++c) out[c].at(x, y) = float(result[c]);
-            }
+        const float* in_rows[3];
+        float* out_rows[3];
+        for (int y = y0; y < y1; ++y) {
+            for (size_t l = 0; l < in.size(); ++l) in_rows[l] = in[l].row(y) + (window.x0 - in[l].window.x0);
+            for (size_t c = 0; c < channels; ++c) out_rows[c] = out[c].row(y);
+            f(in_rows, out_rows, window.width());
+        }
     });
     return out;
+}
+
+// Applies f(layer densities, result) in double to every pixel of `window` (the spectral tiers).
+template <typename F>
+std::vector<Plane> per_pixel(const std::vector<Plane>& in, const Window& window, size_t channels, int threads, F f) {
+    return per_row(in, window, channels, threads, [&](const float* const* d, float* const* result, int width) {
+        double values[3], results[3];
+        for (int x = 0; x < width; ++x) {
+            for (size_t l = 0; l < in.size(); ++l) values[l] = d[l][x];
+            f(values, results);
+            for (size_t c = 0; c < channels; ++c) result[c][x] = float(results[c]);
+        }
+    });
 }
 
 void check_setting(bool ok, const std::string& problem) {
@@ -351,13 +364,19 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
     StageTimer enlarger_timer(times, "enlarger");
     std::vector<Plane> paper_exposure;
     if (enlarger_table_) {
-        paper_exposure = per_pixel<float>(negative, negative[0].window, 3, threads, [&](const float* d, float* h) {
-            (*enlarger_table_)(d, h);
-            for (int j = 0; j < 3; ++j) h[j] = fast_exp2(h[j]);
+        paper_exposure = per_row(negative, negative[0].window, 3, threads, [&](const float* const* d, float* const* h,
+                                                                               int width) {
+            for (int x = 0; x < width; ++x) {
+                const float densities[3] = {d[0][x], d[1][x], d[2][x]};
+                float log2_h[3];
+                (*enlarger_table_)(densities, log2_h);
+                for (int j = 0; j < 3; ++j) h[j][x] = log2_h[j];
+            }
+            for (int j = 0; j < 3; ++j) fast_exp2_row(h[j], width);
         });
     } else {
         paper_exposure =
-            per_pixel<double>(negative, negative[0].window, enlarger.paper_layers(), threads, [&](const double* d, double* h) {
+            per_pixel(negative, negative[0].window, enlarger.paper_layers(), threads, [&](const double* d, double* h) {
                 enlarger.expose(d, h);
                 for (int j = 0; j < enlarger.paper_layers(); ++j) h[j] = std::clamp(h[j], 0.0, kMaxInput);
             });
@@ -368,16 +387,24 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
     StageTimer view_timer(times, "view");
     if (view_table_) {
         const Matrix3& m = print_xyz_to_rgb();
-        return per_pixel<float>(paper_density, out, 3, threads, [&](const float* d, float* rgb) {
-            float log2_xyz[3];
-            (*view_table_)(d, log2_xyz);
-            const float xyz[3] = {fast_exp2(log2_xyz[0]), fast_exp2(log2_xyz[1]), fast_exp2(log2_xyz[2])};
-            for (int c = 0; c < 3; ++c)
-                rgb[c] = float(m[c][0]) * xyz[0] + float(m[c][1]) * xyz[1] + float(m[c][2]) * xyz[2];
+        return per_row(paper_density, out, 3, threads, [&](const float* const* d, float* const* rgb, int width) {
+            float* const xyz[3] = {rgb[0], rgb[1], rgb[2]};  // XYZ first, in the result rows
+            for (int x = 0; x < width; ++x) {
+                const float densities[3] = {d[0][x], d[1][x], d[2][x]};
+                float log2_xyz[3];
+                (*view_table_)(densities, log2_xyz);
+                for (int c = 0; c < 3; ++c) xyz[c][x] = log2_xyz[c];
+            }
+            for (int c = 0; c < 3; ++c) fast_exp2_row(xyz[c], width);
+            for (int x = 0; x < width; ++x) {
+                const float v[3] = {xyz[0][x], xyz[1][x], xyz[2][x]};
+                for (int c = 0; c < 3; ++c)
+                    rgb[c][x] = float(m[c][0]) * v[0] + float(m[c][1]) * v[1] + float(m[c][2]) * v[2];
+            }
         });
     }
     const PrintView view(paper_stages_.stock);
-    return per_pixel<double>(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view.rgb(d, rgb); });
+    return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view.rgb(d, rgb); });
 }
 
 // Texture: each channel c is treated as the exposure of film layer c (a single-layer film

@@ -59,15 +59,15 @@ inline uint32_t mix32(uint32_t h) {
     h ^= h >> 16;
     return h;
 }
-// The part of the hash that is the same along a row: pass it to quantile_normal.
+// The part of the hash that is the same along a row: pass it to quantile_normal_run.
 inline uint32_t quantile_normal_row(const NoiseKey& key, int y) {
     uint32_t h = mix32(uint32_t(key.seed) ^ mix32(uint32_t(key.seed >> 32) ^ mix32(uint32_t(key.frame) ^
                                                                                   mix32(key.stream + 0x9E3779B9u))));
     return mix32(h ^ uint32_t(y));
 }
 const float* normal_quantile_table();  // 2^16 entries, mean 0 and variance 1
-inline float quantile_normal(uint32_t row_hash, int x) {
-    return normal_quantile_table()[mix32(row_hash ^ mix32(uint32_t(x))) >> 16];
-}
+// The noise at x = x0 ... x0 + n - 1 of a row into out: the quantile at the top 16 bits of
+// mix32(row_hash ^ mix32(x)).
+void quantile_normal_run(uint32_t row_hash, int x0, int n, float* out);
 
 }  // namespace darkroom

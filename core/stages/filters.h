@@ -3,6 +3,7 @@
 // the full frame, bit for bit).
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "core/image.h"
@@ -17,10 +18,27 @@ std::vector<float> pixel_integrated_gaussian(double sigma_px);
 // taps - 1 values. Summed in float in the order of k for every x (vectorisable, and each
 // value independent of where the row starts).
 void convolve_row(const float* in, const std::vector<float>& taps, int width, float* out);
-// One row of a vertical pass: out[x] = sum_k taps[k] rows[k][x].
-void convolve_column(const float* const* rows, const std::vector<float>& taps, int width, float* out);
+// One row of a vertical pass, added to out: out[x] += sum_k taps[k] rows[k][x].
+void convolve_column_add(const float* const* rows, const std::vector<float>& taps, int width, float* out);
+
+// A sum of separable filters, sum_t sign_t (taps_t in x, then taps_t in y), all of 2r + 1
+// taps, streamed in bands of rows so that the horizontal results stay in cache:
+//   source(y, padded) writes input row y, the width + 2r values from x = out.x0 - r;
+//   sink(y, filtered) receives output row y of `out`.
+// The vertical pass reads rows clamped to [row_begin, row_end). Each output value is summed
+// in one fixed order (terms, then taps), whatever the bands and threads.
+using RowSource = std::function<void(int y, float* padded)>;
+using RowSink = std::function<void(int y, const float* filtered)>;
+struct SeparableFilter {
+    std::vector<std::vector<float>> terms;
+    std::vector<float> signs;  // +1 or -1 per term
+};
+void filter_separable(const Window& out, const SeparableFilter& filter, int row_begin, int row_end, int threads,
+                      const RowSource& source, const RowSink& sink);
 
 // dst = separable convolution of src with taps (x then y), frame-clamped as above.
 void convolve_separable(const Plane& src, Plane& dst, const std::vector<float>& taps, const Window& frame, int threads);
+// dst = a sum of separable filters of src, frame-clamped as above.
+void convolve_separable(const Plane& src, Plane& dst, const SeparableFilter& filter, const Window& frame, int threads);
 
 }  // namespace darkroom

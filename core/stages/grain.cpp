@@ -1,10 +1,10 @@
 #include "core/stages/grain.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <mutex>
 
-#include "core/parallel.h"
 #include "core/stages/filters.h"
 
 namespace darkroom {
@@ -122,31 +122,30 @@ GrainModel design_grain(const GrainSpec& spec, double d_min, double pitch_um, No
     return g;
 }
 
-Plane grain_field(const GrainModel& g, const Window& w, int threads) {
-    const int r = g.radius, side = 2 * r + 1;
-    // Horizontal pass over the rows the vertical pass needs, then vertical. Each filtered
-    // value is summed in a fixed order from noise at absolute coordinates.
-    Window hw{w.x0, w.y0 - r, w.x1, w.y1 + r};
-    Plane horizontal(hw), field(w);
-    parallel_for(hw.y0, hw.y1, threads, [&](int y_begin, int y_end) {
-        std::vector<float> noise(w.width() + 2 * r);
-        for (int y = y_begin; y < y_end; ++y) {
+namespace {
+
+// The grain's filtered noise on `w`, one row at a time to sink(y, field row): white noise at
+// absolute coordinates through the grain kernel in x and y, so any window agrees.
+void filter_grain_noise(const GrainModel& g, const Window& w, int threads, const RowSink& sink) {
+    const int r = g.radius;
+    // Noise exists at every coordinate: the vertical pass reads real rows, never clamped ones.
+    filter_separable(
+        w, SeparableFilter{{g.kernel}, {1.0f}}, w.y0 - r, w.y1 + r, threads,
+        [&](int y, float* noise) {
             if (g.fast) {
-                uint32_t row = quantile_normal_row(g.key, y);
-                for (int i = 0; i < (int)noise.size(); ++i) noise[i] = quantile_normal(row, w.x0 - r + i);
+                quantile_normal_run(quantile_normal_row(g.key, y), w.x0 - r, w.width() + 2 * r, noise);
             } else {
-                for (int i = 0; i < (int)noise.size(); ++i) noise[i] = standard_normal(g.key, w.x0 - r + i, y);
+                for (int i = 0; i < w.width() + 2 * r; ++i) noise[i] = standard_normal(g.key, w.x0 - r + i, y);
             }
-            convolve_row(noise.data(), g.kernel, w.width(), horizontal.row(y));
-        }
-    });
-    parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
-        std::vector<const float*> rows(side);
-        for (int y = y_begin; y < y_end; ++y) {
-            for (int k = 0; k < side; ++k) rows[k] = horizontal.row(y - r + k);
-            convolve_column(rows.data(), g.kernel, w.width(), field.row(y));
-        }
-    });
+        },
+        sink);
+}
+
+}  // namespace
+
+Plane grain_field(const GrainModel& g, const Window& w, int threads) {
+    Plane field(w);
+    filter_grain_noise(g, w, threads, [&](int y, const float* n) { std::copy_n(n, w.width(), field.row(y)); });
     return field;
 }
 
@@ -156,23 +155,19 @@ double grain_sigma_at(const GrainModel& g, double density) {
 }
 
 void apply_grain(Plane& density, const GrainModel& g, int threads) {
-    const Plane field = grain_field(g, density.window, threads);
-    parallel_for(density.window.y0, density.window.y1, threads, [&](int y_begin, int y_end) {
-        for (int y = y_begin; y < y_end; ++y) {
-            float* d = density.row(y);
-            const float* n = field.row(y);
-            // Held at d_min: a Gaussian fluctuation wider than the net density would
-            // otherwise take away more silver (or dye) than developed, giving densities
-            // below base+fog or below 0 (transmitting or reflecting more than falls on it).
-            if (g.fast) {
-                for (int x = 0; x < density.window.width(); ++x)
-                    d[x] = std::max(g.d_min, d[x] + g.amplitude(std::max(0.0f, d[x] - g.d_min)) * n[x]);
-                continue;
-            }
-            for (int x = 0; x < density.window.width(); ++x) {
-                double net = std::max(0.0, double(d[x]) - g.d_min);
-                d[x] = float(std::max(double(g.d_min), d[x] + g.sigma_per_pixel * std::pow(net, g.density_exponent) * n[x]));
-            }
+    filter_grain_noise(g, density.window, threads, [&](int y, const float* n) {
+        float* d = density.row(y);
+        // Held at d_min: a Gaussian fluctuation wider than the net density would otherwise
+        // take away more silver (or dye) than developed, giving densities below base+fog or
+        // below 0 (transmitting or reflecting more than falls on it).
+        if (g.fast) {
+            for (int x = 0; x < density.window.width(); ++x)
+                d[x] = std::max(g.d_min, d[x] + g.amplitude(std::max(0.0f, d[x] - g.d_min)) * n[x]);
+            return;
+        }
+        for (int x = 0; x < density.window.width(); ++x) {
+            double net = std::max(0.0, double(d[x]) - g.d_min);
+            d[x] = float(std::max(double(g.d_min), d[x] + g.sigma_per_pixel * std::pow(net, g.density_exponent) * n[x]));
         }
     });
 }

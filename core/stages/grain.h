@@ -36,7 +36,7 @@ struct GrainModel {
     float d_min = 0;               // net density is measured from here (as stored in planes)
     double density_exponent = 1.0 / 3.0;
     NoiseKey key;
-    // The fast tiers: noise from quantile_normal (core/random.h) instead of Philox and
+    // The fast tiers: noise from quantile_normal_run (core/random.h) instead of Philox and
     // Box-Muller, and the amplitude sigma_per_pixel (D - d_min)^exponent from a table.
     bool fast = false;
     LogAxisTable amplitude;

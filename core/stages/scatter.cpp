@@ -225,19 +225,7 @@ void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Wi
     const int r = kernel.radius, side = 2 * r + 1;
     const Window& w = dst.window;
     if (!kernel.separable.empty()) {
-        std::fill(dst.pixels.begin(), dst.pixels.end(), 0.0f);
-        Plane term(w);
-        for (size_t k = 0; k < kernel.separable.size(); ++k) {
-            convolve_separable(src, term, kernel.separable[k], frame, threads);
-            const float sign = kernel.separable_sign[k];
-            parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
-                for (int y = y_begin; y < y_end; ++y) {
-                    const float* t = term.row(y);
-                    float* out = dst.row(y);
-                    for (int x = 0; x < w.width(); ++x) out[x] += sign * t[x];
-                }
-            });
-        }
+        convolve_separable(src, dst, SeparableFilter{kernel.separable, kernel.separable_sign}, frame, threads);
         return;
     }
     parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {

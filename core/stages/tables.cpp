@@ -5,6 +5,10 @@
 #include <cstring>
 #include <limits>
 
+// GCC warns that a vector value would be passed differently without AVX; the vector
+// helpers here are inlined, so no vector crosses a call.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 namespace darkroom {
 
 namespace {
@@ -55,6 +59,30 @@ float fast_exp2(float x) {
     const float p =
         1.0f + f * (1.0f + f * (0.5f + f * (1.0f / 6 + f * (1.0f / 24 + f * (1.0f / 120 + f * (1.0f / 720))))));
     return p * bits_float(uint32_t(whole + 127) << 23);
+}
+
+// The same operations as fast_exp2, eight values at a time (GCC vector types; AVX2 where
+// the processor has it).
+__attribute__((target_clones("avx2", "default"))) void fast_exp2_row(float* values, int n) {
+    using Vec = float __attribute__((vector_size(32)));
+    using Int = int32_t __attribute__((vector_size(32)));
+    constexpr int kLanes = 8;
+    int i = 0;
+    for (; i + kLanes <= n; i += kLanes) {
+        Vec x;
+        std::memcpy(&x, values + i, sizeof x);
+        x = x < -126.0f ? Vec{} - 126.0f : x;
+        x = x > 126.0f ? Vec{} + 126.0f : x;
+        const Int whole = __builtin_convertvector(x + (x >= 0.0f ? Vec{} + 0.5f : Vec{} - 0.5f), Int);
+        const Vec f = (x - __builtin_convertvector(whole, Vec)) * 0.69314718f;
+        const Vec p = 1.0f + f * (1.0f + f * (0.5f + f * (1.0f / 6 + f * (1.0f / 24 + f * (1.0f / 120 + f * (1.0f / 720))))));
+        const Int scale_bits = (whole + 127) << 23;
+        Vec scale;
+        std::memcpy(&scale, &scale_bits, sizeof scale);
+        const Vec result = p * scale;
+        std::memcpy(values + i, &result, sizeof result);
+    }
+    for (; i < n; ++i) values[i] = fast_exp2(values[i]);
 }
 
 Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f)

@@ -32,6 +32,8 @@ private:
 // 2^x in float from the exponent and a polynomial in the fraction (relative error below
 // 3e-7, a few float roundings, for |x| < 126); the fast tiers' exp10(x) = exp2(x log2 10).
 float fast_exp2(float x);
+// fast_exp2 of each of n values in place, in vector registers: bit for bit the same values.
+void fast_exp2_row(float* values, int n);
 
 // A function of three variables on a uniform grid (nodes^3 over [lo, hi] per axis),
 // interpolated trilinearly; inputs outside the grid are clamped to its faces.

@@ -60,6 +60,17 @@ TEST_CASE("fast_exp2 is 2^x within 3e-7", "[quality][tables]") {
     CHECK(worst < 3e-7);
 }
 
+TEST_CASE("fast_exp2_row gives fast_exp2 of each value, bit for bit", "[quality][tables]") {
+    std::vector<float> values;
+    for (double x = -130.0; x <= 130.0; x += 0.0371) values.push_back(float(x));
+    values.insert(values.end(), {-0.5f, 0.5f, -0.0f, 126.0f, -126.0f, 1e30f, -1e30f});
+    for (int n : {int(values.size()), 7, 1}) {  // vector lanes and the scalar tail
+        std::vector<float> row(values.begin(), values.begin() + n);
+        fast_exp2_row(row.data(), n);
+        for (int i = 0; i < n; ++i) REQUIRE(row[i] == fast_exp2(values[i]));
+    }
+}
+
 TEST_CASE("a 3D table reproduces a trilinear function and clamps outside its box", "[quality][tables]") {
     auto f = [](const double* v, double* out) {
         out[0] = 1 + 2 * v[0] - v[1] + 0.5 * v[2];
