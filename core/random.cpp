@@ -1,12 +1,12 @@
+// GCC warns that a vector value would be passed differently without AVX; the vector
+// helpers here are inlined, so no vector crosses a call.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 #include "core/random.h"
 
 #include <cmath>
 #include <cstdint>
 #include <vector>
-
-// GCC warns that a vector value would be passed differently without AVX; the vector
-// helpers here are inlined, so no vector crosses a call.
-#pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace darkroom {
 
@@ -39,24 +39,16 @@ const float* normal_quantile_table() {
     return table.data();
 }
 
-// mix32 and the index, eight at a time (GCC vector types; AVX2 where the processor has it).
+// The hashes, eight at a time (GCC vector types; AVX2 where the processor has it).
 __attribute__((target_clones("avx2", "default"))) void quantile_normal_run(uint32_t row_hash, int x0, int n,
                                                                             float* out) {
     using U32 = uint32_t __attribute__((vector_size(32)));
     constexpr int kLanes = 8;
-    auto mix = [](U32 h) {
-        h ^= h >> 16;
-        h *= 0x85EBCA6Bu;
-        h ^= h >> 13;
-        h *= 0xC2B2AE35u;
-        h ^= h >> 16;
-        return h;
-    };
     const float* table = normal_quantile_table();
     const U32 lane{0, 1, 2, 3, 4, 5, 6, 7};
     int i = 0;
     for (; i + kLanes <= n; i += kLanes) {
-        const U32 index = mix(row_hash ^ mix(uint32_t(x0 + i) + lane)) >> 16;
+        const U32 index = mix32(row_hash ^ mix32(uint32_t(x0 + i) + lane)) >> 16;
         for (int k = 0; k < kLanes; ++k) out[i + k] = table[index[k]];
     }
     for (; i < n; ++i) out[i] = table[mix32(row_hash ^ mix32(uint32_t(x0 + i))) >> 16];

@@ -51,7 +51,9 @@ inline float standard_normal(const NoiseKey& key, int x, int y) { return (float)
 // The fast tiers' noise: a 32-bit integer hash of (key, x, y) picks one of 2^16 equally
 // likely quantiles of the standard normal (so values reach about +-4.2 sigma). The hash
 // is the murmur3 finaliser (Appleby, MurmurHash3, public domain), applied per coordinate.
-inline uint32_t mix32(uint32_t h) {
+// (A template so that core/random.cpp hashes eight lanes of a vector type with it.)
+template <typename U32>
+inline U32 mix32(U32 h) {
     h ^= h >> 16;
     h *= 0x85EBCA6Bu;
     h ^= h >> 13;

@@ -45,32 +45,9 @@ inline Vec load(const float* p) {
 
 inline void store(float* p, Vec v) { std::memcpy(p, &v, sizeof v); }
 
-}  // namespace
-
-__attribute__((target_clones("avx2", "default"))) void convolve_row(const float* __restrict in,
-                                                                     const std::vector<float>& taps, int width,
-                                                                     float* __restrict out) {
-    const int n = int(taps.size());
-    const float* tap = taps.data();
-    int x = 0;
-    for (; x + kBlock <= width; x += kBlock) {
-        Vec sum[kVecs] = {};
-        for (int k = 0; k < n; ++k) {
-            const Vec t = Vec{} + tap[k];
-            for (int v = 0; v < kVecs; ++v) sum[v] += t * load(in + x + k + v * kLanes);
-        }
-        for (int v = 0; v < kVecs; ++v) store(out + x + v * kLanes, sum[v]);
-    }
-    for (; x < width; ++x) {
-        float sum = 0.0f;
-        for (int k = 0; k < n; ++k) sum += tap[k] * in[x + k];
-        out[x] = sum;
-    }
-}
-
-__attribute__((target_clones("avx2", "default"))) void convolve_column_add(const float* const* rows,
-                                                                            const std::vector<float>& taps, int width,
-                                                                            float* __restrict out) {
+// out[x] += sum_k taps[k] row_of(k)[x] for x in [0, width).
+template <typename RowOf>
+__attribute__((always_inline)) inline void add_tap_sums(const std::vector<float>& taps, int width, float* __restrict out, RowOf row_of) {
     const int n = int(taps.size());
     const float* tap = taps.data();
     int x = 0;
@@ -79,15 +56,30 @@ __attribute__((target_clones("avx2", "default"))) void convolve_column_add(const
         for (int v = 0; v < kVecs; ++v) sum[v] = load(out + x + v * kLanes);
         for (int k = 0; k < n; ++k) {
             const Vec t = Vec{} + tap[k];
-            for (int v = 0; v < kVecs; ++v) sum[v] += t * load(rows[k] + x + v * kLanes);
+            const float* row = row_of(k) + x;
+            for (int v = 0; v < kVecs; ++v) sum[v] += t * load(row + v * kLanes);
         }
         for (int v = 0; v < kVecs; ++v) store(out + x + v * kLanes, sum[v]);
     }
     for (; x < width; ++x) {
         float sum = out[x];
-        for (int k = 0; k < n; ++k) sum += tap[k] * rows[k][x];
+        for (int k = 0; k < n; ++k) sum += tap[k] * row_of(k)[x];
         out[x] = sum;
     }
+}
+
+}  // namespace
+
+__attribute__((target_clones("avx2", "default"))) void convolve_row(const float* in, const std::vector<float>& taps,
+                                                                     int width, float* out) {
+    std::fill_n(out, width, 0.0f);
+    add_tap_sums(taps, width, out, [in](int k) { return in + k; });
+}
+
+__attribute__((target_clones("avx2", "default"))) void convolve_column_add(const float* const* rows,
+                                                                            const std::vector<float>& taps, int width,
+                                                                            float* out) {
+    add_tap_sums(taps, width, out, [rows](int k) { return rows[k]; });
 }
 
 void filter_separable(const Window& out, const SeparableFilter& filter, int row_begin, int row_end, int threads,
