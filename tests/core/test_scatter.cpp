@@ -102,4 +102,10 @@ TEST_CASE("the separable form of a scatter kernel gives the direct convolution's
     taps_only.separable.clear();
     scatter(src, direct, taps_only, frame, 2);
     for (size_t i = 0; i < src.pixels.size(); ++i) REQUIRE(separable.pixels[i] == Approx(direct.pixels[i]).margin(1e-4));  // inputs up to 3.1
+    // The filter runs over bands of 64 rows: one thread (two bands here) or seven change no pixel.
+    for (int threads : {1, 7}) {
+        Plane again(frame);
+        scatter(src, again, k, frame, threads);
+        CHECK(again.pixels == separable.pixels);
+    }
 }
