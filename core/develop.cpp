@@ -366,12 +366,7 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
     if (enlarger_table_) {
         paper_exposure = per_row(negative, negative[0].window, 3, threads, [&](const float* const* d, float* const* h,
                                                                                int width) {
-            for (int x = 0; x < width; ++x) {
-                const float densities[3] = {d[0][x], d[1][x], d[2][x]};
-                float log2_h[3];
-                (*enlarger_table_)(densities, log2_h);
-                for (int j = 0; j < 3; ++j) h[j][x] = log2_h[j];
-            }
+            enlarger_table_->apply_row(d, h, width);  // log2 paper exposures
             for (int j = 0; j < 3; ++j) fast_exp2_row(h[j], width);
         });
     } else {
@@ -388,13 +383,8 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
     if (view_table_) {
         const Matrix3& m = print_xyz_to_rgb();
         return per_row(paper_density, out, 3, threads, [&](const float* const* d, float* const* rgb, int width) {
-            float* const xyz[3] = {rgb[0], rgb[1], rgb[2]};  // XYZ first, in the result rows
-            for (int x = 0; x < width; ++x) {
-                const float densities[3] = {d[0][x], d[1][x], d[2][x]};
-                float log2_xyz[3];
-                (*view_table_)(densities, log2_xyz);
-                for (int c = 0; c < 3; ++c) xyz[c][x] = log2_xyz[c];
-            }
+            float* const* xyz = rgb;  // XYZ first, in the result rows
+            view_table_->apply_row(d, xyz, width);
             for (int c = 0; c < 3; ++c) fast_exp2_row(xyz[c], width);
             for (int x = 0; x < width; ++x) {
                 const float v[3] = {xyz[0][x], xyz[1][x], xyz[2][x]};

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 
@@ -103,24 +104,70 @@ Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& h
             }
 }
 
-void Table3D::operator()(const float* in, float* out) const {
-    int index[3];
-    float t[3];
+namespace {
+
+// Trilinear interpolation of `values` (3 floats per node, x fastest) at the points of
+// in[a][0 .. lanes), lanes the width of the vector type V (one float or eight): one piece
+// of code for the vector blocks and the scalar tail, so both compute the same values.
+template <typename V, typename I>
+__attribute__((always_inline)) inline void trilinear(const float* values, int nodes, const float* lo,
+                                                     const float* scale, const float* const* in, float* const* out) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    I index[3];
+    V t[3];
     for (int a = 0; a < 3; ++a) {
-        float u = std::clamp((in[a] - lo_[a]) * scale_[a], 0.0f, float(nodes_ - 1));
-        index[a] = std::min(int(u), nodes_ - 2);
-        t[a] = u - float(index[a]);
+        V u;
+        std::memcpy(&u, in[a], sizeof u);
+        u = (u - lo[a]) * scale[a];
+        u = u >= 0.0f ? u : V{} + 0.0f;  // NaN too: a density that is not a number reads the grid's first node
+        u = u > float(nodes - 1) ? V{} + float(nodes - 1) : u;
+        index[a] = __builtin_convertvector(u, I);
+        index[a] = index[a] > nodes - 2 ? I{} + (nodes - 2) : index[a];
+        t[a] = u - __builtin_convertvector(index[a], V);
     }
-    const size_t n = size_t(nodes_), base = (index[2] * n + index[1]) * n + index[0];
-    const std::array<float, 3>* v = &values_[base];
-    const size_t dy = n, dz = n * n;
+    const I base = ((index[2] * nodes + index[1]) * nodes + index[0]) * 3;
+    const int dy = 3 * nodes, dz = 3 * nodes * nodes;
+    auto corner = [&](int offset, int c) {
+        V v;
+        for (int k = 0; k < lanes; ++k) v[k] = values[base[k] + offset + c];
+        return v;
+    };
     for (int c = 0; c < 3; ++c) {
-        float x00 = v[0][c] + t[0] * (v[1][c] - v[0][c]);
-        float x10 = v[dy][c] + t[0] * (v[dy + 1][c] - v[dy][c]);
-        float x01 = v[dz][c] + t[0] * (v[dz + 1][c] - v[dz][c]);
-        float x11 = v[dz + dy][c] + t[0] * (v[dz + dy + 1][c] - v[dz + dy][c]);
-        float y0 = x00 + t[1] * (x10 - x00), y1 = x01 + t[1] * (x11 - x01);
-        out[c] = y0 + t[2] * (y1 - y0);
+        const V v000 = corner(0, c), v100 = corner(3, c), v010 = corner(dy, c), v110 = corner(dy + 3, c);
+        const V v001 = corner(dz, c), v101 = corner(dz + 3, c), v011 = corner(dz + dy, c), v111 = corner(dz + dy + 3, c);
+        const V x00 = v000 + t[0] * (v100 - v000), x10 = v010 + t[0] * (v110 - v010);
+        const V x01 = v001 + t[0] * (v101 - v001), x11 = v011 + t[0] * (v111 - v011);
+        const V y0 = x00 + t[1] * (x10 - x00), y1 = x01 + t[1] * (x11 - x01);
+        const V result = y0 + t[2] * (y1 - y0);
+        std::memcpy(out[c], &result, sizeof result);
+    }
+}
+
+using Lane1 = float __attribute__((vector_size(4)));
+using Index1 = int32_t __attribute__((vector_size(4)));
+
+}  // namespace
+
+void Table3D::operator()(const float* in, float* out) const {
+    const float* in_rows[3] = {&in[0], &in[1], &in[2]};
+    float* out_rows[3] = {&out[0], &out[1], &out[2]};
+    trilinear<Lane1, Index1>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows);
+}
+
+__attribute__((target_clones("avx2", "default"))) void Table3D::apply_row(const float* const* in, float* const* out,
+                                                                          int n) const {
+    using Lane8 = float __attribute__((vector_size(32)));
+    using Index8 = int32_t __attribute__((vector_size(32)));
+    int i = 0;
+    for (; i + 8 <= n; i += 8) {
+        const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
+        float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
+        trilinear<Lane8, Index8>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows);
+    }
+    for (; i < n; ++i) {
+        const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
+        float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
+        trilinear<Lane1, Index1>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows);
     }
 }
 
