@@ -159,8 +159,7 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
                 for (int y = y0; y < y1; ++y) {
                     float* row = d.row(y);
                     if (!m.curve_tables.empty()) {
-                        const LogAxisTable& table = m.curve_tables[i];
-                        for (int x = 0; x < developed.width(); ++x) row[x] = table(row[x]);
+                        m.curve_tables[i].apply_row(row, row, developed.width());
                     } else {
                         const Curve& curve = m.stock.layers[i].density_curve;
                         for (int x = 0; x < developed.width(); ++x)

@@ -161,8 +161,12 @@ void apply_grain(Plane& density, const GrainModel& g, int threads) {
         // take away more silver (or dye) than developed, giving densities below base+fog or
         // below 0 (transmitting or reflecting more than falls on it).
         if (g.fast) {
-            for (int x = 0; x < density.window.width(); ++x)
-                d[x] = std::max(g.d_min, d[x] + g.amplitude(std::max(0.0f, d[x] - g.d_min)) * n[x]);
+            const int width = density.window.width();
+            thread_local std::vector<float> amplitude;  // per worker: the rows' grain amplitudes
+            amplitude.resize(size_t(width));
+            for (int x = 0; x < width; ++x) amplitude[x] = std::max(0.0f, d[x] - g.d_min);
+            g.amplitude.apply_row(amplitude.data(), amplitude.data(), width);
+            for (int x = 0; x < width; ++x) d[x] = std::max(g.d_min, d[x] + amplitude[x] * n[x]);
             return;
         }
         for (int x = 0; x < density.window.width(); ++x) {

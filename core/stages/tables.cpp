@@ -45,12 +45,49 @@ LogAxisTable::LogAxisTable(const Curve& curve, int mantissa_bits) : shift_(23 - 
     samples_[samples] = samples_[samples - 1];  // so the last sample interpolates to itself
 }
 
-float LogAxisTable::operator()(float v) const {
+namespace {
+
+// The lookup of LogAxisTable at the lanes of v (V one float or eight, U its uint32 lanes):
+// one piece of code for vector blocks and scalar tails.
+template <typename V, typename U>
+__attribute__((always_inline)) inline V log_axis_lookup(const float* samples, uint32_t first_bits, uint32_t last_bits,
+                                                        int shift, V v) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
     // Non-negative floats order like their bit patterns; NaN and negatives count as 0.
-    const uint32_t b = std::clamp(float_bits(v > 0.0f ? v : 0.0f), first_bits_, last_bits_) - first_bits_;
-    const uint32_t i = b >> shift_;
-    const float t = float(b & ((1u << shift_) - 1)) * bits_float((127u - shift_) << 23);  // * 2^-shift
-    return samples_[i] + t * (samples_[i + 1] - samples_[i]);
+    v = v > 0.0f ? v : V{} + 0.0f;
+    U b;
+    std::memcpy(&b, &v, sizeof b);
+    b = b < first_bits ? U{} + first_bits : b;
+    b = b > last_bits ? U{} + last_bits : b;
+    b -= first_bits;
+    const U i = b >> shift;
+    const V t = __builtin_convertvector(b & ((1u << shift) - 1), V) * bits_float((127u - shift) << 23);  // * 2^-shift
+    V lower, upper;
+    for (int k = 0; k < lanes; ++k) lower[k] = samples[i[k]], upper[k] = samples[i[k] + 1];
+    return lower + t * (upper - lower);
+}
+
+using Float1 = float __attribute__((vector_size(4)));
+using Bits1 = uint32_t __attribute__((vector_size(4)));
+
+}  // namespace
+
+float LogAxisTable::operator()(float v) const {
+    return log_axis_lookup<Float1, Bits1>(samples_.data(), first_bits_, last_bits_, shift_, Float1{v})[0];
+}
+
+__attribute__((target_clones("avx2", "default"))) void LogAxisTable::apply_row(const float* in, float* out,
+                                                                               int n) const {
+    using Float8 = float __attribute__((vector_size(32)));
+    using Bits8 = uint32_t __attribute__((vector_size(32)));
+    int i = 0;
+    for (; i + 8 <= n; i += 8) {
+        Float8 v;
+        std::memcpy(&v, in + i, sizeof v);
+        v = log_axis_lookup<Float8, Bits8>(samples_.data(), first_bits_, last_bits_, shift_, v);
+        std::memcpy(out + i, &v, sizeof v);
+    }
+    for (; i < n; ++i) out[i] = (*this)(in[i]);
 }
 
 float fast_exp2(float x) {

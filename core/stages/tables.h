@@ -22,6 +22,8 @@ public:
     LogAxisTable() = default;
     LogAxisTable(const Curve& f_of_log10_v, int mantissa_bits);
     float operator()(float v) const;
+    // operator() of n values, eight at a time, bit for bit the same values (out may be in).
+    void apply_row(const float* in, float* out, int n) const;
 
 private:
     std::vector<float> samples_;

@@ -50,6 +50,13 @@ TEST_CASE("a curve tabulated against exposure follows the curve within its inter
         CHECK(table(-1.0f) == table(0.0f));
         CHECK(table(std::nanf("")) == table(0.0f));
         CHECK(table(std::numeric_limits<float>::infinity()) == Approx(curve.y.back()).margin(1e-6));
+        // A row, in vector blocks and the scalar tail, gives operator()'s values bit for bit.
+        std::vector<float> row;
+        for (double log_h = -7.0; log_h <= 3.0; log_h += 0.00917) row.push_back(float(std::pow(10.0, log_h)));
+        row.insert(row.end(), {0.0f, -1.0f, std::nanf(""), std::numeric_limits<float>::infinity(), 1e-40f});
+        std::vector<float> looked_up(row.size());
+        table.apply_row(row.data(), looked_up.data(), int(row.size()));
+        for (size_t i = 0; i < row.size(); ++i) REQUIRE(looked_up[i] == table(row[i]));
     }
 }
 
