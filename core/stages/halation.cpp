@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "core/parallel.h"
 #include "core/stages/filters.h"
@@ -12,8 +13,8 @@ namespace {
 
 int floor_div(int a, int d) { return a >= 0 ? a / d : -((-a + d - 1) / d); }
 
-// The Gaussian part of halation on the coarse grid: out = blur(src) on out.window.
-void coarse_blur(const Plane& src, Plane& out, const HalationKernel& k, const Window& frame, int threads) {
+// Halation on the coarse grid: out = src + strength * blur(src) on out.window.
+void coarse_halation(const Plane& src, Plane& out, const HalationKernel& k, const Window& frame, int threads) {
     const int d = k.decimation, r = int(k.taps.size() / 2);
     const Window coarse_frame{floor_div(frame.x0, d), floor_div(frame.y0, d), floor_div(frame.x1 - 1, d) + 1,
                               floor_div(frame.y1 - 1, d) + 1};
@@ -41,23 +42,32 @@ void coarse_blur(const Plane& src, Plane& out, const HalationKernel& k, const Wi
         }
     });
     convolve_separable(means, blurred, k.taps, coarse_frame, threads);
-    // Bilinear interpolation at each fine pixel's centre, clamped to the coarse frame.
+    // Bilinear interpolation at each fine pixel's centre, clamped to the coarse frame; the
+    // columns' blocks and weights are the same on every row.
     auto clamp_coarse = [&](int v, int lo, int hi) { return std::clamp(v, lo, hi - 1); };
+    const int width = out.window.width();
+    std::vector<int> column0(width), column1(width);
+    std::vector<float> tx(width);
+    for (int x = out.window.x0; x < out.window.x1; ++x) {
+        const int i = floor_div(2 * x + 1 - d, 2 * d), c = x - out.window.x0;
+        tx[c] = float(2 * x + 1 - d - 2 * d * i) / float(2 * d);
+        column0[c] = clamp_coarse(i, coarse_frame.x0, coarse_frame.x1) - blurred_window.x0;
+        column1[c] = clamp_coarse(i + 1, coarse_frame.x0, coarse_frame.x1) - blurred_window.x0;
+    }
+    const float strength = float(k.strength);
     parallel_for(out.window.y0, out.window.y1, threads, [&](int y_begin, int y_end) {
         for (int y = y_begin; y < y_end; ++y) {
             const int j = floor_div(2 * y + 1 - d, 2 * d);
             const float ty = float(2 * y + 1 - d - 2 * d * j) / float(2 * d);
             const float* row0 = blurred.row(clamp_coarse(j, coarse_frame.y0, coarse_frame.y1));
             const float* row1 = blurred.row(clamp_coarse(j + 1, coarse_frame.y0, coarse_frame.y1));
+            const float* in = src.row(y) + (out.window.x0 - src.window.x0);
             float* o = out.row(y);
-            for (int x = out.window.x0; x < out.window.x1; ++x) {
-                const int i = floor_div(2 * x + 1 - d, 2 * d);
-                const float tx = float(2 * x + 1 - d - 2 * d * i) / float(2 * d);
-                const int i0 = clamp_coarse(i, coarse_frame.x0, coarse_frame.x1) - blurred_window.x0;
-                const int i1 = clamp_coarse(i + 1, coarse_frame.x0, coarse_frame.x1) - blurred_window.x0;
-                const float top = row0[i0] + tx * (row0[i1] - row0[i0]);
-                const float bottom = row1[i0] + tx * (row1[i1] - row1[i0]);
-                o[x - out.window.x0] = top + ty * (bottom - top);
+            for (int c = 0; c < width; ++c) {
+                const int i0 = column0[c], i1 = column1[c];
+                const float top = row0[i0] + tx[c] * (row0[i1] - row0[i0]);
+                const float bottom = row1[i0] + tx[c] * (row1[i1] - row1[i0]);
+                o[c] = in[c] + strength * (top + ty * (bottom - top));
             }
         }
     });
@@ -84,10 +94,11 @@ HalationKernel design_halation(double strength, double radius_um, double pixel_p
 }
 
 void apply_halation(const Plane& src, Plane& dst, const HalationKernel& kernel, const Window& frame, int threads) {
-    if (kernel.decimation > 1)
-        coarse_blur(src, dst, kernel, frame, threads);
-    else
-        convolve_separable(src, dst, kernel.taps, frame, threads);
+    if (kernel.decimation > 1) {
+        coarse_halation(src, dst, kernel, frame, threads);
+        return;
+    }
+    convolve_separable(src, dst, kernel.taps, frame, threads);
     const float strength = float(kernel.strength);
     parallel_for(dst.window.y0, dst.window.y1, threads, [&](int y_begin, int y_end) {
         for (int y = y_begin; y < y_end; ++y) {
