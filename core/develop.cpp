@@ -127,18 +127,18 @@ Plane spread_exposure(const MaterialStages& m, size_t layer, Plane exposure, con
                       int threads, StageTimes* times) {
     if (m.halation[layer]) {
         StageTimer timer(times, "halation");
-        Plane halated(out.grown(m.scatter[layer].radius).intersected(frame));
+        Plane halated = Plane::unset(out.grown(m.scatter[layer].radius).intersected(frame));
         apply_halation(exposure, halated, *m.halation[layer], frame, threads);
         exposure = std::move(halated);
     }
     if (!m.scatter[layer].is_identity()) {
         StageTimer timer(times, "scatter");
-        Plane spread(out);
+        Plane spread = Plane::unset(out);
         scatter(exposure, spread, m.scatter[layer], frame, threads);
         return spread;
     }
     if (exposure.window == out) return exposure;
-    Plane cropped(out);  // another layer's halo made the exposure larger than this one needs
+    Plane cropped = Plane::unset(out);  // another layer's halo made the exposure larger than this one needs
     for (int y = out.y0; y < out.y1; ++y)
         std::copy_n(exposure.row(y) + (out.x0 - exposure.window.x0), out.width(), cropped.row(y));
     return cropped;
@@ -175,7 +175,7 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
         if (m.boolean_grain[i]) {
             StageTimer timer(times, "grain");
             apply_boolean_grain(d, *m.boolean_grain[i], threads);
-            Plane cropped(out);
+            Plane cropped = Plane::unset(out);
             for (int y = out.y0; y < out.y1; ++y) std::copy_n(d.row(y) + (out.x0 - developed.x0), out.width(), cropped.row(y));
             d = std::move(cropped);
         }
@@ -188,7 +188,8 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
 // of `channels`: whole rows, so that the fast tiers' exponentials vectorise.
 template <typename F>
 std::vector<Plane> per_row(const std::vector<Plane>& in, const Window& window, size_t channels, int threads, F f) {
-    std::vector<Plane> out(channels, Plane(window));
+    std::vector<Plane> out;
+    for (size_t c = 0; c < channels; ++c) out.push_back(Plane::unset(window));
     parallel_for(window.y0, window.y1, threads, [&](int y0, int y1) {
         const float* in_rows[3];
         float* out_rows[3];
@@ -330,7 +331,7 @@ std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& fi
     std::vector<Plane> exposure;
     StageTimer expose_timer(times, "expose");
     for (const auto& w : film_stages_.rgb_weights) {
-        Plane h(film_in);
+        Plane h = Plane::unset(film_in);
         if (monochrome_input_) {
             const double scale = (w[0] + w[1] + w[2]) * film_exposure_scale_;
             parallel_for(film_in.y0, film_in.y1, threads, [&](int y0, int y1) {

@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <memory>
+#include <utility>
 #include <vector>
 
 namespace darkroom {
@@ -53,14 +55,39 @@ struct BasicImageView {
 using ImageView = BasicImageView<float>;
 using ConstImageView = BasicImageView<const float>;
 
+// Storage whose resize() leaves new floats unset: a stage that writes every pixel of its
+// output plane need not pay for zeroing it first (about a copy pass per plane).
+template <typename T>
+struct UnsetAllocator : std::allocator<T> {
+    template <typename U>
+    struct rebind {
+        using other = UnsetAllocator<U>;
+    };
+    template <typename U>
+    void construct(U* p) noexcept {
+        ::new (static_cast<void*>(p)) U;
+    }
+    template <typename U, typename... Args>
+    void construct(U* p, Args&&... args) {
+        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+};
+
 // A single-channel float image that owns its pixels: the working buffer between stages.
 struct Plane {
     Window window;
-    std::vector<float> pixels;
+    std::vector<float, UnsetAllocator<float>> pixels;
 
     Plane() = default;
     explicit Plane(const Window& w, float fill = 0.0f)
         : window(w), pixels((size_t)std::max<long long>(w.pixel_count(), 0), fill) {}
+    // A plane whose every pixel the caller writes before reading any.
+    static Plane unset(const Window& w) {
+        Plane p;
+        p.window = w;
+        p.pixels.resize((size_t)std::max<long long>(w.pixel_count(), 0));
+        return p;
+    }
     float& at(int x, int y) { return pixels[(size_t)(y - window.y0) * window.width() + (x - window.x0)]; }
     float at(int x, int y) const { return pixels[(size_t)(y - window.y0) * window.width() + (x - window.x0)]; }
     float* row(int y) { return pixels.data() + (size_t)(y - window.y0) * window.width(); }
