@@ -127,9 +127,15 @@ void convolve_separable(const Plane& src, Plane& dst, const SeparableFilter& fil
     filter_separable(
         w, filter, frame.y0, frame.y1, threads,
         [&](int y, float* padded) {
-            const float* in = src.row(y);
-            for (int i = 0; i < w.width() + 2 * r; ++i)
-                padded[i] = in[std::clamp(w.x0 - r + i, frame.x0, frame.x1 - 1) - src.window.x0];
+            // The row from x = w.x0 - r, its ends held at the frame's edge pixels.
+            auto in = [&](int x) { return src.row(y) + (x - src.window.x0); };
+            const int first = w.x0 - r, last = w.x1 + r;  // padded covers [first, last)
+            const int inside0 = std::max(first, frame.x0), inside1 = std::min(last, frame.x1);
+            // (The edge pixels are read only where the row reaches past them: a window's source
+            // plane need not hold them.)
+            if (first < inside0) std::fill(padded, padded + (inside0 - first), *in(frame.x0));
+            std::copy(in(inside0), in(inside1), padded + (inside0 - first));
+            if (inside1 < last) std::fill(padded + (inside1 - first), padded + (last - first), *in(frame.x1 - 1));
         },
         [&](int y, const float* filtered) { std::copy_n(filtered, w.width(), dst.row(y)); });
 }
