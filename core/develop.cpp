@@ -330,30 +330,35 @@ std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& fi
     const Window film_in = film_out.grown(film_stages_.halo_px()).intersected(frame_);
     std::vector<Plane> exposure;
     StageTimer expose_timer(times, "expose");
-    for (const auto& w : film_stages_.rgb_weights) {
-        Plane h = Plane::unset(film_in);
-        if (monochrome_input_) {
-            const double scale = (w[0] + w[1] + w[2]) * film_exposure_scale_;
-            parallel_for(film_in.y0, film_in.y1, threads, [&](int y0, int y1) {
-                for (int y = y0; y < y1; ++y)
-                    for (int x = film_in.x0; x < film_in.x1; ++x)
-                        h.at(x, y) = float(std::clamp(sanitize(in.at(x, y)[0]) * scale, 0.0, kMaxInput));
-            });
-            exposure.push_back(std::move(h));
-            continue;
-        }
-        parallel_for(film_in.y0, film_in.y1, threads, [&](int y0, int y1) {
-            for (int y = y0; y < y1; ++y)
-                for (int x = film_in.x0; x < film_in.x1; ++x) {
-                    const float* px = in.at(x, y);
-                    double rgb[3] = {sanitize(px[0]), sanitize(px[in.channels > 1 ? 1 : 0]),
-                                     sanitize(px[in.channels > 2 ? 2 : 0])};
-                    double e = (w[0] * rgb[0] + w[1] * rgb[1] + w[2] * rgb[2]) * film_exposure_scale_;
-                    h.at(x, y) = float(std::clamp(e, 0.0, kMaxInput));
+    const auto& weights = film_stages_.rgb_weights;
+    for (size_t l = 0; l < weights.size(); ++l) exposure.push_back(Plane::unset(film_in));
+    // Per row: the input's channels sanitised once, then each layer's exposure from them.
+    parallel_for(film_in.y0, film_in.y1, threads, [&](int y0, int y1) {
+        const int width = film_in.width();
+        std::vector<double> channel[3];
+        for (auto& c : channel) c.resize(size_t(width));
+        const int source[3] = {0, in.channels > 1 ? 1 : 0, in.channels > 2 ? 2 : 0};  // grey: R = G = B
+        for (int y = y0; y < y1; ++y) {
+            for (int x = 0; x < width; ++x) {
+                const float* px = in.at(film_in.x0 + x, y);
+                for (int c = 0; c < 3; ++c) channel[c][x] = sanitize(px[source[c]]);
+            }
+            for (size_t l = 0; l < weights.size(); ++l) {
+                const auto& w = weights[l];
+                float* h = exposure[l].row(y);
+                if (monochrome_input_) {  // grey input: one scale of channel 0
+                    const double scale = (w[0] + w[1] + w[2]) * film_exposure_scale_;
+                    for (int x = 0; x < width; ++x) h[x] = float(std::clamp(channel[0][x] * scale, 0.0, kMaxInput));
+                    continue;
                 }
-        });
-        exposure.push_back(std::move(h));
-    }
+                for (int x = 0; x < width; ++x) {
+                    const double e = (w[0] * channel[0][x] + w[1] * channel[1][x] + w[2] * channel[2][x]) *
+                                     film_exposure_scale_;
+                    h[x] = float(std::clamp(e, 0.0, kMaxInput));
+                }
+            }
+        }
+    });
     expose_timer.stop();
     return develop_material(film_stages_, std::move(exposure), film_out, frame_, threads, times);
 }
