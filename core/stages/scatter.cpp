@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <stdexcept>
 #include <tuple>
 
 #include "core/parallel.h"
@@ -169,6 +170,8 @@ void taper(ScatterKernel& kernel, int max_radius) {
 namespace {
 
 ScatterKernel design_uncached(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design) {
+    if (!(mtf_response(mtf, 0.0) > 0))
+        throw std::invalid_argument("the MTF's response at 0 cycles/mm must be positive (it is normalised to 1 there)");
     ScatterKernel kernel;
     if (mtf_deviation_to_nyquist(mtf, pixel_pitch_um) < kMtfNoOpTolerance) {
         kernel.taps = {1.0f};
@@ -218,6 +221,8 @@ ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, con
     }
     ScatterKernel kernel = design_uncached(mtf, pixel_pitch_um, design);
     std::lock_guard<std::mutex> lock(mutex);
+    // A long session (a plugin across many pitches and stocks) must not grow it without bound.
+    if (cache.size() >= kMaxCachedKernels) cache.clear();
     return cache.emplace(key, std::move(kernel)).first->second;
 }
 

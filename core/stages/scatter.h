@@ -46,6 +46,10 @@ struct ScatterDesign {
     double separable_tolerance = kSeparableTolerance;
 };
 
+// Throws std::invalid_argument for an MTF whose response at 0 is not positive (scattering
+// is normalised to MTF(0) = 1: there is nothing to normalise). Designs are kept per process
+// for the frames of a sequence; the cache is emptied when it holds kMaxCachedKernels.
+constexpr size_t kMaxCachedKernels = 64;
 ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design = {});
 
 // dst = src convolved with the kernel (through its separable terms when it has them), for

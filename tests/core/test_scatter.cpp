@@ -109,3 +109,19 @@ TEST_CASE("the separable form of a scatter kernel gives the direct convolution's
         CHECK(again.pixels == separable.pixels);
     }
 }
+
+TEST_CASE("an MTF with no response at 0 is refused, not designed into a 0/0 kernel", "[scatter]") {
+    const Curve zero = make_curve({0, 50}, {0, 0}, "zero");
+    CHECK_THROWS_WITH(design_scatter_kernel(zero, 5.0), Catch::Contains("response at 0 cycles/mm must be positive"));
+    const Curve falling_from_zero = make_curve({0, 10, 50}, {0, 0.5, 0.2}, "dip");
+    CHECK_THROWS_AS(design_scatter_kernel(falling_from_zero, 5.0), std::invalid_argument);
+}
+
+TEST_CASE("the kernel cache gives the design of the same inputs, beyond its size bound too", "[scatter]") {
+    const Curve mtf = make_curve({0, 20, 60}, {1, 0.8, 0.3}, "mtf");
+    const ScatterKernel first = design_scatter_kernel(mtf, 6.0);
+    for (size_t i = 0; i <= kMaxCachedKernels; ++i) design_scatter_kernel(mtf, 6.5 + 0.01 * double(i));  // fills and empties it
+    const ScatterKernel again = design_scatter_kernel(mtf, 6.0);
+    CHECK(again.taps == first.taps);
+    CHECK(again.separable == first.separable);
+}
