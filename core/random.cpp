@@ -48,7 +48,11 @@ __attribute__((target_clones("avx2", "default"))) void quantile_normal_run(uint3
     const U32 lane{0, 1, 2, 3, 4, 5, 6, 7};
     int i = 0;
     for (; i + kLanes <= n; i += kLanes) {
-        const U32 index = mix32(row_hash ^ mix32(uint32_t(x0 + i) + lane)) >> 16;
+        U32 h = uint32_t(x0 + i) + lane;
+        mix32_in_place(h);
+        h ^= row_hash;
+        mix32_in_place(h);
+        const U32 index = h >> 16;
         for (int k = 0; k < kLanes; ++k) out[i + k] = table[index[k]];
     }
     for (; i < n; ++i) out[i] = table[mix32(row_hash ^ mix32(uint32_t(x0 + i))) >> 16];

@@ -51,14 +51,18 @@ inline float standard_normal(const NoiseKey& key, int x, int y) { return (float)
 // The fast tiers' noise: a 32-bit integer hash of (key, x, y) picks one of 2^16 equally
 // likely quantiles of the standard normal (so values reach about +-4.2 sigma). The hash
 // is the murmur3 finaliser (Appleby, MurmurHash3, public domain), applied per coordinate.
-// (A template so that core/random.cpp hashes eight lanes of a vector type with it.)
+// (In place and a template, so that core/random.cpp hashes eight lanes of a vector type
+// with it: a vector never passes through a call, whose ABI would differ with and without AVX.)
 template <typename U32>
-inline U32 mix32(U32 h) {
+inline void mix32_in_place(U32& h) {
     h ^= h >> 16;
     h *= 0x85EBCA6Bu;
     h ^= h >> 13;
     h *= 0xC2B2AE35u;
     h ^= h >> 16;
+}
+inline uint32_t mix32(uint32_t h) {
+    mix32_in_place(h);
     return h;
 }
 // The part of the hash that is the same along a row: pass it to quantile_normal_run.

@@ -37,13 +37,9 @@ namespace {
 using Vec = float __attribute__((vector_size(32)));
 constexpr int kLanes = 8, kVecs = 8, kBlock = kLanes * kVecs;
 
-inline Vec load(const float* p) {
-    Vec v;
-    std::memcpy(&v, p, sizeof v);
-    return v;
-}
-
-inline void store(float* p, Vec v) { std::memcpy(p, &v, sizeof v); }
+// (No vector passes through a call: its ABI would differ with and without AVX.)
+inline void load(Vec& v, const float* p) { std::memcpy(&v, p, sizeof v); }
+inline void store(float* p, const Vec& v) { std::memcpy(p, &v, sizeof v); }
 
 // out[x] += sum_k taps[k] row_of(k)[x] for x in [0, width).
 template <typename RowOf>
@@ -53,11 +49,15 @@ __attribute__((always_inline)) inline void add_tap_sums(const std::vector<float>
     int x = 0;
     for (; x + kBlock <= width; x += kBlock) {
         Vec sum[kVecs];
-        for (int v = 0; v < kVecs; ++v) sum[v] = load(out + x + v * kLanes);
+        for (int v = 0; v < kVecs; ++v) load(sum[v], out + x + v * kLanes);
         for (int k = 0; k < n; ++k) {
             const Vec t = Vec{} + tap[k];
             const float* row = row_of(k) + x;
-            for (int v = 0; v < kVecs; ++v) sum[v] += t * load(row + v * kLanes);
+            for (int v = 0; v < kVecs; ++v) {
+                Vec in;
+                load(in, row + v * kLanes);
+                sum[v] += t * in;
+            }
         }
         for (int v = 0; v < kVecs; ++v) store(out + x + v * kLanes, sum[v]);
     }

@@ -47,11 +47,12 @@ LogAxisTable::LogAxisTable(const Curve& curve, int mantissa_bits) : shift_(23 - 
 
 namespace {
 
-// The lookup of LogAxisTable at the lanes of v (V one float or eight, U its uint32 lanes):
-// one piece of code for vector blocks and scalar tails.
+// The lookup of LogAxisTable at the lanes of v, in place (V one float or eight, U its
+// uint32 lanes): one piece of code for vector blocks and scalar tails. (No vector passes
+// through a call by value: its ABI would differ with and without AVX.)
 template <typename V, typename U>
-__attribute__((always_inline)) inline V log_axis_lookup(const float* samples, uint32_t first_bits, uint32_t last_bits,
-                                                        int shift, V v) {
+__attribute__((always_inline)) inline void log_axis_lookup(const float* samples, uint32_t first_bits,
+                                                           uint32_t last_bits, int shift, V& v) {
     constexpr int lanes = sizeof(V) / sizeof(float);
     // Non-negative floats order like their bit patterns; NaN and negatives count as 0.
     v = v > 0.0f ? v : V{} + 0.0f;
@@ -64,7 +65,7 @@ __attribute__((always_inline)) inline V log_axis_lookup(const float* samples, ui
     const V t = __builtin_convertvector(b & ((1u << shift) - 1), V) * bits_float((127u - shift) << 23);  // * 2^-shift
     V lower, upper;
     for (int k = 0; k < lanes; ++k) lower[k] = samples[i[k]], upper[k] = samples[i[k] + 1];
-    return lower + t * (upper - lower);
+    v = lower + t * (upper - lower);
 }
 
 using Float1 = float __attribute__((vector_size(4)));
@@ -73,21 +74,33 @@ using Bits1 = uint32_t __attribute__((vector_size(4)));
 }  // namespace
 
 float LogAxisTable::operator()(float v) const {
-    return log_axis_lookup<Float1, Bits1>(samples_.data(), first_bits_, last_bits_, shift_, Float1{v})[0];
+    Float1 lane{v};
+    log_axis_lookup<Float1, Bits1>(samples_.data(), first_bits_, last_bits_, shift_, lane);
+    return lane[0];
 }
 
-__attribute__((target_clones("avx2", "default"))) void LogAxisTable::apply_row(const float* in, float* out,
-                                                                               int n) const {
+// The vector loops are free functions: clang 14 does not clone member functions.
+__attribute__((target_clones("avx2", "default"))) void log_axis_row(const float* samples, uint32_t first_bits,
+                                                                     uint32_t last_bits, int shift, const float* in,
+                                                                     float* out, int n) {
     using Float8 = float __attribute__((vector_size(32)));
     using Bits8 = uint32_t __attribute__((vector_size(32)));
     int i = 0;
     for (; i + 8 <= n; i += 8) {
         Float8 v;
         std::memcpy(&v, in + i, sizeof v);
-        v = log_axis_lookup<Float8, Bits8>(samples_.data(), first_bits_, last_bits_, shift_, v);
+        log_axis_lookup<Float8, Bits8>(samples, first_bits, last_bits, shift, v);
         std::memcpy(out + i, &v, sizeof v);
     }
-    for (; i < n; ++i) out[i] = (*this)(in[i]);
+    for (; i < n; ++i) {
+        Float1 lane{in[i]};
+        log_axis_lookup<Float1, Bits1>(samples, first_bits, last_bits, shift, lane);
+        out[i] = lane[0];
+    }
+}
+
+void LogAxisTable::apply_row(const float* in, float* out, int n) const {
+    log_axis_row(samples_.data(), first_bits_, last_bits_, shift_, in, out, n);
 }
 
 float fast_exp2(float x) {
@@ -164,14 +177,13 @@ __attribute__((always_inline)) inline void trilinear(const float* values, int no
     }
     const I base = ((index[2] * nodes + index[1]) * nodes + index[0]) * 3;
     const int dy = 3 * nodes, dz = 3 * nodes * nodes;
-    auto corner = [&](int offset, int c) {
-        V v;
+    auto corner = [&](V& v, int offset, int c) {
         for (int k = 0; k < lanes; ++k) v[k] = values[base[k] + offset + c];
-        return v;
     };
     for (int c = 0; c < 3; ++c) {
-        const V v000 = corner(0, c), v100 = corner(3, c), v010 = corner(dy, c), v110 = corner(dy + 3, c);
-        const V v001 = corner(dz, c), v101 = corner(dz + 3, c), v011 = corner(dz + dy, c), v111 = corner(dz + dy + 3, c);
+        V v000, v100, v010, v110, v001, v101, v011, v111;
+        corner(v000, 0, c), corner(v100, 3, c), corner(v010, dy, c), corner(v110, dy + 3, c);
+        corner(v001, dz, c), corner(v101, dz + 3, c), corner(v011, dz + dy, c), corner(v111, dz + dy + 3, c);
         const V x00 = v000 + t[0] * (v100 - v000), x10 = v010 + t[0] * (v110 - v010);
         const V x01 = v001 + t[0] * (v101 - v001), x11 = v011 + t[0] * (v111 - v011);
         const V y0 = x00 + t[1] * (x10 - x00), y1 = x01 + t[1] * (x11 - x01);
@@ -191,21 +203,26 @@ void Table3D::operator()(const float* in, float* out) const {
     trilinear<Lane1, Index1>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows);
 }
 
-__attribute__((target_clones("avx2", "default"))) void Table3D::apply_row(const float* const* in, float* const* out,
-                                                                          int n) const {
+__attribute__((target_clones("avx2", "default"))) void trilinear_row(const float* values, int nodes, const float* lo,
+                                                                      const float* scale, const float* const* in,
+                                                                      float* const* out, int n) {
     using Lane8 = float __attribute__((vector_size(32)));
     using Index8 = int32_t __attribute__((vector_size(32)));
     int i = 0;
     for (; i + 8 <= n; i += 8) {
         const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
         float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
-        trilinear<Lane8, Index8>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows);
+        trilinear<Lane8, Index8>(values, nodes, lo, scale, in_rows, out_rows);
     }
     for (; i < n; ++i) {
         const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
         float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
-        trilinear<Lane1, Index1>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows);
+        trilinear<Lane1, Index1>(values, nodes, lo, scale, in_rows, out_rows);
     }
+}
+
+void Table3D::apply_row(const float* const* in, float* const* out, int n) const {
+    trilinear_row(&values_[0][0], nodes_, lo_.data(), scale_.data(), in, out, n);
 }
 
 }  // namespace darkroom
