@@ -331,7 +331,11 @@ std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& fi
     std::vector<Plane> exposure;
     StageTimer expose_timer(times, "expose");
     const auto& weights = film_stages_.rgb_weights;
-    for (size_t l = 0; l < weights.size(); ++l) exposure.push_back(Plane::unset(film_in));
+    std::vector<double> grey_scale;  // grey input: each layer's exposure is one scale of channel 0
+    for (const auto& w : weights) {
+        exposure.push_back(Plane::unset(film_in));
+        grey_scale.push_back((w[0] + w[1] + w[2]) * film_exposure_scale_);
+    }
     // Per row: the input's channels sanitised once, then each layer's exposure from them.
     parallel_for(film_in.y0, film_in.y1, threads, [&](int y0, int y1) {
         const int width = film_in.width();
@@ -346,9 +350,9 @@ std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& fi
             for (size_t l = 0; l < weights.size(); ++l) {
                 const auto& w = weights[l];
                 float* h = exposure[l].row(y);
-                if (monochrome_input_) {  // grey input: one scale of channel 0
-                    const double scale = (w[0] + w[1] + w[2]) * film_exposure_scale_;
-                    for (int x = 0; x < width; ++x) h[x] = float(std::clamp(channel[0][x] * scale, 0.0, kMaxInput));
+                if (monochrome_input_) {
+                    for (int x = 0; x < width; ++x)
+                        h[x] = float(std::clamp(channel[0][x] * grey_scale[l], 0.0, kMaxInput));
                     continue;
                 }
                 for (int x = 0; x < width; ++x) {

@@ -103,35 +103,44 @@ void LogAxisTable::apply_row(const float* in, float* out, int n) const {
     log_axis_row(samples_.data(), first_bits_, last_bits_, shift_, in, out, n);
 }
 
-float fast_exp2(float x) {
-    x = std::clamp(x, -126.0f, 126.0f);
-    const int whole = int(x + (x >= 0.0f ? 0.5f : -0.5f));  // nearest, by truncation (inline)
-    const float f = (x - float(whole)) * 0.69314718f;       // |f| <= ln2 / 2: e^f to f^6
-    const float p =
-        1.0f + f * (1.0f + f * (0.5f + f * (1.0f / 6 + f * (1.0f / 24 + f * (1.0f / 120 + f * (1.0f / 720))))));
-    return p * bits_float(uint32_t(whole + 127) << 23);
+namespace {
+
+// 2^x at the lanes of x, in place (V one float or eight, I its int32 lanes): one piece of
+// code for fast_exp2 and the vector blocks of fast_exp2_row.
+template <typename V, typename I>
+__attribute__((always_inline)) inline void exp2_in_place(V& x) {
+    x = x < -126.0f ? V{} - 126.0f : x;
+    x = x > 126.0f ? V{} + 126.0f : x;
+    const I whole = __builtin_convertvector(x + (x >= 0.0f ? V{} + 0.5f : V{} - 0.5f), I);  // nearest, by truncation
+    const V f = (x - __builtin_convertvector(whole, V)) * 0.69314718f;  // |f| <= ln2 / 2: e^f to f^6
+    const V p = 1.0f + f * (1.0f + f * (0.5f + f * (1.0f / 6 + f * (1.0f / 24 + f * (1.0f / 120 + f * (1.0f / 720))))));
+    const I scale_bits = (whole + 127) << 23;
+    V scale;
+    std::memcpy(&scale, &scale_bits, sizeof scale);
+    x = p * scale;
 }
 
-// The same operations as fast_exp2, eight values at a time (GCC vector types; AVX2 where
-// the processor has it).
+using Exp2Lane = float __attribute__((vector_size(4)));
+using Exp2Index = int32_t __attribute__((vector_size(4)));
+
+}  // namespace
+
+float fast_exp2(float x) {
+    Exp2Lane lane{x};
+    exp2_in_place<Exp2Lane, Exp2Index>(lane);
+    return lane[0];
+}
+
+// Eight values at a time (GCC vector types; AVX2 where the processor has it).
 __attribute__((target_clones("avx2", "default"))) void fast_exp2_row(float* values, int n) {
     using Vec = float __attribute__((vector_size(32)));
     using Int = int32_t __attribute__((vector_size(32)));
-    constexpr int kLanes = 8;
     int i = 0;
-    for (; i + kLanes <= n; i += kLanes) {
+    for (; i + 8 <= n; i += 8) {
         Vec x;
         std::memcpy(&x, values + i, sizeof x);
-        x = x < -126.0f ? Vec{} - 126.0f : x;
-        x = x > 126.0f ? Vec{} + 126.0f : x;
-        const Int whole = __builtin_convertvector(x + (x >= 0.0f ? Vec{} + 0.5f : Vec{} - 0.5f), Int);
-        const Vec f = (x - __builtin_convertvector(whole, Vec)) * 0.69314718f;
-        const Vec p = 1.0f + f * (1.0f + f * (0.5f + f * (1.0f / 6 + f * (1.0f / 24 + f * (1.0f / 120 + f * (1.0f / 720))))));
-        const Int scale_bits = (whole + 127) << 23;
-        Vec scale;
-        std::memcpy(&scale, &scale_bits, sizeof scale);
-        const Vec result = p * scale;
-        std::memcpy(values + i, &result, sizeof result);
+        exp2_in_place<Vec, Int>(x);
+        std::memcpy(values + i, &x, sizeof x);
     }
     for (; i < n; ++i) values[i] = fast_exp2(values[i]);
 }
