@@ -29,6 +29,9 @@ namespace {
 
 using stock_json::kHuge;
 using stock_json::kMaxDensity;
+using stock_json::kMaxIsoSpeed;
+using stock_json::kMinIsoSpeed;
+
 // A density curve may not fall by more than this between samples (rounding in a sampled
 // analytic curve, e.g. a written parametric one, stays far below it).
 constexpr double kFallTolerance = 1e-9;
@@ -295,7 +298,7 @@ Stock parse_stock_json(const std::string& text, const std::string& origin) {
         if (!src.is_array()) r.at("sources").fail("expected an array of strings");
         for (size_t i = 0; i < src.size(); ++i) s.sources.push_back(r.at("sources").at(i).text(src[i]));
     }
-    s.iso_speed = r.at("iso_speed").number(r.field(doc, "iso_speed"), 1e-6, 1e9);
+    s.iso_speed = r.at("iso_speed").number(r.field(doc, "iso_speed"), kMinIsoSpeed, kMaxIsoSpeed);
     if (doc.contains("frame_width_mm")) s.frame_width_mm = r.at("frame_width_mm").number(doc["frame_width_mm"], 0.1, 1e4);
     if (doc.contains("exposure_illuminant")) {
         s.exposure_illuminant_name = r.at("exposure_illuminant").text(doc["exposure_illuminant"]);

@@ -7,6 +7,7 @@
 // measured one; null curve samples are left out.
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "core/stock.h"
 #include "core/stock_json.h"
@@ -75,6 +76,7 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
 
     Stock s;
     s.id = ri.at("stock").text(ri.field(info, "stock"));
+    if (s.id.empty()) ri.at("stock").fail("must not be empty");
     s.name = ri.at("name").text(ri.field(info, "name"));
     std::string type = ri.at("type").text(ri.field(info, "type"));
     std::string support = ri.at("support").text(ri.field(info, "support"));
@@ -138,7 +140,8 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
         layer.mtf = make_curve({0.0, 1000.0}, {1.0, 1.0}, "flat MTF");
         s.layers.push_back(layer);
     }
-    s.base_density = spectral_column(rd, data, "base_density", -1, -stock_json::kHuge, stock_json::kHuge);
+    // A negative density would transmit more light than falls on it.
+    s.base_density = spectral_column(rd, data, "base_density", -1, 0.0, stock_json::kHuge);
 
     SpeedDefinition sd = speed_definition(s.kind);
     const Curve& green = s.layers[1].density_curve;
@@ -147,6 +150,12 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
         rd.at("density_curves").fail("the green curve never rises " + std::to_string(sd.density_over_fog) +
                                      " above its minimum, so the stock has no speed");
     s.iso_speed = sd.k / std::pow(10.0, hm_log);
+    if (!(s.iso_speed >= stock_json::kMinIsoSpeed && s.iso_speed <= stock_json::kMaxIsoSpeed)) {
+        std::ostringstream problem;
+        problem << "the speed point (log H " << hm_log << ") gives ISO " << s.iso_speed << ", outside ["
+                << stock_json::kMinIsoSpeed << ", " << stock_json::kMaxIsoSpeed << "]";
+        rd.at("log_exposure").fail(problem.str());
+    }
     return s;
 }
 

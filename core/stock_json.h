@@ -20,6 +20,9 @@ inline constexpr double kHuge = 1e30;
 // Every density a stock's curves may reach, however they are given (tables, softplus knots,
 // the parametric form, an imported profile), so that a stock written by stock_to_json reads back.
 inline constexpr double kMaxDensity = 10.0;
+// The speeds a stock may have (ISO arithmetic), however it is given or derived.
+inline constexpr double kMinIsoSpeed = 1e-6;
+inline constexpr double kMaxIsoSpeed = 1e9;
 // log10 sensitivities are read within +-30, so that 10^x is a finite, non-zero double.
 inline constexpr double kMaxLog10Sensitivity = 30.0;
 

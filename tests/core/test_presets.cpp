@@ -214,6 +214,40 @@ TEST_CASE("every negative-working spektrafilm profile imports within its tracing
     CHECK(imported >= 9);
 }
 
+// What the importer accepts must be a valid stock, so that stock_to_json writes what reads back
+// (the stock fuzzer found each of these accepted and then refused on reading).
+TEST_CASE("a spektrafilm profile that no stock file could hold is refused, naming the field", "[presets][reference-data]") {
+    if (!have_reference_data()) return;
+    const nlohmann::json vision3 = read_profile("kodak_vision3_250d.json");
+    auto refusal_of = [](const nlohmann::json& profile) {
+        try {
+            import_spektrafilm_profile(profile.dump(), "edited.json");
+        } catch (const StockError& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    nlohmann::json p = vision3;
+    p["info"]["stock"] = "";
+    CHECK(refusal_of(p) == "edited.json: field 'info.stock': must not be empty");
+    p = vision3;
+    p["data"]["base_density"][7] = -0.1;
+    CHECK(refusal_of(p) == "edited.json: field 'data.base_density[7]': value -0.1 is outside [0, 1e+30]");
+    for (double shift : {-16.0, 16.0}) {
+        p = vision3;
+        for (auto& x : p["data"]["log_exposure"]) x = x.get<double>() + shift;
+        CHECK_THAT(refusal_of(p), Catch::StartsWith("edited.json: field 'data.log_exposure': the speed point") &&
+                                      Catch::EndsWith("outside [1e-06, 1e+09]"));
+    }
+    // A dip of 0.05 D is more than tracing noise: refused rather than smoothed away.
+    p = vision3;
+    auto& curves = p["data"]["density_curves"];
+    const size_t mid = curves.size() / 2;
+    curves[mid][1] = curves[mid - 1][1].get<double>() - 0.05;
+    CHECK_THAT(refusal_of(p), Catch::StartsWith("edited.json: field 'data.density_curves': the green curve falls at log H"));
+    CHECK(refusal_of(vision3) == "accepted");
+}
+
 TEST_CASE("a grey ramp printed with automatic printer lights stays near neutral", "[presets][print]") {
     struct Pair {
         const char* film;
