@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/simd.h"
+
 namespace darkroom {
 
 // Quantiles z_i of the standard normal at (i + 0.5) / 2^16, by Newton's method on
@@ -42,17 +44,16 @@ const float* normal_quantile_table() {
 // The hashes, eight at a time (GCC vector types; AVX2 where the processor has it).
 __attribute__((target_clones("avx2", "default"))) void quantile_normal_run(uint32_t row_hash, int x0, int n,
                                                                             float* out) {
-    using U32 = uint32_t __attribute__((vector_size(32)));
     constexpr int kLanes = 8;
     const float* table = normal_quantile_table();
-    const U32 lane{0, 1, 2, 3, 4, 5, 6, 7};
+    const simd::Uint8 lane{0, 1, 2, 3, 4, 5, 6, 7};
     int i = 0;
     for (; i + kLanes <= n; i += kLanes) {
-        U32 h = uint32_t(x0 + i) + lane;
+        simd::Uint8 h = uint32_t(x0 + i) + lane;
         mix32_in_place(h);
         h ^= row_hash;
         mix32_in_place(h);
-        const U32 index = h >> 16;
+        const simd::Uint8 index = h >> 16;
         for (int k = 0; k < kLanes; ++k) out[i + k] = table[index[k]];
     }
     for (; i < n; ++i) out[i] = table[mix32(row_hash ^ mix32(uint32_t(x0 + i))) >> 16];

@@ -15,18 +15,20 @@ namespace darkroom {
 std::vector<float> pixel_integrated_gaussian(double sigma_px);
 
 // One row: out[x] = sum_k taps[k] in[x + k] for x in [0, width), `in` holding width +
-// taps - 1 values. Summed in float in the order of k for every x (vectorisable, and each
-// value independent of where the row starts).
+// taps - 1 values. Summed in float in one order for every x (vectorisable, and each value
+// independent of where the row starts): the order of k, except that symmetric taps sum
+// taps[k] (in[x + k] + in[x + n-1-k]) for k < n/2 first, then the middle tap.
 void convolve_row(const float* in, const std::vector<float>& taps, int width, float* out);
 // One row of a vertical pass, added to out: out[x] += sum_k taps[k] rows[k][x].
 void convolve_column_add(const float* const* rows, const std::vector<float>& taps, int width, float* out);
 
 // A sum of separable filters, sum_t sign_t (taps_t in x, then taps_t in y), all of 2r + 1
-// taps, streamed in bands of rows so that the horizontal results stay in cache:
+// taps, streamed row by row so that the horizontal results stay in cache (a ring of the
+// 2r + 1 rows the vertical pass reads, each row filtered once per thread):
 //   source(y, padded) writes input row y, the width + 2r values from x = out.x0 - r;
 //   sink(y, filtered) receives output row y of `out`.
 // The vertical pass reads rows clamped to [row_begin, row_end). Each output value is summed
-// in one fixed order (terms, then taps), whatever the bands and threads.
+// in one fixed order (terms, then taps), whatever the threads.
 using RowSource = std::function<void(int y, float* padded)>;
 using RowSink = std::function<void(int y, const float* filtered)>;
 struct SeparableFilter {

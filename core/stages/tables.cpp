@@ -6,11 +6,22 @@
 #include <cstring>
 #include <limits>
 
+#include "core/simd.h"
+
 // GCC warns that a vector value would be passed differently without AVX; the vector
 // helpers here are inlined, so no vector crosses a call.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace darkroom {
+
+using simd::Float1;
+using simd::Float8;
+using simd::Int1;
+using simd::Int8;
+using simd::load;
+using simd::store;
+using simd::Uint1;
+using simd::Uint8;
 
 namespace {
 
@@ -68,14 +79,11 @@ __attribute__((always_inline)) inline void log_axis_lookup(const float* samples,
     v = lower + t * (upper - lower);
 }
 
-using Float1 = float __attribute__((vector_size(4)));
-using Bits1 = uint32_t __attribute__((vector_size(4)));
-
 }  // namespace
 
 float LogAxisTable::operator()(float v) const {
     Float1 lane{v};
-    log_axis_lookup<Float1, Bits1>(samples_.data(), first_bits_, last_bits_, shift_, lane);
+    log_axis_lookup<Float1, Uint1>(samples_.data(), first_bits_, last_bits_, shift_, lane);
     return lane[0];
 }
 
@@ -83,18 +91,16 @@ float LogAxisTable::operator()(float v) const {
 __attribute__((target_clones("avx2", "default"))) void log_axis_row(const float* samples, uint32_t first_bits,
                                                                      uint32_t last_bits, int shift, const float* in,
                                                                      float* out, int n) {
-    using Float8 = float __attribute__((vector_size(32)));
-    using Bits8 = uint32_t __attribute__((vector_size(32)));
     int i = 0;
     for (; i + 8 <= n; i += 8) {
         Float8 v;
-        std::memcpy(&v, in + i, sizeof v);
-        log_axis_lookup<Float8, Bits8>(samples, first_bits, last_bits, shift, v);
-        std::memcpy(out + i, &v, sizeof v);
+        load(v, in + i);
+        log_axis_lookup<Float8, Uint8>(samples, first_bits, last_bits, shift, v);
+        store(out + i, v);
     }
     for (; i < n; ++i) {
         Float1 lane{in[i]};
-        log_axis_lookup<Float1, Bits1>(samples, first_bits, last_bits, shift, lane);
+        log_axis_lookup<Float1, Uint1>(samples, first_bits, last_bits, shift, lane);
         out[i] = lane[0];
     }
 }
@@ -120,27 +126,22 @@ __attribute__((always_inline)) inline void exp2_in_place(V& x) {
     x = p * scale;
 }
 
-using Exp2Lane = float __attribute__((vector_size(4)));
-using Exp2Index = int32_t __attribute__((vector_size(4)));
-
 }  // namespace
 
 float fast_exp2(float x) {
-    Exp2Lane lane{x};
-    exp2_in_place<Exp2Lane, Exp2Index>(lane);
+    Float1 lane{x};
+    exp2_in_place<Float1, Int1>(lane);
     return lane[0];
 }
 
 // Eight values at a time (GCC vector types; AVX2 where the processor has it).
 __attribute__((target_clones("avx2", "default"))) void fast_exp2_row(float* values, int n) {
-    using Vec = float __attribute__((vector_size(32)));
-    using Int = int32_t __attribute__((vector_size(32)));
     int i = 0;
     for (; i + 8 <= n; i += 8) {
-        Vec x;
-        std::memcpy(&x, values + i, sizeof x);
-        exp2_in_place<Vec, Int>(x);
-        std::memcpy(values + i, &x, sizeof x);
+        Float8 x;
+        load(x, values + i);
+        exp2_in_place<Float8, Int8>(x);
+        store(values + i, x);
     }
     for (; i < n; ++i) values[i] = fast_exp2(values[i]);
 }
@@ -159,24 +160,56 @@ Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& h
             for (int i = 0; i < nodes; ++i) {
                 double in[3] = {lo[0] + i * step[0], lo[1] + j * step[1], lo[2] + k * step[2]}, out[3];
                 f(in, out);
-                for (int c = 0; c < 3; ++c) values_[(size_t(k) * nodes + j) * nodes + i][c] = float(out[c]);
+                values_[(size_t(k) * nodes + j) * nodes + i] = {float(out[0]), float(out[1]), float(out[2]), 0.0f};
             }
 }
 
 namespace {
 
-// Trilinear interpolation of `values` (3 floats per node, x fastest) at the points of
+// The three values of the node at each lane's offset into v[0..2]. Eight lanes load each
+// node's 16 bytes whole and transpose them in registers (four nodes per 128-bit half), where
+// lane-by-lane loads would insert 24 values one at a time; both load the same floats.
+template <typename V, typename I>
+__attribute__((always_inline)) inline void node_values(const float* values, const I& offset, V* v) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    if constexpr (lanes == 8) {
+        simd::Float4 n[8];
+        for (int k = 0; k < 8; ++k) load(n[k], values + offset[k]);
+        // Lanes k and k + 4 side by side: [x y z - | x y z -].
+        const V p0 = __builtin_shufflevector(n[0], n[4], 0, 1, 2, 3, 4, 5, 6, 7);
+        const V p1 = __builtin_shufflevector(n[1], n[5], 0, 1, 2, 3, 4, 5, 6, 7);
+        const V p2 = __builtin_shufflevector(n[2], n[6], 0, 1, 2, 3, 4, 5, 6, 7);
+        const V p3 = __builtin_shufflevector(n[3], n[7], 0, 1, 2, 3, 4, 5, 6, 7);
+        const V xy01 = __builtin_shufflevector(p0, p1, 0, 8, 1, 9, 4, 12, 5, 13);  // x0 x1 y0 y1 | x4 x5 y4 y5
+        const V z01 = __builtin_shufflevector(p0, p1, 2, 10, 3, 11, 6, 14, 7, 15);
+        const V xy23 = __builtin_shufflevector(p2, p3, 0, 8, 1, 9, 4, 12, 5, 13);
+        const V z23 = __builtin_shufflevector(p2, p3, 2, 10, 3, 11, 6, 14, 7, 15);
+        v[0] = __builtin_shufflevector(xy01, xy23, 0, 1, 8, 9, 4, 5, 12, 13);
+        v[1] = __builtin_shufflevector(xy01, xy23, 2, 3, 10, 11, 6, 7, 14, 15);
+        v[2] = __builtin_shufflevector(z01, z23, 0, 1, 8, 9, 4, 5, 12, 13);
+    } else {
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < lanes; ++k) v[c][k] = values[offset[k] + c];
+    }
+}
+
+// Tetrahedral interpolation of `values` (4 floats per node, 3 values and a pad, x fastest) at the points of
 // in[a][0 .. lanes), lanes the width of the vector type V (one float or eight): one piece
 // of code for the vector blocks and the scalar tail, so both compute the same values.
+// The cell is split along its main diagonal into six tetrahedra; the one holding the point
+// is walked from corner 000 to 111 one axis at a time, largest fraction first:
+//   f = (1 - t_max) f000 + (t_max - t_mid) f_a + (t_mid - t_min) f_ab + t_min f111
+// (Kasson, Nin, Plouffe & Hafner, "Performing color space conversions with three-dimensional
+// linear interpolation", J. Electronic Imaging 4(3), 1995). Exact for linear functions,
+// continuous across cells, and four corner loads per channel where trilinear needs eight.
 template <typename V, typename I>
-__attribute__((always_inline)) inline void trilinear(const float* values, int nodes, const float* lo,
-                                                     const float* scale, const float* const* in, float* const* out) {
-    constexpr int lanes = sizeof(V) / sizeof(float);
+__attribute__((always_inline)) inline void tetrahedral(const float* values, int nodes, const float* lo,
+                                                       const float* scale, const float* const* in, float* const* out) {
     I index[3];
     V t[3];
     for (int a = 0; a < 3; ++a) {
         V u;
-        std::memcpy(&u, in[a], sizeof u);
+        load(u, in[a]);
         u = (u - lo[a]) * scale[a];
         u = u >= 0.0f ? u : V{} + 0.0f;  // NaN too: a density that is not a number reads the grid's first node
         u = u > float(nodes - 1) ? V{} + float(nodes - 1) : u;
@@ -184,54 +217,56 @@ __attribute__((always_inline)) inline void trilinear(const float* values, int no
         index[a] = index[a] > nodes - 2 ? I{} + (nodes - 2) : index[a];
         t[a] = u - __builtin_convertvector(index[a], V);
     }
-    const I base = ((index[2] * nodes + index[1]) * nodes + index[0]) * 3;
-    const int dy = 3 * nodes, dz = 3 * nodes * nodes;
-    auto corner = [&](V& v, int offset, int c) {
-        for (int k = 0; k < lanes; ++k) v[k] = values[base[k] + offset + c];
-    };
+    const I base = ((index[2] * nodes + index[1]) * nodes + index[0]) * 4;
+    const int step[3] = {4, 4 * nodes, 4 * nodes * nodes};  // node offsets along x, y, z
+    // The axes by their fractions: a the largest, c the smallest (ties in axis order; the
+    // tetrahedra share the faces where fractions tie, so either choice gives the same value).
+    const I x_ge_y = t[0] >= t[1], x_ge_z = t[0] >= t[2], y_ge_z = t[1] >= t[2];
+    const I off_a = x_ge_y & x_ge_z ? I{} + step[0] : (y_ge_z ? I{} + step[1] : I{} + step[2]);
+    const I off_c = ~x_ge_y & ~x_ge_z ? I{} + step[0] : (y_ge_z ? I{} + step[2] : I{} + step[1]);
+    const V max_xy = t[0] > t[1] ? t[0] : t[1], min_xy = t[0] < t[1] ? t[0] : t[1];
+    const V t_max = max_xy > t[2] ? max_xy : t[2], t_min = min_xy < t[2] ? min_xy : t[2];
+    const V below_max = max_xy < t[2] ? max_xy : t[2];
+    const V t_mid = min_xy > below_max ? min_xy : below_max;
+    const int diagonal = step[0] + step[1] + step[2];
+    V v000[3], v_a[3], v_ab[3], v111[3];
+    node_values<V, I>(values, base, v000);
+    node_values<V, I>(values, base + off_a, v_a);
+    node_values<V, I>(values, base + (diagonal - off_c), v_ab);
+    node_values<V, I>(values, base + diagonal, v111);
+    const V w000 = 1.0f - t_max, w_a = t_max - t_mid, w_ab = t_mid - t_min;
     for (int c = 0; c < 3; ++c) {
-        V v000, v100, v010, v110, v001, v101, v011, v111;
-        corner(v000, 0, c), corner(v100, 3, c), corner(v010, dy, c), corner(v110, dy + 3, c);
-        corner(v001, dz, c), corner(v101, dz + 3, c), corner(v011, dz + dy, c), corner(v111, dz + dy + 3, c);
-        const V x00 = v000 + t[0] * (v100 - v000), x10 = v010 + t[0] * (v110 - v010);
-        const V x01 = v001 + t[0] * (v101 - v001), x11 = v011 + t[0] * (v111 - v011);
-        const V y0 = x00 + t[1] * (x10 - x00), y1 = x01 + t[1] * (x11 - x01);
-        const V result = y0 + t[2] * (y1 - y0);
-        std::memcpy(out[c], &result, sizeof result);
+        const V result = w000 * v000[c] + w_a * v_a[c] + w_ab * v_ab[c] + t_min * v111[c];
+        store(out[c], result);
     }
 }
-
-using Lane1 = float __attribute__((vector_size(4)));
-using Index1 = int32_t __attribute__((vector_size(4)));
 
 }  // namespace
 
 void Table3D::operator()(const float* in, float* out) const {
     const float* in_rows[3] = {&in[0], &in[1], &in[2]};
     float* out_rows[3] = {&out[0], &out[1], &out[2]};
-    trilinear<Lane1, Index1>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows);
+    tetrahedral<Float1, Int1>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows);
 }
 
-__attribute__((target_clones("avx2", "default"))) void trilinear_row(const float* values, int nodes, const float* lo,
+__attribute__((target_clones("avx2", "default"))) void tetrahedral_row(const float* values, int nodes, const float* lo,
                                                                       const float* scale, const float* const* in,
                                                                       float* const* out, int n) {
-    using Lane8 = float __attribute__((vector_size(32)));
-    using Index8 = int32_t __attribute__((vector_size(32)));
     int i = 0;
     for (; i + 8 <= n; i += 8) {
         const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
         float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
-        trilinear<Lane8, Index8>(values, nodes, lo, scale, in_rows, out_rows);
+        tetrahedral<Float8, Int8>(values, nodes, lo, scale, in_rows, out_rows);
     }
     for (; i < n; ++i) {
         const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
         float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
-        trilinear<Lane1, Index1>(values, nodes, lo, scale, in_rows, out_rows);
+        tetrahedral<Float1, Int1>(values, nodes, lo, scale, in_rows, out_rows);
     }
 }
 
 void Table3D::apply_row(const float* const* in, float* const* out, int n) const {
-    trilinear_row(&values_[0][0], nodes_, lo_.data(), scale_.data(), in, out, n);
+    tetrahedral_row(&values_[0][0], nodes_, lo_.data(), scale_.data(), in, out, n);
 }
 
 }  // namespace darkroom

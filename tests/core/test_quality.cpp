@@ -1,7 +1,10 @@
 // The quality tiers (core/quality.h): the fast tiers' tables and filters against what
 // they approximate, and the tiers' renders against the reference tier.
 #include <catch2/catch.hpp>
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <functional>
 #include <random>
 
 #include "core/demo_scene.h"
@@ -78,13 +81,34 @@ TEST_CASE("fast_exp2_row gives fast_exp2 of each value, bit for bit", "[quality]
     }
 }
 
-TEST_CASE("a 3D table reproduces a trilinear function and clamps outside its box", "[quality][tables]") {
+// Tetrahedral interpolation by its six cases (Kasson et al. 1995, table 1): in the cell's
+// unit cube, with fractions x >= y >= z, f = f000 + x (f100 - f000) + y (f110 - f100) +
+// z (f111 - f110), and likewise for each other order of the fractions.
+static double tetrahedral_by_cases(const std::function<double(int, int, int)>& node, double x, double y, double z) {
+    const double t[3] = {x, y, z};
+    int order[3] = {0, 1, 2};
+    std::stable_sort(order, order + 3, [&](int a, int b) { return t[a] > t[b]; });
+    int corner[3] = {0, 0, 0};
+    double f = node(0, 0, 0), previous = f;
+    for (int k = 0; k < 3; ++k) {
+        corner[order[k]] = 1;
+        const double next = node(corner[0], corner[1], corner[2]);
+        f += t[order[k]] * (next - previous);
+        previous = next;
+    }
+    return f;
+}
+
+TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions and clamps outside its box",
+          "[quality][tables]") {
     auto f = [](const double* v, double* out) {
-        out[0] = 1 + 2 * v[0] - v[1] + 0.5 * v[2];
+        out[0] = 1 + 2 * v[0] - v[1] + 0.5 * v[2];  // linear: reproduced exactly
         out[1] = v[0] * v[1] * v[2];
-        out[2] = 3 - v[0] * v[2] + v[1];
+        out[2] = 3 - v[0] * v[2] + v[1] + std::sin(3 * v[1]);
     };
-    Table3D table({0, -1, 0.5}, {2, 1, 3}, 9, f);
+    const std::array<double, 3> lo{0, -1, 0.5}, hi{2, 1, 3};
+    const int nodes = 9;
+    Table3D table(lo, hi, nodes, f);
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> u(0, 1);
     for (int i = 0; i < 1000; ++i) {
@@ -92,7 +116,24 @@ TEST_CASE("a 3D table reproduces a trilinear function and clamps outside its box
         f(in, expected);
         float in_f[3] = {float(in[0]), float(in[1]), float(in[2])}, out[3];
         table(in_f, out);
-        for (int c = 0; c < 3; ++c) REQUIRE(out[c] == Approx(expected[c]).margin(1e-5));
+        CHECK(out[0] == Approx(expected[0]).margin(1e-5));
+        // The other two against the six-case definition on the table's own nodes.
+        double cell[3], frac[3];
+        int index[3];
+        for (int a = 0; a < 3; ++a) {
+            cell[a] = (in_f[a] - lo[a]) / (hi[a] - lo[a]) * (nodes - 1);
+            index[a] = std::min(int(cell[a]), nodes - 2);
+            frac[a] = cell[a] - index[a];
+        }
+        for (int c = 1; c < 3; ++c) {
+            auto node = [&](int dx, int dy, int dz) {
+                double p[3], v[3];
+                for (int a = 0; a < 3; ++a) p[a] = lo[a] + (index[a] + (a == 0 ? dx : a == 1 ? dy : dz)) * (hi[a] - lo[a]) / (nodes - 1);
+                f(p, v);
+                return double(float(v[c]));
+            };
+            CHECK(out[c] == Approx(tetrahedral_by_cases(node, frac[0], frac[1], frac[2])).margin(1e-5));
+        }
     }
     float outside[3] = {-5, 7, 1}, clamped[3] = {0, 1, 1}, a[3], b[3];
     table(outside, a);

@@ -1,7 +1,9 @@
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <random>
 #include <vector>
 
+#include "core/stages/filters.h"
 #include "core/stages/scatter.h"
 #include "test_support.h"
 
@@ -102,7 +104,8 @@ TEST_CASE("the separable form of a scatter kernel gives the direct convolution's
     taps_only.separable.clear();
     scatter(src, direct, taps_only, frame, 2);
     for (size_t i = 0; i < src.pixels.size(); ++i) REQUIRE(separable.pixels[i] == Approx(direct.pixels[i]).margin(1e-4));  // inputs up to 3.1
-    // The filter runs over bands of 64 rows: one thread (two bands here) or seven change no pixel.
+    // Each thread filters its rows through its own ring of horizontal results: one thread or seven
+    // change no pixel.
     for (int threads : {1, 7}) {
         Plane again(frame);
         scatter(src, again, k, frame, threads);
@@ -124,4 +127,45 @@ TEST_CASE("the kernel cache gives the design of the same inputs, beyond its size
     const ScatterKernel again = design_scatter_kernel(mtf, 6.0);
     CHECK(again.taps == first.taps);
     CHECK(again.separable == first.separable);
+}
+
+TEST_CASE("row and column convolutions sum their taps in the documented order, in vector blocks and the tail",
+          "[scatter][filters]") {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-1, 3);
+    const int width = 64 * 3 + 13;  // three vector blocks and a scalar tail
+    for (bool symmetric : {true, false}) {
+        std::vector<float> taps(9);
+        for (int k = 0; k < 9; ++k) taps[k] = symmetric ? 0.2f / float(1 + std::abs(k - 4)) : u(rng);
+        INFO("symmetric " << symmetric);
+        std::vector<float> in(width + 8), out(width);
+        for (float& v : in) v = u(rng);
+        convolve_row(in.data(), taps, width, out.data());
+        std::vector<const float*> rows;
+        for (int k = 0; k < 9; ++k) rows.push_back(in.data() + k);  // the same sums, as a column pass
+        std::vector<float> column(width, 0.5f);
+        convolve_column_add(rows.data(), taps, width, column.data());
+        for (int x = 0; x < width; ++x) {
+            // The definition, in float: mirrored taps folded when symmetric, else in order.
+            float expected = 0;
+            if (symmetric) {
+                for (int k = 0; k < 4; ++k) expected += taps[k] * (in[x + k] + in[x + 8 - k]);
+                expected += taps[4] * in[x + 4];
+            } else {
+                for (int k = 0; k < 9; ++k) expected += taps[k] * in[x + k];
+            }
+            REQUIRE(out[x] == expected);
+            float expected_column = 0.5f;
+            if (symmetric) {
+                for (int k = 0; k < 4; ++k) expected_column += taps[k] * (in[x + k] + in[x + 8 - k]);
+                expected_column += taps[4] * in[x + 4];
+            } else {
+                for (int k = 0; k < 9; ++k) expected_column += taps[k] * in[x + k];
+            }
+            REQUIRE(column[x] == expected_column);
+            double exact = 0;
+            for (int k = 0; k < 9; ++k) exact += double(taps[k]) * in[x + k];
+            CHECK(out[x] == Approx(exact).margin(1e-5));
+        }
+    }
 }
