@@ -146,23 +146,18 @@ TEST_CASE("row and column convolutions sum their taps in the documented order, i
         std::vector<float> column(width, 0.5f);
         convolve_column_add(rows.data(), taps, width, column.data());
         for (int x = 0; x < width; ++x) {
-            // The definition, in float: mirrored taps folded when symmetric, else in order.
-            float expected = 0;
-            if (symmetric) {
-                for (int k = 0; k < 4; ++k) expected += taps[k] * (in[x + k] + in[x + 8 - k]);
-                expected += taps[4] * in[x + 4];
-            } else {
-                for (int k = 0; k < 9; ++k) expected += taps[k] * in[x + k];
-            }
-            REQUIRE(out[x] == expected);
-            float expected_column = 0.5f;
-            if (symmetric) {
-                for (int k = 0; k < 4; ++k) expected_column += taps[k] * (in[x + k] + in[x + 8 - k]);
-                expected_column += taps[4] * in[x + 4];
-            } else {
-                for (int k = 0; k < 9; ++k) expected_column += taps[k] * in[x + k];
-            }
-            REQUIRE(column[x] == expected_column);
+            // The definition, in float from `start`: mirrored taps folded when symmetric, else in order.
+            auto definition = [&](float start) {
+                float sum = start;
+                if (symmetric) {
+                    for (int k = 0; k < 4; ++k) sum += taps[k] * (in[x + k] + in[x + 8 - k]);
+                    return sum + taps[4] * in[x + 4];
+                }
+                for (int k = 0; k < 9; ++k) sum += taps[k] * in[x + k];
+                return sum;
+            };
+            REQUIRE(out[x] == definition(0.0f));
+            REQUIRE(column[x] == definition(0.5f));
             double exact = 0;
             for (int k = 0; k < 9; ++k) exact += double(taps[k]) * in[x + k];
             CHECK(out[x] == Approx(exact).margin(1e-5));
