@@ -30,17 +30,16 @@ inline void parallel_for(int begin, int end, int threads, const std::function<vo
     }
     std::vector<std::thread> pool;
     std::vector<std::exception_ptr> errors(workers);
-    for (int w = 0; w < workers; ++w) {
-        int b = begin + (int)((long long)n * w / workers);
-        int e = begin + (int)((long long)n * (w + 1) / workers);
-        pool.emplace_back([&, w, b, e] {
-            try {
-                body(b, e);
-            } catch (...) {
-                errors[w] = std::current_exception();
-            }
-        });
-    }
+    auto run = [&](int w) {
+        try {
+            body(begin + (int)((long long)n * w / workers), begin + (int)((long long)n * (w + 1) / workers));
+        } catch (...) {
+            errors[w] = std::current_exception();
+        }
+    };
+    // The calling thread takes the last range itself: one thread fewer to start and join.
+    for (int w = 0; w + 1 < workers; ++w) pool.emplace_back(run, w);
+    run(workers - 1);
     for (auto& t : pool) t.join();
     for (auto& e : errors)
         if (e) std::rethrow_exception(e);
