@@ -88,6 +88,10 @@ __attribute__((target_clones("avx2", "default"))) void exposure_row(const double
     for (; x < width; ++x) h[x] = float(std::clamp(exposure(x) * scale, 0.0, kMaxInput));
 }
 
+// The input channel that holds colour channel c (R, G, B): grey input (one channel, or grey
+// and alpha) holds all three in its first.
+int colour_channel(const ConstImageView& in, int c) { return in.channels >= 3 ? c : 0; }
+
 // The stock's grain for a layer with the user's per-channel overrides (channel = layer).
 GrainSpec layer_grain(const GrainSpec& stock, const DevelopSettings& s, size_t channel) {
     GrainSpec g = stock;
@@ -380,7 +384,7 @@ std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& fi
         const int width = film_in.width();
         std::vector<double> channel[3];
         for (auto& c : channel) c.resize(size_t(width));
-        const int source[3] = {0, in.channels > 1 ? 1 : 0, in.channels > 2 ? 2 : 0};  // grey: R = G = B
+        const int source[3] = {0, colour_channel(in, 1), colour_channel(in, 2)};  // grey: R = G = B
         const double* rgb[3] = {channel[0].data(), channel[1].data(), channel[2].data()};
         for (int y = y0; y < y1; ++y) {
             for (int c = 0; c < (monochrome_input_ ? 1 : 3); ++c)
@@ -452,7 +456,7 @@ std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, in
         for (int y = film_in.y0; y < film_in.y1; ++y)
             for (int x = film_in.x0; x < film_in.x1; ++x)
                 // Clamped as the film's exposure is: at +64 EV a 1e30 pixel would overflow a float.
-                h.at(x, y) = float(std::clamp(sanitize(in.at(x, y)[std::min(c, in.channels - 1)]) * film_exposure_scale_,
+                h.at(x, y) = float(std::clamp(sanitize(in.at(x, y)[colour_channel(in, c)]) * film_exposure_scale_,
                                               -kMaxInput, kMaxInput));
         Plane spread = spread_exposure(m, layer, std::move(h), out, frame_, threads, times);
         const float normalise = float(1.0 / (1.0 + (m.halation[layer] ? m.halation[layer]->strength : 0.0)));
@@ -521,13 +525,14 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
 
     // A single-layer result is written to all three channels.
     StageTimer timer(times, "write");
-    bool copy_alpha = in.channels >= 4 && out.channels >= 4;
+    const int alpha = in.channels == 2 ? 1 : in.channels >= 4 ? 3 : -1;
+    const bool copy_alpha = alpha >= 0 && out.channels >= 4;
     parallel_for(out_window.y0, out_window.y1, threads, [&](int y0, int y1) {
         for (int y = y0; y < y1; ++y)
             for (int x = out_window.x0; x < out_window.x1; ++x) {
                 float* px = out.at(x, y);
                 for (int c = 0; c < 3; ++c) px[c] = result[std::min<size_t>(c, result.size() - 1)].at(x, y);
-                if (copy_alpha) px[3] = in.at(x, y)[3];
+                if (copy_alpha) px[3] = in.at(x, y)[alpha];
             }
     });
 }

@@ -117,8 +117,10 @@ public:
 
     // The input window needed to render `output` (grown by the halo, clipped to the frame).
     Window input_window(const Window& output) const;
-    // Renders `out.window` from `in`, which must cover input_window(out.window). Writes
-    // channels 0-2 of `out`; copies a 4th channel (alpha) from `in` when both have one.
+    // Renders `out.window` from `in`, which must cover input_window(out.window). The input
+    // is grey (1 channel), grey and alpha (2), RGB (3) or RGB and alpha first of the rest
+    // (4 or more). Writes channels 0-2 of `out`, and copies the input's alpha to its 4th
+    // channel when both have one.
     // With `times`, adds the seconds spent in each stage.
     void run(const ConstImageView& in, const ImageView& out, int threads, StageTimes* times = nullptr) const;
 

@@ -184,6 +184,41 @@ TEST_CASE("a run killed halfway leaves only complete frames and --no-clobber fin
     for (int f : {1, frames}) CHECK(pixels(frame_name(clean, "out", f)) == pixels(frame_name(dir, "out", f)));
 }
 
+TEST_CASE("grey and alpha input develops as grey and keeps its alpha, as RGBA", "[cli][batch][metadata]") {
+    fs::path dir = fresh_dir("grey-alpha");
+    auto write_grey = [&](const std::string& path, bool with_alpha) {
+        OIIO::ImageSpec spec(24, 16, with_alpha ? 2 : 1, OIIO::TypeDesc::FLOAT);
+        spec.channelnames = with_alpha ? std::vector<std::string>{"Y", "A"} : std::vector<std::string>{"Y"};
+        spec.alpha_channel = with_alpha ? 1 : -1;
+        OIIO::ImageBuf buf(spec);
+        for (OIIO::ImageBuf::Iterator<float> p(buf); !p.done(); ++p) {
+            p[0] = 0.02f * float(1 + p.x() + p.y());
+            if (with_alpha) p[1] = float((p.x() * 7 + p.y() * 3) % 11) / 10.0f;  // unrelated to the grey
+        }
+        REQUIRE(buf.write(path));
+    };
+    const std::string ya = (dir / "ya.exr").string(), y = (dir / "y.exr").string();
+    write_grey(ya, true);
+    write_grey(y, false);
+    const std::string out_ya = (dir / "out-ya.exr").string(), out_y = (dir / "out-y.exr").string();
+    for (const auto& [in, out] : {std::make_pair(ya, out_ya), std::make_pair(y, out_y)}) {
+        Result r = darkroom("develop " + in + " -o " + out + kLook);
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+    }
+    auto file = OIIO::ImageInput::open(out_ya);
+    REQUIRE(file);
+    CHECK(file->spec().channelnames == std::vector<std::string>{"R", "G", "B", "A"});
+    CHECK(file->spec().alpha_channel == 3);
+    const std::vector<float> rgba = pixels(out_ya), rgb = pixels(out_y), grey_alpha = pixels(ya);
+    REQUIRE(rgba.size() == 24 * 16 * 4);
+    REQUIRE(rgb.size() == 24 * 16 * 3);
+    for (int i = 0; i < 24 * 16; ++i) {
+        for (int c = 0; c < 3; ++c) REQUIRE(rgba[i * 4 + c] == rgb[i * 3 + c]);  // the alpha is not read as colour
+        REQUIRE(rgba[i * 4 + 3] == grey_alpha[i * 2 + 1]);
+    }
+}
+
 TEST_CASE("metadata, windows, pixel aspect and extra channels survive", "[cli][batch][metadata]") {
     fs::path dir = fresh_dir("metadata");
     std::string in = (dir / "plate.exr").string(), out = (dir / "out.exr").string();

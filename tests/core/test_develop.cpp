@@ -190,6 +190,33 @@ TEST_CASE("grey input skips the spectral stage and develops as R = G = B does", 
     for (size_t i = 0; i < a.pixels.size(); ++i) REQUIRE(b.pixels[i] == Approx(a.pixels[i]).epsilon(1e-5).margin(1e-6));
 }
 
+TEST_CASE("grey and alpha input develops as its grey alone and passes its alpha", "[develop]") {
+    Stock film = test::test_colour_film(), paper = test::test_colour_paper();
+    Image colour = demo_scene(48, 32);
+    Image grey(colour.window, 1), grey_alpha(colour.window, 2);
+    for (size_t i = 0; i < grey.pixels.size(); ++i) {
+        grey.pixels[i] = grey_alpha.pixels[2 * i] = colour.pixels[3 * i + 1];
+        grey_alpha.pixels[2 * i + 1] = colour.pixels[3 * i];  // an alpha unlike the grey
+    }
+    // The grey path, the spectral path that reads R, G and B, and the texture output.
+    for (auto [skip, output] : {std::pair{true, OutputMode::print}, std::pair{false, OutputMode::print},
+                                std::pair{true, OutputMode::texture}}) {
+        INFO("skip_noop_stages " << skip << ", output " << int(output));
+        DevelopSettings s;
+        s.frame_width_mm = 2.0;
+        s.skip_noop_stages = skip;
+        s.output = output;
+        Plan plan = Plan::compile(film, &paper, s, {48, 32, true});
+        Image a(colour.window, 3), b(colour.window, 4);
+        plan.run(grey.view(), a.view(), 1);
+        plan.run(grey_alpha.view(), b.view(), 1);
+        for (size_t i = 0; i < grey.pixels.size(); ++i) {
+            for (int c = 0; c < 3; ++c) REQUIRE(b.pixels[4 * i + c] == a.pixels[3 * i + c]);
+            REQUIRE(b.pixels[4 * i + 3] == grey_alpha.pixels[2 * i + 1]);
+        }
+    }
+}
+
 TEST_CASE("non-finite and negative pixels have a defined treatment and finite output", "[develop][stability]") {
     Stock film = test::test_film(), paper = test::test_paper();
     const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
