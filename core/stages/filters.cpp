@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 #include "core/parallel.h"
 #include "core/simd.h"
@@ -27,7 +26,7 @@ std::vector<float> pixel_integrated_gaussian(double sigma_px) {
     return taps;
 }
 
-// The loops below produce each output value as a sum over the taps in their order, in
+// The loops below produce each output value as a sum over the taps in one fixed order, in
 // blocks of 64 values held in eight vector registers while the taps go by (the output is
 // written once, and eight independent sums keep the vector units busy). Written with GCC's
 // vector types, compiled for AVX2 where the processor has it: the same multiplies and adds
