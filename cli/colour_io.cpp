@@ -27,6 +27,21 @@ const char* output_mode_name(OutputMode mode) {
     return "?";
 }
 
+// The names a config's Cineon log space goes by (the embedded config's, then its alias).
+const char* const kCineonLogSpaces[] = {"Cineon Log", "cineon"};
+
+// The config's name for the first of `names` it defines; empty if none.
+template <size_t N>
+std::string config_space_named(const ocio::ColorConverter& converter, const char* const (&names)[N]) {
+    for (const char* name : names) {
+        try {
+            return converter.canonical_color_space(name);
+        } catch (const ocio::OcioError&) {
+        }
+    }
+    return "";
+}
+
 }  // namespace
 
 void add_colour_flags(CLI::App& cmd, ColourOptions& colour) {
@@ -56,12 +71,19 @@ ColourIO::ColourIO(const ColourOptions& o, OutputMode output, bool verbose)
         input_ = input_space_.empty()
                      ? std::make_shared<const ocio::Conversion>(nullptr, "already in the working space (no --iscolorspace)")
                      : converter_.to_working(input_space_);
-        if (to_display)
+        if (to_display) {
             output_ = converter_.to_display(o.display_view[0], o.display_view[1], result);
-        else if (!o.output_space.empty())
+            output_space_ = converter_.display_view_color_space(o.display_view[0], o.display_view[1]);
+        } else if (!o.output_space.empty()) {
             output_ = converter_.from_working(o.output_space, result);
-        else
+            output_space_ = converter_.canonical_color_space(o.output_space);
+        } else {
             output_ = std::make_shared<const ocio::Conversion>(nullptr, "left as the model writes it (no --tocolorspace or --ociodisplay)");
+            if (output == OutputMode::scan)
+                output_space_ = config_space_named(converter_, kCineonLogSpaces);
+            else if (output != OutputMode::density)
+                output_space_ = converter_.working_space().color_space;
+        }
     } catch (const ocio::OcioError& e) {
         throw UserError(e.what());
     }

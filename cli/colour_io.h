@@ -46,12 +46,16 @@ public:
     const std::string& input_space() const { return input_space_; }
     const ocio::Conversion& input_conversion() const { return *input_; }
     const ocio::Conversion& output_conversion() const { return *output_; }
+    // The config's name for the colour space the written result is in, for the output's
+    // "oiio:ColorSpace"; empty where the result is data (density) or in no space the config
+    // names (a scan without a Cineon log space, a working space reached through ACES).
+    const std::string& output_space() const { return output_space_; }
 
 private:
     static void apply(const ocio::Conversion& conversion, Image& image, int threads);
 
     ocio::ColorConverter converter_;
-    std::string input_space_;
+    std::string input_space_, output_space_;
     ocio::ConversionPtr input_, output_;
 };
 

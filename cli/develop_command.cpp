@@ -186,6 +186,7 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
     o.run.in_place = fs::absolute(o.input).lexically_normal() == fs::absolute(o.output).lexically_normal();
     o.write.command_line = command_line();
     o.write.look_json = look_json(cmd).dump();
+    o.write.colour_space = ColourIO(o.look.colour, o.look.settings.output, false).output_space();
     if (!o.run.dry_run) remove_stale_outputs_temps(jobs, o.run.quiet);
 
     // A single image is developed silently, as oiiotool does, unless asked (-v, -n).

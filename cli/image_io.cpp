@@ -66,6 +66,8 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
                          : image.channels == 4                                           ? 3
                                                                                          : -1;
     spec.z_channel = like.z_channel >= 3 && like.z_channel < image.channels ? like.z_channel : -1;
+    if (options.colour_space && options.colour_space->empty()) spec.erase_attribute("oiio:ColorSpace");
+    if (options.colour_space && !options.colour_space->empty()) spec.attribute("oiio:ColorSpace", *options.colour_space);
     if (!options.compression.empty()) spec.attribute("compression", options.compression);
     if (!options.command_line.empty()) {
         std::string history = spec.get_string_attribute("Exif:ImageHistory");

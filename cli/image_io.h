@@ -2,6 +2,7 @@
 #pragma once
 
 #include <OpenImageIO/imageio.h>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -27,6 +28,9 @@ struct WriteOptions {
     std::string compression;   // --compression, as OpenImageIO names it (e.g. "zip", "dwaa:45")
     std::string command_line;  // appended to Exif:ImageHistory and named in Software, as oiiotool does
     std::string look_json;     // the settings used, stored as "darkroom:look"
+    // "oiio:ColorSpace": unset keeps the input's (its pixels' space is kept); empty removes
+    // it (the pixels are data); otherwise the space the written pixels are in.
+    std::optional<std::string> colour_space;
 };
 
 // The data types -d accepts.

@@ -179,6 +179,13 @@ std::pair<std::string, std::string> ColorConverter::resolve_display_view(const s
     return {chosen_display, chosen_view};
 }
 
+std::string ColorConverter::display_view_color_space(const std::string& display, const std::string& view) const {
+    const auto [chosen_display, chosen_view] = resolve_display_view(display, view);
+    const std::string name = config_.config->getDisplayViewColorSpaceName(chosen_display.c_str(), chosen_view.c_str());
+    // OCIO's token for a shared view whose colour space is named like the display.
+    return name == "<USE_DISPLAY_NAME>" ? chosen_display : name;
+}
+
 ConversionPtr ColorConverter::cached(const std::string& key, const std::string& description,
                                      const std::function<OCIO::ConstTransformRcPtr()>& make) const {
     const std::string full_key = config_.cache_id + '\n' + key;

@@ -103,6 +103,9 @@ public:
     std::string encoding(const std::string& color_space) const;
     // The display and view to_display would use for these arguments (defaults resolved).
     std::pair<std::string, std::string> resolve_display_view(const std::string& display, const std::string& view) const;
+    // The colour space that to_display's result is in (the view's, or for a view through a
+    // view transform the display's), as OCIO names it.
+    std::string display_view_color_space(const std::string& display, const std::string& view) const;
 
 private:
     // The cached conversion for `key`, made from the transform `make` returns on a miss

@@ -121,6 +121,33 @@ std::string show_config(const std::string& name) {
     return path;
 }
 
+// The output's "oiio:ColorSpace" names the space its pixels are in. The input's tag ("sRGB",
+// as an 8-bit picture carries) is never passed on. (PNG stores any name; EXR stores none.)
+TEST_CASE("the output is tagged with the colour space its pixels are in", "[cli][colour][metadata]") {
+    ScopedOcioVariable unset(std::nullopt);
+    const std::string in = tmp("colour-tag-in.png");
+    OIIO::ImageSpec spec(16, 12, 3, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:ColorSpace", "sRGB");
+    OIIO::ImageBuf buf(spec);
+    OIIO::ImageBufAlgo::fill(buf, {0.4f, 0.4f, 0.4f});
+    REQUIRE(buf.write(in));
+    auto tag_of = [&](const std::string& name, const std::string& flags) {
+        const std::string out = tmp(name);
+        Result r = darkroom("develop " + in + " -o " + out + " --no-grain" + flags);
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+        auto file = OIIO::ImageInput::open(out);
+        REQUIRE(file);
+        const OIIO::ParamValue* tag = file->spec().find_attribute("oiio:ColorSpace");
+        return tag ? std::string(tag->get_string()) : std::string("(none)");
+    };
+    CHECK(tag_of("colour-tag-print.png", "") == "lin_rec709");
+    CHECK(tag_of("colour-tag-acescg.png", " --tocolorspace lin_ap1") == "ACEScg");  // the config's name, not the alias
+    CHECK(tag_of("colour-tag-display.png", " --ociodisplay sRGB Standard") == "sRGB - Display");
+    CHECK(tag_of("colour-tag-scan.png", " --output scan") == "Cineon Log");
+    CHECK(tag_of("colour-tag-density.tif", " --output density -d float") == "(none)");
+}
+
 TEST_CASE("verbose output names the active config and why; the config used is the one named", "[cli][colour]") {
     const std::string in = make_input("colour-config-in.exr", 16, 12), config = show_config("colour-config.ocio");
     const std::string develop = "develop " + in + " --no-grain -v --iscolorspace srgb -o ";
