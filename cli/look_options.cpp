@@ -169,8 +169,8 @@ Image develop_image(const LookOptions& look, const Plan& plan, const ConstImageV
     const ColourIO colour(look.colour, look.settings.output, look.verbose);
     // RGB, then what the input has past its colour: alpha (grey and alpha input: RGBA) and
     // any further channels.
-    const int extra = in.channels >= 3 ? in.channels - 3 : in.channels - 1;
-    Image out(out_window, 3 + extra);
+    const int colour_channels = colour_channel_count(in.channels);
+    Image out(out_window, 3 + in.channels - colour_channels);
     if (colour.input_conversion().is_noop()) {
         plan.run(in, out.view(), look.threads);
     } else {
@@ -187,7 +187,7 @@ Image develop_image(const LookOptions& look, const Plan& plan, const ConstImageV
     if (!look.grain_profile.empty()) add_plate_grain(look, out);
     for (int y = out.window.y0; y < out.window.y1; ++y)
         for (int x = out.window.x0; x < out.window.x1; ++x)
-            for (int c = 3; c < out.channels; ++c) out.at(x, y)[c] = in.at(x, y)[c - 3 + (in.channels - extra)];
+            for (int c = 3; c < out.channels; ++c) out.at(x, y)[c] = in.at(x, y)[colour_channels + c - 3];
     return out;
 }
 

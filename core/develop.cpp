@@ -45,52 +45,64 @@ std::string fmt(double v, int precision = 4) {
     return s.str();
 }
 
-double sanitize(float v) {
-    if (std::isnan(v)) return 0.0;
-    return std::clamp(double(v), -kMaxInput, kMaxInput);
+// The input sanitising and exposure below, on the lanes of a double vector D (one lane or
+// four, core/simd.h): one piece of code for the vector blocks and the scalar tails, cloned
+// for AVX2 with the same double operations, so every machine gets the same exposures.
+
+// NaN is 0; the rest is held within +-kMaxInput.
+template <typename D>
+__attribute__((always_inline)) inline void sanitize_lanes(D& v) {
+    v = v == v ? v : D{};
+    v = v < -kMaxInput ? D{} - kMaxInput : v;
+    v = kMaxInput < v ? D{} + kMaxInput : v;
 }
 
-// The exposure rows below, four values at a time (core/simd.h), cloned for AVX2: the same
-// double operations per value as sanitize and std::clamp (a selection, signed zeros kept),
-// so every machine and the scalar tails get the same exposures.
-using simd::Double4;
+double sanitize(float v) {
+    simd::Double1 lane{double(v)};
+    sanitize_lanes(lane);
+    return lane[0];
+}
 
-// One channel of a row of interleaved pixels (`stride` floats apart), sanitised.
+// h[x ..] = clamp((w . rgb) * scale, 0, kMaxInput); for grey input (w null) rgb[0] * scale.
+template <typename D, typename F>
+__attribute__((always_inline)) inline void exposure_lanes(const double* const* rgb, const double* w, double scale,
+                                                          int x, float* h) {
+    D c[3];
+    for (int i = 0; i < (w ? 3 : 1); ++i) simd::load(c[i], rgb[i] + x);
+    D e = (w ? w[0] * c[0] + w[1] * c[1] + w[2] * c[2] : c[0]) * scale;
+    e = e < 0.0 ? D{} : e;  // a selection, as std::clamp: signed zeros kept
+    e = kMaxInput < e ? D{} + kMaxInput : e;
+    simd::store(h + x, __builtin_convertvector(e, F));
+}
+
+// out[x ..] = the sanitised values of channel `first` of interleaved pixels `stride` floats apart.
+template <typename D>
+__attribute__((always_inline)) inline void sanitized_lanes(const float* first, int stride, int x, double* out) {
+    D v;
+    for (int k = 0; k < int(sizeof v / sizeof(double)); ++k) v[k] = first[size_t(x + k) * stride];
+    sanitize_lanes(v);
+    simd::store(out + x, v);
+}
+
+// One channel of a row of interleaved pixels, sanitised.
 __attribute__((target_clones("avx2", "default"))) void sanitized_channel(const float* first, int stride, int width,
                                                                           double* out) {
     int x = 0;
-    for (; x + 4 <= width; x += 4) {
-        Double4 v;
-        for (int k = 0; k < 4; ++k) v[k] = first[size_t(x + k) * stride];
-        v = v == v ? v : Double4{};  // NaN is 0
-        v = v < -kMaxInput ? Double4{} - kMaxInput : v;
-        v = kMaxInput < v ? Double4{} + kMaxInput : v;
-        simd::store(out + x, v);
-    }
-    for (; x < width; ++x) out[x] = sanitize(first[size_t(x) * stride]);
+    for (; x + 4 <= width; x += 4) sanitized_lanes<simd::Double4>(first, stride, x, out);
+    for (; x < width; ++x) sanitized_lanes<simd::Double1>(first, stride, x, out);
 }
 
-// One layer's exposure row: h = clamp((w . rgb) * scale, 0, kMaxInput), in double; for
-// grey input (w null) h = clamp(grey * scale, 0, kMaxInput).
+// One layer's exposure row (exposure_lanes).
 __attribute__((target_clones("avx2", "default"))) void exposure_row(const double* const* rgb, const double* w,
                                                                      double scale, int width, float* h) {
-    auto exposure = [&](int x) { return w ? w[0] * rgb[0][x] + w[1] * rgb[1][x] + w[2] * rgb[2][x] : rgb[0][x]; };
     int x = 0;
-    for (; x + 4 <= width; x += 4) {
-        Double4 e, c[3];
-        for (int i = 0; i < (w ? 3 : 1); ++i) simd::load(c[i], rgb[i] + x);
-        e = w ? w[0] * c[0] + w[1] * c[1] + w[2] * c[2] : c[0];
-        e *= scale;
-        e = e < 0.0 ? Double4{} : e;
-        e = kMaxInput < e ? Double4{} + kMaxInput : e;
-        simd::store(h + x, __builtin_convertvector(e, simd::Float4));
-    }
-    for (; x < width; ++x) h[x] = float(std::clamp(exposure(x) * scale, 0.0, kMaxInput));
+    for (; x + 4 <= width; x += 4) exposure_lanes<simd::Double4, simd::Float4>(rgb, w, scale, x, h);
+    for (; x < width; ++x) exposure_lanes<simd::Double1, simd::Float1>(rgb, w, scale, x, h);
 }
 
 // The input channel that holds colour channel c (R, G, B): grey input (one channel, or grey
 // and alpha) holds all three in its first.
-int colour_channel(const ConstImageView& in, int c) { return in.channels >= 3 ? c : 0; }
+int colour_channel(const ConstImageView& in, int c) { return colour_channel_count(in.channels) == 3 ? c : 0; }
 
 // The stock's grain for a layer with the user's per-channel overrides (channel = layer).
 GrainSpec layer_grain(const GrainSpec& stock, const DevelopSettings& s, size_t channel) {
@@ -525,8 +537,8 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
 
     // A single-layer result is written to all three channels.
     StageTimer timer(times, "write");
-    const int alpha = in.channels == 2 ? 1 : in.channels >= 4 ? 3 : -1;
-    const bool copy_alpha = alpha >= 0 && out.channels >= 4;
+    const int alpha = colour_channel_count(in.channels);  // the channel after the colour
+    const bool copy_alpha = alpha < in.channels && out.channels >= 4;
     parallel_for(out_window.y0, out_window.y1, threads, [&](int y0, int y1) {
         for (int y = y0; y < y1; ++y)
             for (int x = out_window.x0; x < out_window.x1; ++x) {

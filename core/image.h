@@ -36,6 +36,10 @@ struct Window {
     bool operator==(const Window& o) const { return x0 == o.x0 && y0 == o.y0 && x1 == o.x1 && y1 == o.y1; }
 };
 
+// How many of an image's first channels are colour: grey (1 channel) or grey and alpha (2)
+// hold one, RGB (3) and RGB with alpha and more (4+) three; the channel after them is alpha.
+inline int colour_channel_count(int channels) { return channels >= 3 ? 3 : 1; }
+
 template <typename T>
 struct BasicImageView {
     T* data = nullptr;          // first pixel, i.e. (window.x0, window.y0)

@@ -20,6 +20,7 @@ using Double4 = double __attribute__((vector_size(32)));
 using Float1 = float __attribute__((vector_size(4)));
 using Int1 = int32_t __attribute__((vector_size(4)));
 using Uint1 = uint32_t __attribute__((vector_size(4)));
+using Double1 = double __attribute__((vector_size(8)));
 
 // v = the values at p, one vector move. (memcpy into an array of vectors was merged by GCC
 // into one copy through the stack in 16-byte halves, and the 32-byte reads that followed
