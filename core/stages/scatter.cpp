@@ -81,22 +81,23 @@ void unit_gain(ScatterKernel& kernel) {
 }
 
 // Eigen-decomposition of the symmetric kernel matrix by power iteration with deflation,
-// largest |eigenvalue| first, until the residual is within kSeparableTolerance of the
-// largest tap everywhere. Left empty when that needs so many terms that the direct sum is
-// cheaper (2 passes of 2r+1 taps per term against (2r+1)^2).
-void make_separable(ScatterKernel& kernel, double tolerance) {
+// largest |eigenvalue| first, until the residual is within `tolerance` of the largest tap
+// everywhere or there are `max_terms` terms. Left empty when the tolerance needs so many
+// terms that the direct sum is cheaper (2 passes of 2r+1 taps per term against (2r+1)^2).
+void make_separable(ScatterKernel& kernel, double tolerance, int max_terms) {
     const int side = 2 * kernel.radius + 1;
     std::vector<double> residual(kernel.taps.begin(), kernel.taps.end());
     double largest = 0;
     for (double v : residual) largest = std::max(largest, std::abs(v));
-    const int max_terms = side / 2 - 1;
-    for (int term = 0; term < max_terms; ++term) {
+    const int cheaper_terms = kernel.radius;  // k terms cost less than the direct sum: 2 (2r+1) k < (2r+1)^2
+    for (int term = 0; term <= cheaper_terms; ++term) {
         double worst = 0;
         for (double v : residual) worst = std::max(worst, std::abs(v));
-        if (worst <= tolerance * largest) {
+        if (worst <= tolerance * largest || (max_terms > 0 && term == max_terms)) {
             unit_gain(kernel);
             return;
         }
+        if (term == cheaper_terms) break;
         // Start from the residual's strongest column; iterate e <- R e / |R e|.
         int column = 0;
         double best = -1;
@@ -200,7 +201,7 @@ ScatterKernel design_uncached(const Curve& mtf, double pixel_pitch_um, const Sca
             for (int x = -radius; x <= radius; ++x)
                 kernel.taps[(y + radius) * side + (x + radius)] = float(tap(x, y) / sum);
         if (design.max_radius_px > 0 && radius > design.max_radius_px) taper(kernel, design.max_radius_px);
-        if (design.separable_tolerance > 0) make_separable(kernel, design.separable_tolerance);
+        if (design.separable_tolerance > 0) make_separable(kernel, design.separable_tolerance, design.max_terms);
         return kernel;
     }
 }
@@ -210,10 +211,10 @@ ScatterKernel design_uncached(const Curve& mtf, double pixel_pitch_um, const Sca
 // A design takes up to seconds (the DFT grid and the eigen-terms) and every frame of a
 // sequence asks for the same few: each is computed once per process.
 ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design) {
-    using Key = std::tuple<std::vector<double>, std::vector<double>, double, int, double>;
+    using Key = std::tuple<std::vector<double>, std::vector<double>, double, int, double, int>;
     static std::mutex mutex;
     static std::map<Key, ScatterKernel> cache;
-    Key key{mtf.x, mtf.y, pixel_pitch_um, design.max_radius_px, design.separable_tolerance};
+    Key key{mtf.x, mtf.y, pixel_pitch_um, design.max_radius_px, design.separable_tolerance, design.max_terms};
     {
         std::lock_guard<std::mutex> lock(mutex);
         auto it = cache.find(key);

@@ -44,6 +44,10 @@ struct ScatterDesign {
     // Split into separable terms within this fraction of the largest tap; 0: never (the
     // direct 2D sum).
     double separable_tolerance = kSeparableTolerance;
+    // At most this many separable terms, kept even when the tolerance is not met (the best
+    // approximation of that rank: the largest eigen-terms); 0: as many as the tolerance
+    // needs, while they cost less than the direct sum.
+    int max_terms = 0;
 };
 
 // Throws std::invalid_argument for an MTF whose response at 0 is not positive (scattering

@@ -113,6 +113,49 @@ TEST_CASE("the separable form of a scatter kernel gives the direct convolution's
     }
 }
 
+// The largest |tap - rebuilt tap| of a kernel's separable terms, after the common scale
+// that gives them unit gain.
+static double separable_residual(const ScatterKernel& k) {
+    const int side = 2 * k.radius + 1;
+    std::vector<double> rebuilt(side * side, 0.0);
+    double product = 0, square = 0;
+    for (int i = 0; i < side * side; ++i) {
+        for (size_t t = 0; t < k.separable.size(); ++t)
+            rebuilt[i] += k.separable_sign[t] * double(k.separable[t][i / side]) * k.separable[t][i % side];
+        product += rebuilt[i] * k.taps[i];
+        square += double(k.taps[i]) * k.taps[i];
+    }
+    double worst = 0;
+    for (int i = 0; i < side * side; ++i) worst = std::max(worst, std::abs(rebuilt[i] - product / square * k.taps[i]));
+    return worst;
+}
+
+TEST_CASE("a design limited to k separable terms keeps the k largest, where the tolerance alone would sum directly",
+          "[scatter]") {
+    Curve mtf = make_curve({0, 5, 10, 20, 40, 60, 80}, {1, 1, 1, 0.95, 0.75, 0.55, 0.4}, "mtf");
+    // A tolerance no 7x7 kernel's 3 cheap terms reach: the direct sum.
+    CHECK(design_scatter_kernel(mtf, 6.0, {3, 1e-12}).separable.empty());
+    const ScatterKernel one = design_scatter_kernel(mtf, 6.0, {3, 1e-12, 1});
+    const ScatterKernel two = design_scatter_kernel(mtf, 6.0, {3, 1e-12, 2});
+    REQUIRE(one.separable.size() == 1);
+    REQUIRE(two.separable.size() == 2);
+    // The same first (largest) term, up to the unit-gain scale.
+    const double scale = two.separable[0][3] / one.separable[0][3];
+    for (int i = 0; i < 7; ++i) CHECK(two.separable[0][i] == Approx(scale * one.separable[0][i]).margin(1e-7));
+    // Each term takes off the residual's largest part; at most 3 terms are cheaper than 49 taps.
+    CHECK(separable_residual(two) < 0.5 * separable_residual(one));
+    CHECK(design_scatter_kernel(mtf, 6.0, {3, 1e-12, 4}).separable.empty());
+    for (const ScatterKernel& k : {one, two}) {
+        double gain = 0;
+        for (size_t t = 0; t < k.separable.size(); ++t) {
+            double sum = 0;
+            for (float v : k.separable[t]) sum += v;
+            gain += k.separable_sign[t] * sum * sum;
+        }
+        CHECK(gain == Approx(1.0).margin(1e-5));  // the image's mean is kept
+    }
+}
+
 TEST_CASE("an MTF with no response at 0 is refused, not designed into a 0/0 kernel", "[scatter]") {
     const Curve zero = make_curve({0, 50}, {0, 0}, "zero");
     CHECK_THROWS_WITH(design_scatter_kernel(zero, 5.0), Catch::Contains("response at 0 cycles/mm must be positive"));
