@@ -86,7 +86,7 @@ struct DisabledStage {
     std::string stage;         // as StageTimes names it
     double seconds = 0;
     std::vector<StageTime> stages;
-    double stage_seconds_when_on = 0;  // that stage's time in the fast tier's full run
+    double stage_seconds_when_on = 0;  // that stage's time in the fast tier's full run (grain: its share of develop + grain)
     double saved_seconds = 0;          // the fast tier's full run less this one
     // The same settings with the stage kept in the plan at its neutral value
     // (DevelopSettings::skip_noop_stages = false): what leaving it out saves, and whether

@@ -149,7 +149,6 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
 
         m.grain.push_back(std::nullopt);
         m.boolean_grain.push_back(std::nullopt);
-        if (tier.curve_table_bits > 0) m.curve_tables.emplace_back(layer.density_curve, tier.curve_table_bits);
         GrainSpec spec = layer_grain(layer.grain, s, i);
         if (!s.grain) spec.rms_granularity = 0;
         GrainModel g = design_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um,
@@ -174,6 +173,14 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         else
             m.grain.back() = g;
     }
+    // The tabulated curves; with grain, each also gives the grain's amplitude at its density
+    // from the same lookup (develop and grain then run as one pass over the rows).
+    if (tier.curve_table_bits > 0)
+        for (size_t i = 0; i < stock.layers.size(); ++i) {
+            LogAxisTable::Function amplitude;
+            if (const auto& g = m.grain[i]) amplitude = [g](double density) { return g->amplitude_at(density); };
+            m.curve_tables.emplace_back(stock.layers[i].density_curve, tier.curve_table_bits, amplitude);
+        }
     return m;
 }
 
@@ -207,6 +214,12 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
         // The Boolean grain of a pixel depends on the densities around it: develop those too.
         const Window developed = m.boolean_grain[i] ? out.grown(m.boolean_grain[i]->halo_px).intersected(frame) : out;
         Plane d = spread_exposure(m, i, std::move(exposure[i]), developed, frame, threads, times);
+        if (m.grain[i] && !m.curve_tables.empty()) {
+            StageTimer timer(times, kDevelopAndGrainStage);
+            develop_with_grain(d, m.curve_tables[i], *m.grain[i], threads);
+            density.push_back(std::move(d));
+            continue;
+        }
         {
             StageTimer timer(times, "develop");
             // Exposure below 0 (a PSF's negative lobes) is no light.

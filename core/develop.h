@@ -103,6 +103,10 @@ struct MaterialStages {
     int halo_px() const;
 };
 
+// The fast tiers develop and add grain in one pass over the rows (one table lookup gives a
+// pixel's density and its grain amplitude), timed as one stage.
+constexpr const char* kDevelopAndGrainStage = "develop + grain";
+
 // Seconds a run spent in each stage (summed over layers), for the benchmark.
 struct StageTimes {
     std::vector<std::pair<std::string, double>> seconds;  // in pipeline order

@@ -109,16 +109,6 @@ GrainModel design_grain(const GrainSpec& spec, double d_min, double pitch_um, No
     g.sigma_per_pixel = spec.rms_granularity / unit_noise_sigma48 / pitch_um;
     g.kernel = pixel_averaged_grain_kernel(spec.grain_size_um / pitch_um);
     g.radius = int(g.kernel.size() / 2);
-    if (fast) {
-        // Net densities from 1e-6 (below which the grain is under 1e-6 of its size at 1.0
-        // for the exponents stocks have) to 100, 100 samples per decade.
-        std::vector<double> log_net, amplitude;
-        for (int i = -600; i <= 200; ++i) {
-            log_net.push_back(i / 100.0);
-            amplitude.push_back(g.sigma_per_pixel * std::pow(10.0, g.density_exponent * i / 100.0));
-        }
-        g.amplitude = LogAxisTable(make_curve(log_net, amplitude, "grain amplitude"), 6);
-    }
     return g;
 }
 
@@ -149,30 +139,34 @@ Plane grain_field(const GrainModel& g, const Window& w, int threads) {
     return field;
 }
 
+double GrainModel::amplitude_at(double density) const {
+    return sigma_per_pixel * std::pow(std::max(0.0, density - d_min), density_exponent);
+}
+
 double grain_sigma_at(const GrainModel& g, double density) {
     double net = std::max(0.0, density - g.d_min);
     return g.pixel_sigma_at_unit_density() * std::pow(net, g.density_exponent);
 }
 
+// Held at d_min: a Gaussian fluctuation wider than the net density would otherwise take
+// away more silver (or dye) than developed, giving densities below base+fog or below 0
+// (transmitting or reflecting more than falls on it).
 void apply_grain(Plane& density, const GrainModel& g, int threads) {
     filter_grain_noise(g, density.window, threads, [&](int y, const float* n) {
         float* d = density.row(y);
-        // Held at d_min: a Gaussian fluctuation wider than the net density would otherwise
-        // take away more silver (or dye) than developed, giving densities below base+fog or
-        // below 0 (transmitting or reflecting more than falls on it).
-        if (g.fast) {
-            const int width = density.window.width();
-            thread_local std::vector<float> amplitude;  // per worker: the rows' grain amplitudes
-            amplitude.resize(size_t(width));
-            for (int x = 0; x < width; ++x) amplitude[x] = std::max(0.0f, d[x] - g.d_min);
-            g.amplitude.apply_row(amplitude.data(), amplitude.data(), width);
-            for (int x = 0; x < width; ++x) d[x] = std::max(g.d_min, d[x] + amplitude[x] * n[x]);
-            return;
-        }
-        for (int x = 0; x < density.window.width(); ++x) {
-            double net = std::max(0.0, double(d[x]) - g.d_min);
-            d[x] = float(std::max(double(g.d_min), d[x] + g.sigma_per_pixel * std::pow(net, g.density_exponent) * n[x]));
-        }
+        for (int x = 0; x < density.window.width(); ++x)
+            d[x] = float(std::max(double(g.d_min), d[x] + g.amplitude_at(d[x]) * n[x]));
+    });
+}
+
+void develop_with_grain(Plane& plane, const LogAxisTable& develop, const GrainModel& g, int threads) {
+    const int width = plane.window.width();
+    filter_grain_noise(g, plane.window, threads, [&](int y, const float* n) {
+        float* d = plane.row(y);
+        thread_local std::vector<float> amplitude;  // per worker: the row's grain amplitudes
+        amplitude.resize(size_t(width));
+        develop.apply_row(d, d, amplitude.data(), width);
+        for (int x = 0; x < width; ++x) d[x] = std::max(g.d_min, d[x] + amplitude[x] * n[x]);
     });
 }
 

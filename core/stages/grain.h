@@ -37,9 +37,8 @@ struct GrainModel {
     double density_exponent = 1.0 / 3.0;
     NoiseKey key;
     // The fast tiers: noise from quantile_normal_run (core/random.h) instead of Philox and
-    // Box-Muller, and the amplitude sigma_per_pixel (D - d_min)^exponent from a table.
+    // Box-Muller (and the amplitude from the H&D table: develop_with_grain).
     bool fast = false;
-    LogAxisTable amplitude;
 
     // Below this standard deviation (in density) at net density 1 the stage is skipped:
     // it would change transmittance by less than 2.3e-6 relative.
@@ -47,6 +46,8 @@ struct GrainModel {
     bool is_noop() const;
     // The standard deviation of the filtered field per pixel at net density 1.
     double pixel_sigma_at_unit_density() const;
+    // What the unit noise is scaled by at a developed density: sigma_per_pixel (D - d_min)^exponent.
+    double amplitude_at(double density) const;
 };
 
 GrainModel design_grain(const GrainSpec& spec, double d_min, double pixel_pitch_um, NoiseKey key, bool fast = false);
@@ -59,7 +60,11 @@ Plane grain_field(const GrainModel& grain, const Window& window, int threads);
 double grain_sigma_at(const GrainModel& grain, double density);
 
 // Adds grain to a density plane (its whole window):
-// D += sigma_per_pixel * (D - d_min)^density_exponent * field, never below d_min.
+// D += amplitude_at(D) * field, never below d_min.
 void apply_grain(Plane& density, const GrainModel& grain, int threads);
+// The fast tiers' develop and grain in one pass over the rows: `plane` holds exposures and
+// becomes densities, D = curve(H) and its amplitude from one lookup of `develop` (built with
+// the grain's amplitude_at, tables.h), then grain as apply_grain adds it.
+void develop_with_grain(Plane& plane, const LogAxisTable& develop, const GrainModel& grain, int threads);
 
 }  // namespace darkroom

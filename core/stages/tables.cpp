@@ -45,26 +45,58 @@ float positive_float(double log_h) {
 
 }  // namespace
 
-LogAxisTable::LogAxisTable(const Curve& curve, int mantissa_bits) : shift_(23 - mantissa_bits) {
+LogAxisTable::LogAxisTable(const Curve& curve, int mantissa_bits, const Function& g_of_f) : shift_(23 - mantissa_bits) {
     const uint32_t step = 1u << shift_;
     first_bits_ = float_bits(positive_float(curve.x_min())) & ~(step - 1);
     last_bits_ = (float_bits(positive_float(curve.x_max())) + step - 1) & ~(step - 1);
     const uint32_t samples = ((last_bits_ - first_bits_) >> shift_) + 1;
-    samples_.resize(samples + 1);
-    for (uint32_t i = 0; i < samples; ++i)
-        samples_[i] = float(curve(std::log10(double(bits_float(first_bits_ + (i << shift_))))));
-    samples_[samples] = samples_[samples - 1];  // so the last sample interpolates to itself
+    std::vector<std::array<float, 2>> fg(samples + 1);
+    for (uint32_t i = 0; i < samples; ++i) {
+        const double f = curve(std::log10(double(bits_float(first_bits_ + (i << shift_)))));
+        fg[i] = {float(f), g_of_f ? float(g_of_f(f)) : 0.0f};
+    }
+    fg[samples] = fg[samples - 1];  // so the last sample interpolates to itself
+    nodes_.resize(samples);
+    for (uint32_t i = 0; i < samples; ++i) nodes_[i] = {fg[i][0], fg[i][1], fg[i + 1][0], fg[i + 1][1]};
 }
 
 namespace {
 
-// The lookup of LogAxisTable at the lanes of v, in place (V one float or eight, U its
-// uint32 lanes): one piece of code for vector blocks and scalar tails. (No vector passes
-// through a call by value: its ABI would differ with and without AVX.)
-template <typename V, typename U>
-__attribute__((always_inline)) inline void log_axis_lookup(const float* samples, uint32_t first_bits,
-                                                           uint32_t last_bits, int shift, V& v) {
+// The four values of the 16-byte node at each lane's offset (in floats) into v[0..components).
+// Eight lanes load each node whole and transpose them in registers (four nodes per 128-bit
+// half), where lane-by-lane loads would insert the values one at a time; both load the same
+// floats.
+template <int components, typename V, typename I>
+__attribute__((always_inline)) inline void node_values(const float* values, const I& offset, V* v) {
     constexpr int lanes = sizeof(V) / sizeof(float);
+    if constexpr (lanes == 8) {
+        simd::Float4 n[8];
+        for (int k = 0; k < 8; ++k) load(n[k], values + offset[k]);
+        // Lanes k and k + 4 side by side: [a b c d | a b c d].
+        const V p0 = __builtin_shufflevector(n[0], n[4], 0, 1, 2, 3, 4, 5, 6, 7);
+        const V p1 = __builtin_shufflevector(n[1], n[5], 0, 1, 2, 3, 4, 5, 6, 7);
+        const V p2 = __builtin_shufflevector(n[2], n[6], 0, 1, 2, 3, 4, 5, 6, 7);
+        const V p3 = __builtin_shufflevector(n[3], n[7], 0, 1, 2, 3, 4, 5, 6, 7);
+        const V ab01 = __builtin_shufflevector(p0, p1, 0, 8, 1, 9, 4, 12, 5, 13);  // a0 a1 b0 b1 | a4 a5 b4 b5
+        const V cd01 = __builtin_shufflevector(p0, p1, 2, 10, 3, 11, 6, 14, 7, 15);
+        const V ab23 = __builtin_shufflevector(p2, p3, 0, 8, 1, 9, 4, 12, 5, 13);
+        const V cd23 = __builtin_shufflevector(p2, p3, 2, 10, 3, 11, 6, 14, 7, 15);
+        v[0] = __builtin_shufflevector(ab01, ab23, 0, 1, 8, 9, 4, 5, 12, 13);
+        v[1] = __builtin_shufflevector(ab01, ab23, 2, 3, 10, 11, 6, 7, 14, 15);
+        v[2] = __builtin_shufflevector(cd01, cd23, 0, 1, 8, 9, 4, 5, 12, 13);
+        if constexpr (components == 4) v[3] = __builtin_shufflevector(cd01, cd23, 2, 3, 10, 11, 6, 7, 14, 15);
+    } else {
+        for (int c = 0; c < components; ++c)
+            for (int k = 0; k < lanes; ++k) v[c][k] = values[offset[k] + c];
+    }
+}
+
+// The lookup of LogAxisTable at the lanes of v: f in place, and g into *g when asked (V
+// one float or eight, U its uint32 lanes): one piece of code for vector blocks and scalar
+// tails. (No vector passes through a call by value: its ABI would differ with and without AVX.)
+template <typename V, typename U>
+__attribute__((always_inline)) inline void log_axis_lookup(const float* nodes, uint32_t first_bits,
+                                                           uint32_t last_bits, int shift, V& v, V* g) {
     // Non-negative floats order like their bit patterns; NaN and negatives count as 0.
     v = v > 0.0f ? v : V{} + 0.0f;
     U b;
@@ -72,41 +104,49 @@ __attribute__((always_inline)) inline void log_axis_lookup(const float* samples,
     b = b < first_bits ? U{} + first_bits : b;
     b = b > last_bits ? U{} + last_bits : b;
     b -= first_bits;
-    const U i = b >> shift;
+    const U offset = (b >> shift) * 4u;
     const V t = __builtin_convertvector(b & ((1u << shift) - 1), V) * bits_float((127u - shift) << 23);  // * 2^-shift
-    V lower, upper;
-    for (int k = 0; k < lanes; ++k) lower[k] = samples[i[k]], upper[k] = samples[i[k] + 1];
-    v = lower + t * (upper - lower);
+    V node[4];  // f_i, g_i, f_i+1, g_i+1
+    node_values<4>(nodes, offset, node);
+    v = node[0] + t * (node[2] - node[0]);
+    if (g) *g = node[1] + t * (node[3] - node[1]);
 }
 
 }  // namespace
 
 float LogAxisTable::operator()(float v) const {
     Float1 lane{v};
-    log_axis_lookup<Float1, Uint1>(samples_.data(), first_bits_, last_bits_, shift_, lane);
+    log_axis_lookup<Float1, Uint1>(&nodes_[0][0], first_bits_, last_bits_, shift_, lane, nullptr);
     return lane[0];
 }
 
-// The vector loops are free functions: clang 14 does not clone member functions.
-__attribute__((target_clones("avx2", "default"))) void log_axis_row(const float* samples, uint32_t first_bits,
+// The vector loops are free functions: clang 14 does not clone member functions. g_out may
+// be null (f only).
+__attribute__((target_clones("avx2", "default"))) void log_axis_row(const float* nodes, uint32_t first_bits,
                                                                      uint32_t last_bits, int shift, const float* in,
-                                                                     float* out, int n) {
+                                                                     float* out, float* g_out, int n) {
     int i = 0;
     for (; i + 8 <= n; i += 8) {
-        Float8 v;
+        Float8 v, g{};
         load(v, in + i);
-        log_axis_lookup<Float8, Uint8>(samples, first_bits, last_bits, shift, v);
+        log_axis_lookup<Float8, Uint8>(nodes, first_bits, last_bits, shift, v, g_out ? &g : nullptr);
         store(out + i, v);
+        if (g_out) store(g_out + i, g);
     }
     for (; i < n; ++i) {
-        Float1 lane{in[i]};
-        log_axis_lookup<Float1, Uint1>(samples, first_bits, last_bits, shift, lane);
+        Float1 lane{in[i]}, g{};
+        log_axis_lookup<Float1, Uint1>(nodes, first_bits, last_bits, shift, lane, g_out ? &g : nullptr);
         out[i] = lane[0];
+        if (g_out) g_out[i] = g[0];
     }
 }
 
 void LogAxisTable::apply_row(const float* in, float* out, int n) const {
-    log_axis_row(samples_.data(), first_bits_, last_bits_, shift_, in, out, n);
+    log_axis_row(&nodes_[0][0], first_bits_, last_bits_, shift_, in, out, nullptr, n);
+}
+
+void LogAxisTable::apply_row(const float* in, float* f_out, float* g_out, int n) const {
+    log_axis_row(&nodes_[0][0], first_bits_, last_bits_, shift_, in, f_out, g_out, n);
 }
 
 namespace {
@@ -166,33 +206,6 @@ Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& h
 
 namespace {
 
-// The three values of the node at each lane's offset into v[0..2]. Eight lanes load each
-// node's 16 bytes whole and transpose them in registers (four nodes per 128-bit half), where
-// lane-by-lane loads would insert 24 values one at a time; both load the same floats.
-template <typename V, typename I>
-__attribute__((always_inline)) inline void node_values(const float* values, const I& offset, V* v) {
-    constexpr int lanes = sizeof(V) / sizeof(float);
-    if constexpr (lanes == 8) {
-        simd::Float4 n[8];
-        for (int k = 0; k < 8; ++k) load(n[k], values + offset[k]);
-        // Lanes k and k + 4 side by side: [x y z - | x y z -].
-        const V p0 = __builtin_shufflevector(n[0], n[4], 0, 1, 2, 3, 4, 5, 6, 7);
-        const V p1 = __builtin_shufflevector(n[1], n[5], 0, 1, 2, 3, 4, 5, 6, 7);
-        const V p2 = __builtin_shufflevector(n[2], n[6], 0, 1, 2, 3, 4, 5, 6, 7);
-        const V p3 = __builtin_shufflevector(n[3], n[7], 0, 1, 2, 3, 4, 5, 6, 7);
-        const V xy01 = __builtin_shufflevector(p0, p1, 0, 8, 1, 9, 4, 12, 5, 13);  // x0 x1 y0 y1 | x4 x5 y4 y5
-        const V z01 = __builtin_shufflevector(p0, p1, 2, 10, 3, 11, 6, 14, 7, 15);
-        const V xy23 = __builtin_shufflevector(p2, p3, 0, 8, 1, 9, 4, 12, 5, 13);
-        const V z23 = __builtin_shufflevector(p2, p3, 2, 10, 3, 11, 6, 14, 7, 15);
-        v[0] = __builtin_shufflevector(xy01, xy23, 0, 1, 8, 9, 4, 5, 12, 13);
-        v[1] = __builtin_shufflevector(xy01, xy23, 2, 3, 10, 11, 6, 7, 14, 15);
-        v[2] = __builtin_shufflevector(z01, z23, 0, 1, 8, 9, 4, 5, 12, 13);
-    } else {
-        for (int c = 0; c < 3; ++c)
-            for (int k = 0; k < lanes; ++k) v[c][k] = values[offset[k] + c];
-    }
-}
-
 // Tetrahedral interpolation of `values` (4 floats per node, 3 values and a pad, x fastest) at the points of
 // in[a][0 .. lanes), lanes the width of the vector type V (one float or eight): one piece
 // of code for the vector blocks and the scalar tail, so both compute the same values.
@@ -230,10 +243,10 @@ __attribute__((always_inline)) inline void tetrahedral(const float* values, int 
     const V t_mid = min_xy > below_max ? min_xy : below_max;
     const int diagonal = step[0] + step[1] + step[2];
     V v000[3], v_a[3], v_ab[3], v111[3];
-    node_values<V, I>(values, base, v000);
-    node_values<V, I>(values, base + off_a, v_a);
-    node_values<V, I>(values, base + (diagonal - off_c), v_ab);
-    node_values<V, I>(values, base + diagonal, v111);
+    node_values<3>(values, base, v000);
+    node_values<3>(values, base + off_a, v_a);
+    node_values<3>(values, base + (diagonal - off_c), v_ab);
+    node_values<3>(values, base + diagonal, v111);
     const V w000 = 1.0f - t_max, w_a = t_max - t_mid, w_ab = t_mid - t_min;
     for (int c = 0; c < 3; ++c) {
         const V result = w000 * v000[c] + w_a * v_a[c] + w_ab * v_ab[c] + t_min * v111[c];

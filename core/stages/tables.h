@@ -17,16 +17,23 @@ namespace darkroom {
 // octave of v has 2^mantissa_bits samples and the lookup needs no logarithm. Linear
 // between samples (in v), which within a sample's 1/2^bits relative span is within
 // (2^-bits)^2/8 of linear in log v; constant beyond the curve's ends, like Curve.
+// Optionally a second function g of f's value (the grain's amplitude at the developed
+// density) from the same lookup, sampled at the same points: each sample is stored with the
+// next as one 16-byte node (f_i, g_i, f_i+1, g_i+1), so that a lane's lookup is one load and
+// g costs little more than f.
 class LogAxisTable {
 public:
+    using Function = std::function<double(double)>;
     LogAxisTable() = default;
-    LogAxisTable(const Curve& f_of_log10_v, int mantissa_bits);
+    LogAxisTable(const Curve& f_of_log10_v, int mantissa_bits, const Function& g_of_f = {});
     float operator()(float v) const;
     // operator() of n values, eight at a time, bit for bit the same values (out may be in).
     void apply_row(const float* in, float* out, int n) const;
+    // f and g of n values (g 0 when the table has none), f bit for bit as above.
+    void apply_row(const float* in, float* f_out, float* g_out, int n) const;
 
 private:
-    std::vector<float> samples_;
+    std::vector<std::array<float, 4>> nodes_;  // (f_i, g_i, f_i+1, g_i+1)
     uint32_t first_bits_ = 0, last_bits_ = 0;  // float bit patterns of the first and last sample
     int shift_ = 0;                             // 23 - mantissa_bits
 };
