@@ -96,7 +96,7 @@ __attribute__((target_clones("avx2", "default"))) void convolve_column_add(const
 }
 
 void filter_separable(const Window& out, const SeparableFilter& filter, int row_begin, int row_end, int threads,
-                      const RowSource& source, const RowSink& sink) {
+                      const RowSource& source, const RowTarget& target, const RowSink& sink) {
     const int terms = int(filter.terms.size()), r = int(filter.terms[0].size() / 2), width = out.width();
     std::vector<std::vector<float>> vertical(terms);  // the sign folded into the vertical taps
     for (int t = 0; t < terms; ++t)
@@ -117,12 +117,13 @@ void filter_separable(const Window& out, const SeparableFilter& filter, int row_
                 source(next, padded.data());
                 for (int t = 0; t < terms; ++t) convolve_row(padded.data(), filter.terms[t], width, ring_row(t, next));
             }
-            std::fill(filtered.begin(), filtered.end(), 0.0f);
+            float* result = target ? target(y) : filtered.data();
+            std::fill_n(result, width, 0.0f);
             for (int t = 0; t < terms; ++t) {
                 for (int k = -r; k <= r; ++k) rows[k + r] = ring_row(t, std::clamp(y + k, row_begin, row_end - 1));
-                convolve_column_add(rows.data(), vertical[t], width, filtered.data());
+                convolve_column_add(rows.data(), vertical[t], width, result);
             }
-            sink(y, filtered.data());
+            if (sink) sink(y, result);
         }
     });
 }
@@ -149,7 +150,7 @@ void convolve_separable(const Plane& src, Plane& dst, const SeparableFilter& fil
             std::copy(in(inside0), in(inside1), padded + (inside0 - first));
             if (inside1 < last) std::fill(padded + (inside1 - first), padded + (last - first), *in(frame.x1 - 1));
         },
-        [&](int y, const float* filtered) { std::copy_n(filtered, w.width(), dst.row(y)); });
+        [&](int y) { return dst.row(y); }, nullptr);
 }
 
 }  // namespace darkroom

@@ -26,17 +26,19 @@ void convolve_column_add(const float* const* rows, const std::vector<float>& tap
 // taps, streamed row by row so that the horizontal results stay in cache (a ring of the
 // 2r + 1 rows the vertical pass reads, each row filtered once per thread):
 //   source(y, padded) writes input row y, the width + 2r values from x = out.x0 - r;
-//   sink(y, filtered) receives output row y of `out`.
+//   target(y), when given, is where output row y of `out` is written (else a scratch row);
+//   sink(y, filtered), when given, then receives that row.
 // The vertical pass reads rows clamped to [row_begin, row_end). Each output value is summed
 // in one fixed order (terms, then taps), whatever the threads.
 using RowSource = std::function<void(int y, float* padded)>;
+using RowTarget = std::function<float*(int y)>;
 using RowSink = std::function<void(int y, const float* filtered)>;
 struct SeparableFilter {
     std::vector<std::vector<float>> terms;
     std::vector<float> signs;  // +1 or -1 per term
 };
 void filter_separable(const Window& out, const SeparableFilter& filter, int row_begin, int row_end, int threads,
-                      const RowSource& source, const RowSink& sink);
+                      const RowSource& source, const RowTarget& target, const RowSink& sink);
 
 // dst = separable convolution of src with taps (x then y), frame-clamped as above.
 void convolve_separable(const Plane& src, Plane& dst, const std::vector<float>& taps, const Window& frame, int threads);

@@ -128,7 +128,7 @@ void filter_grain_noise(const GrainModel& g, const Window& w, int threads, const
                 for (int i = 0; i < w.width() + 2 * r; ++i) noise[i] = standard_normal(g.key, w.x0 - r + i, y);
             }
         },
-        sink);
+        nullptr, sink);
 }
 
 }  // namespace

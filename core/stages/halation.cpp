@@ -28,22 +28,31 @@ void coarse_halation(const Plane& src, Plane& out, const HalationKernel& k, cons
     const Window blurred_window = Window{cx0, cy0, cx1, cy1}.intersected(coarse_frame);
     const Window means_window = blurred_window.grown(r).intersected(coarse_frame);
     Plane means(means_window), blurred(blurred_window);
-    // Block means over the block's pixels inside the frame.
+    // Block means over the block's pixels inside the frame: its rows summed column by column
+    // (whole rows, in vector registers), then its columns.
     parallel_for(means_window.y0, means_window.y1, threads, [&](int y_begin, int y_end) {
+        const int px_begin = std::max(means_window.x0 * d, frame.x0), px_end = std::min(means_window.x1 * d, frame.x1);
+        std::vector<float> column_sums(size_t(px_end - px_begin));
         for (int by = y_begin; by < y_end; ++by) {
             const int py0 = std::max(by * d, frame.y0), py1 = std::min(by * d + d, frame.y1);
+            const float* first = src.row(py0) + (px_begin - src.window.x0);
+            std::copy_n(first, column_sums.size(), column_sums.begin());
+            for (int y = py0 + 1; y < py1; ++y) {
+                const float* in = src.row(y) + (px_begin - src.window.x0);
+                for (size_t i = 0; i < column_sums.size(); ++i) column_sums[i] += in[i];
+            }
             for (int bx = means_window.x0; bx < means_window.x1; ++bx) {
                 const int px0 = std::max(bx * d, frame.x0), px1 = std::min(bx * d + d, frame.x1);
                 float sum = 0;
-                for (int y = py0; y < py1; ++y)
-                    for (int x = px0; x < px1; ++x) sum += src.at(x, y);
+                for (int x = px0; x < px1; ++x) sum += column_sums[size_t(x - px_begin)];
                 means.at(bx, by) = sum / float((py1 - py0) * (px1 - px0));
             }
         }
     });
     convolve_separable(means, blurred, k.taps, coarse_frame, threads);
-    // Bilinear interpolation at each fine pixel's centre, clamped to the coarse frame; the
-    // columns' blocks and weights are the same on every row.
+    // Bilinear interpolation at each fine pixel's centre, clamped to the coarse frame: first
+    // along x, once per coarse row (the columns' blocks and weights are the same on every
+    // row), then along y between the two rows a fine row falls between.
     auto clamp_coarse = [&](int v, int lo, int hi) { return std::clamp(v, lo, hi - 1); };
     const int width = out.window.width();
     std::vector<int> column0(width), column1(width);
@@ -54,21 +63,24 @@ void coarse_halation(const Plane& src, Plane& out, const HalationKernel& k, cons
         column0[c] = clamp_coarse(i, coarse_frame.x0, coarse_frame.x1) - blurred_window.x0;
         column1[c] = clamp_coarse(i + 1, coarse_frame.x0, coarse_frame.x1) - blurred_window.x0;
     }
+    Plane across = Plane::unset(Window{out.window.x0, blurred_window.y0, out.window.x1, blurred_window.y1});
+    parallel_for(blurred_window.y0, blurred_window.y1, threads, [&](int y_begin, int y_end) {
+        for (int j = y_begin; j < y_end; ++j) {
+            const float* row = blurred.row(j);
+            float* o = across.row(j);
+            for (int c = 0; c < width; ++c) o[c] = row[column0[c]] + tx[c] * (row[column1[c]] - row[column0[c]]);
+        }
+    });
     const float strength = float(k.strength);
     parallel_for(out.window.y0, out.window.y1, threads, [&](int y_begin, int y_end) {
         for (int y = y_begin; y < y_end; ++y) {
             const int j = floor_div(2 * y + 1 - d, 2 * d);
             const float ty = float(2 * y + 1 - d - 2 * d * j) / float(2 * d);
-            const float* row0 = blurred.row(clamp_coarse(j, coarse_frame.y0, coarse_frame.y1));
-            const float* row1 = blurred.row(clamp_coarse(j + 1, coarse_frame.y0, coarse_frame.y1));
+            const float* top = across.row(clamp_coarse(j, coarse_frame.y0, coarse_frame.y1));
+            const float* bottom = across.row(clamp_coarse(j + 1, coarse_frame.y0, coarse_frame.y1));
             const float* in = src.row(y) + (out.window.x0 - src.window.x0);
             float* o = out.row(y);
-            for (int c = 0; c < width; ++c) {
-                const int i0 = column0[c], i1 = column1[c];
-                const float top = row0[i0] + tx[c] * (row0[i1] - row0[i0]);
-                const float bottom = row1[i0] + tx[c] * (row1[i1] - row1[i0]);
-                o[c] = in[c] + strength * (top + ty * (bottom - top));
-            }
+            for (int c = 0; c < width; ++c) o[c] = in[c] + strength * (top[c] + ty * (bottom[c] - top[c]));
         }
     });
 }
