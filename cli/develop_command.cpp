@@ -75,8 +75,15 @@ void develop_frame(const DevelopOptions& o, PlanCache& plans, const FrameJob& jo
     look.settings.frame = job.frame;
     look.verbose = print_plan;
     look.threads = threads;
-    const Plan plan = plans.plan_for(frame_geometry(in.pixels.view()), job.frame);
-    const Image out = develop_image(look, plan, in.pixels.view(), output_window(o, in.pixels.window));
+    // The film frame is the file's display window: a data window that is a CG element's
+    // bounding box, or overscan, is that part of the frame (its pixel pitch and its grain),
+    // so the core sees the pixels at their display-window coordinates.
+    const int dx = in.spec.x - in.spec.full_x, dy = in.spec.y - in.spec.full_y;
+    ConstImageView view = in.pixels.view();
+    view.window = view.window.moved(dx, dy);
+    const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width), job.frame);
+    Image out = develop_image(look, plan, view, output_window(o, in.pixels.window).moved(dx, dy));
+    out.window = out.window.moved(-dx, -dy);  // write_image takes the data window's coordinates
     report.develop_seconds = seconds_since(start);
 
     start = std::chrono::steady_clock::now();
@@ -207,7 +214,7 @@ void add_run_flags(CLI::App& cmd, DevelopOptions& o) {
     auto run_option = [](CLI::Option* opt) { return opt->configurable(false); };
     run_option(cmd.add_option("input", o.input, "Input image or sequence (plate.####.exr, plate.%04d.exr, plate.@@@@.exr)"));
     run_option(cmd.add_option("-o,--out", o.output, "Output image or sequence"));
-    run_option(cmd.add_option("--window", o.window, "Render only this window X,Y,W,H of the full frame")
+    run_option(cmd.add_option("--window", o.window, "Render only this window X,Y,W,H of the input (from its first pixel)")
                    ->delimiter(',')
                    ->expected(4));
     run_option(cmd.add_option("--frames", o.sequence.frames, "Frames of a sequence: 1-100, 1-100x2, 1,5,9-12"));

@@ -148,14 +148,14 @@ void add_plate_grain(const LookOptions& look, Image& out) {
 
 }  // namespace
 
-FrameGeometry frame_geometry(const ConstImageView& in) {
-    return FrameGeometry{in.window.width(), in.window.height(), in.channels < 3};
+FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px) {
+    return FrameGeometry{in.window.width(), in.window.height(), in.channels < 3, in.window.x0, in.window.y0, film_width_px};
 }
 
 Plan PlanCache::plan_for(const FrameGeometry& frame, int frame_number) {
     // Held while compiling: the other frames of this size need the same plan.
     std::lock_guard<std::mutex> lock(mutex_);
-    const auto key = std::make_tuple(frame.width, frame.height, frame.monochrome);
+    const auto key = std::make_tuple(frame.width, frame.height, frame.monochrome, frame.x0, frame.y0, frame.film_width);
     auto it = plans_.find(key);
     if (it == plans_.end()) it = plans_.emplace(key, compile_look(look_, frame)).first;
     return it->second.for_frame(frame_number);

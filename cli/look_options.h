@@ -62,8 +62,9 @@ CLI::Option* add_choice(CLI::App& command, const std::string& flag, Enum& value,
 Plan compile_look(const LookOptions& look, const FrameGeometry& frame);
 
 // The frame an input image is: its size, and grey when it has one or two channels (Y, Y+A),
-// whose channel 0 the plan reads as R, G and B.
-FrameGeometry frame_geometry(const ConstImageView& in);
+// whose channel 0 the plan reads as R, G and B. Its window is in the film frame's
+// coordinates, which is `film_width_px` wide (0: the image is the whole frame).
+FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px = 0);
 
 // The plans of one look for a sequence: compiled once per frame geometry (a compile takes
 // seconds, about as long as developing a 2K frame) and moved to each frame's grain
@@ -76,10 +77,10 @@ public:
 private:
     LookOptions look_;
     std::mutex mutex_;
-    std::map<std::tuple<int, int, bool>, Plan> plans_;
+    std::map<std::tuple<int, int, bool, int, int, int>, Plan> plans_;
 };
 
-// Develops `out_window` of the full frame `in` (window (0, 0, width, height)) with `look`
+// Develops `out_window` of the image `in` (its window in the film frame's coordinates) with `look`
 // through `plan` (compiled for `look` and this frame). The output has max(3, input channels)
 // channels; those past RGB (alpha, depth, mattes) are not film's business and pass through.
 // The one path for the program and the Python module.

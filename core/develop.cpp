@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 
@@ -322,6 +323,15 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     if (frame.width <= 0 || frame.height <= 0)
         throw std::invalid_argument("frame size " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
                                     " is empty");
+    if (frame.film_width < 0) throw std::invalid_argument("film frame width " + std::to_string(frame.film_width) + " px is negative");
+    // (Far inside int's range, so that windows grown by a halo never overflow.)
+    constexpr int kMaxCoordinate = 1 << 28;
+    for (long long v : {(long long)frame.x0, (long long)frame.y0, (long long)frame.x0 + frame.width,
+                        (long long)frame.y0 + frame.height})
+        if (std::abs(v) > kMaxCoordinate)
+            throw std::invalid_argument("the image's window (" + std::to_string(frame.x0) + ", " + std::to_string(frame.y0) +
+                                        ") + " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
+                                        " reaches beyond +-2^28 pixels of the film frame");
     if (film.kind != StockKind::negative) throw std::invalid_argument("'" + film.id + "' is not a film stock (it is a paper or print film)");
     if (paper && paper->kind == StockKind::negative)
         throw std::invalid_argument("'" + paper->id + "' is a camera film, not a paper or print film");
@@ -331,9 +341,10 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
 
     Plan p;
     p.settings_ = settings;
-    p.frame_ = Window{0, 0, frame.width, frame.height};
+    p.frame_ = Window{frame.x0, frame.y0, frame.x0 + frame.width, frame.y0 + frame.height};
+    const int film_width_px = frame.film_width > 0 ? frame.film_width : frame.width;
     double film_width_mm = settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm;
-    p.film_stages_ = build_stages(film, film_width_mm, frame.width, settings, 0, "film", p.skipped_);
+    p.film_stages_ = build_stages(film, film_width_mm, film_width_px, settings, 0, "film", p.skipped_);
     p.monochrome_input_ = frame.monochrome && settings.skip_noop_stages;
     if (p.monochrome_input_ && settings.output != OutputMode::texture)
         p.skipped_.push_back("spectral sensitivity: the input is grey, so each layer's exposure is one scale of it");
@@ -343,7 +354,7 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
 
     if (settings.output == OutputMode::print) {
         double print_width_mm = settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm;
-        p.paper_stages_ = build_stages(*paper, print_width_mm, frame.width, settings, 16, "paper", p.skipped_);
+        p.paper_stages_ = build_stages(*paper, print_width_mm, film_width_px, settings, 16, "paper", p.skipped_);
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev});

@@ -87,6 +87,14 @@ struct FrameGeometry {
     // The input is grey (one colour channel): each layer's spectral exposure is then one
     // scale of it, the sum of the layer's RGB weights.
     bool monochrome = false;
+    // An image that is not exactly the film frame (a file whose data window differs from its
+    // display window: a CG element's bounding box, or overscan): where its first pixel sits
+    // relative to the film frame's origin, and the film frame's width in pixels (0: the
+    // image's width). The pixel pitch is the film frame's width over film_width, and the
+    // image's pixels have absolute coordinates from (x0, y0), so grain falls on the same
+    // film-frame pixels whatever part of the frame a file holds; filters clamp at the image.
+    int x0 = 0, y0 = 0;
+    int film_width = 0;
 };
 
 // One material's run of the pipeline, precomputed.

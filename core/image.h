@@ -30,6 +30,7 @@ struct Window {
         return o.empty() || (o.x0 >= x0 && o.y0 >= y0 && o.x1 <= x1 && o.y1 <= y1);
     }
     Window grown(int halo_px) const { return {x0 - halo_px, y0 - halo_px, x1 + halo_px, y1 + halo_px}; }
+    Window moved(int dx, int dy) const { return {x0 + dx, y0 + dy, x1 + dx, y1 + dy}; }
     Window intersected(const Window& o) const {
         return {std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
     }

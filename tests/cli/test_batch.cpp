@@ -1,5 +1,6 @@
 // Batch work the oiiotool way: sequences, look files, metadata, safe writes, resuming.
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -216,6 +217,58 @@ TEST_CASE("grey and alpha input develops as grey and keeps its alpha, as RGBA", 
     for (int i = 0; i < 24 * 16; ++i) {
         for (int c = 0; c < 3; ++c) REQUIRE(rgba[i * 4 + c] == rgb[i * 3 + c]);  // the alpha is not read as colour
         REQUIRE(rgba[i * 4 + 3] == grey_alpha[i * 2 + 1]);
+    }
+}
+
+// An EXR of the pattern below on the data window (x, y, width, height) of a 128x96 display window.
+static void write_part_of_frame(const std::string& path, int x, int y, int width, int height) {
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::FLOAT);
+    spec.x = x;
+    spec.y = y;
+    spec.full_x = spec.full_y = 0;
+    spec.full_width = 128;
+    spec.full_height = 96;
+    OIIO::ImageBuf buf(spec);
+    for (OIIO::ImageBuf::Iterator<float> p(buf); !p.done(); ++p)
+        for (int c = 0; c < 3; ++c)
+            p[c] = float(0.02 + 0.5 * (1.0 + std::sin(0.21 * p.x() + 0.13 * p.y() + c)) * (1.0 + (p.x() / 9 + p.y() / 7) % 3));
+    REQUIRE(buf.write(path));
+}
+
+TEST_CASE("a file holding part of the frame (a CG element's bounding box, overscan) develops as that part of the frame",
+          "[cli][batch][metadata]") {
+    // The film frame is the display window: the pixel pitch and the grain follow it, so the
+    // pixels away from the data window's edges (where filters clamp) are the whole frame's.
+    fs::path dir = fresh_dir("data-window");
+    const std::string look = kLook + " --halation 0 --threads 2";
+    struct Part {
+        const char* name;
+        int x, y, width, height;
+        int compare_x0, compare_y0, compare_x1, compare_y1;  // display pixels 12 or more from every edge
+    };
+    const Part whole{"whole", 0, 0, 128, 96, 0, 0, 0, 0};
+    const Part parts[] = {{"bounding-box", 32, 24, 64, 48, 44, 36, 84, 60}, {"overscan", -10, -8, 148, 112, 12, 12, 116, 84}};
+    write_part_of_frame((dir / "whole.exr").string(), whole.x, whole.y, whole.width, whole.height);
+    REQUIRE(darkroom("develop " + (dir / "whole.exr").string() + " -o " + (dir / "whole-out.exr").string() + look).exit_code == 0);
+    const std::vector<float> frame = pixels((dir / "whole-out.exr").string());
+    for (const Part& part : parts) {
+        INFO(part.name);
+        const std::string in = (dir / (std::string(part.name) + ".exr")).string(),
+                          out = (dir / (std::string(part.name) + "-out.exr")).string();
+        write_part_of_frame(in, part.x, part.y, part.width, part.height);
+        Result r = darkroom("develop " + in + " -o " + out + look + " -v");
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+        CHECK(r.output.find("pixel pitch 23.44 um") != std::string::npos);  // 3 mm over the display's 128 px
+        OIIO::ImageSpec spec;
+        const std::vector<float> got = pixels(out, &spec);
+        CHECK(spec.x == part.x);
+        CHECK(spec.y == part.y);
+        CHECK(spec.width == part.width);
+        for (int y = part.compare_y0; y < part.compare_y1; ++y)
+            for (int x = part.compare_x0; x < part.compare_x1; ++x)
+                for (int c = 0; c < 3; ++c)
+                    REQUIRE(got[((y - part.y) * part.width + (x - part.x)) * 3 + c] == frame[(y * 128 + x) * 3 + c]);
     }
 }
 

@@ -1,4 +1,5 @@
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -96,6 +97,42 @@ TEST_CASE("same settings give identical pixels for any thread count and window",
     s.frame = 3;
     s.seed = 12;
     CHECK(render(film, &paper, s, scene).pixels != frame3.pixels);
+}
+
+TEST_CASE("an image that is part of the film frame develops as that part of the whole frame", "[develop][determinism]") {
+    // A CG element's bounding box inside the frame, and overscan around it: the plan takes
+    // the pitch from the film frame's width and the pixels' coordinates from the frame's origin.
+    Stock film = test::test_colour_film(), paper = test::test_colour_paper();
+    DevelopSettings s;
+    s.seed = 4;
+    s.frame_width_mm = 3.0;
+    s.print_width_mm = 20.0;
+    s.halation = 0;  // (its halo would reach past these small parts)
+    const Image scene = demo_scene(160, 120);
+    const Plan whole = Plan::compile(film, &paper, s, {160, 120});
+    Image expected(scene.window, 3);
+    whole.run(scene.view(), expected.view(), 2);
+    struct Part {
+        Window window;   // in the frame's coordinates
+        Window compare;  // its pixels 12 or more from its edges (inside the frame)
+    };
+    for (const Part& part : {Part{{40, 30, 120, 90}, {52, 42, 108, 78}}, Part{{-16, -9, 176, 129}, {12, 12, 148, 108}}}) {
+        const Window& w = part.window;
+        // The part's pixels, in their own buffer: the scene's inside the frame, edge pixels beyond.
+        Image pixels(w, 3);
+        for (int y = w.y0; y < w.y1; ++y)
+            for (int x = w.x0; x < w.x1; ++x)
+                std::copy_n(scene.at(std::clamp(x, 0, 159), std::clamp(y, 0, 119)), 3, pixels.at(x, y));
+        const Plan plan = Plan::compile(film, &paper, s, FrameGeometry{w.width(), w.height(), false, w.x0, w.y0, 160});
+        Image got(w, 3);
+        plan.run(pixels.view(), got.view(), 3);
+        for (int y = part.compare.y0; y < part.compare.y1; ++y)
+            for (int x = part.compare.x0; x < part.compare.x1; ++x)
+                for (int c = 0; c < 3; ++c) REQUIRE(got.at(x, y)[c] == expected.at(x, y)[c]);
+    }
+    CHECK_THROWS_WITH(Plan::compile(film, &paper, s, FrameGeometry{10, 10, false, 0, 0, -1}), Catch::Contains("negative"));
+    CHECK_THROWS_WITH(Plan::compile(film, &paper, s, FrameGeometry{10, 10, false, std::numeric_limits<int>::max() - 5, 0, 0}),
+                      Catch::Contains("beyond"));
 }
 
 TEST_CASE("a plan compiled once and moved to another frame renders that frame's pixels", "[develop]") {
