@@ -6,9 +6,13 @@
 // actions, describe, and the two exported entry points.
 //
 // Coordinates: OFX pixel coordinates have their origin at the bottom left; core's frames
-// are top-down from (0, 0) like the files the CLI reads. The frame is the Source clip's
-// region of definition at the render scale, and row y of core is OFX row (frame top - 1 - y),
-// so grain keyed by core's absolute pixel coordinates is the grain `darkroom develop` gives.
+// are top-down like the files the CLI reads. The film frame is the project's format (its
+// size from its offset) at the render scale, where the host gives one, else the Source
+// clip's region of definition; core's (0, 0) is the film frame's top-left pixel and row y
+// of core is OFX row (film top - 1 - y). The Source image (its region of definition) is the
+// part of the film frame it covers: a CG element's bounding box, or overscan, gets the
+// frame's pixel pitch and the grain those frame pixels get, as `darkroom develop` gives a
+// file whose data window differs from its display window.
 
 #include <algorithm>
 #include <atomic>
@@ -48,18 +52,23 @@ constexpr int kMinBandRows = 32;
 
 // --- Geometry -------------------------------------------------------------------------
 
-// The frame in OFX pixel coordinates at a render scale: the Source's region of definition.
+// A canonical rectangle in OFX pixel coordinates at a render scale.
 OfxRectI frame_pixels(const OfxRectD& rod, OfxPointD scale, double pixel_aspect) {
     return {(int)std::floor(rod.x1 * scale.x / pixel_aspect), (int)std::floor(rod.y1 * scale.y),
             (int)std::ceil(rod.x2 * scale.x / pixel_aspect), (int)std::ceil(rod.y2 * scale.y)};
 }
 
-Window to_core(const OfxRectI& r, const OfxRectI& frame) {
-    return {r.x1 - frame.x1, frame.y2 - r.y2, r.x2 - frame.x1, frame.y2 - r.y1};
+// The Source image and the film frame, in OFX pixels at the render scale (see Coordinates).
+struct Placement {
+    OfxRectI image, film;
+};
+
+Window to_core(const OfxRectI& r, const OfxRectI& film) {
+    return {r.x1 - film.x1, film.y2 - r.y2, r.x2 - film.x1, film.y2 - r.y1};
 }
 
-OfxRectI to_ofx(const Window& w, const OfxRectI& frame) {
-    return {w.x0 + frame.x1, frame.y2 - w.y1, w.x1 + frame.x1, frame.y2 - w.y0};
+OfxRectI to_ofx(const Window& w, const OfxRectI& film) {
+    return {w.x0 + film.x1, film.y2 - w.y1, w.x1 + film.x1, film.y2 - w.y0};
 }
 
 std::string rect_text(const OfxRectI& r) {
@@ -109,7 +118,7 @@ std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, cons
         << 'x' << frame.height << '|' << s.exposure_ev << ',' << s.print_exposure_ev << ',' << int(s.output) << ','
         << int(s.input_units) << ',' << s.grain << ',' << s.mtf << ',' << s.halation << ',' << s.seed << ','
         << s.frame_width_mm << ',' << s.print_width_mm << ',' << quality_name(s.quality) << ','
-        << s.skip_noop_stages << ',' << frame.monochrome;
+        << s.skip_noop_stages << ',' << frame.monochrome << '|' << frame.x0 << ',' << frame.y0 << ',' << frame.film_width;
     for (int c = 0; c < 3; ++c)
         key << ',' << s.grain_amount[c] << ',' << s.grain_size[c] << ',' << s.grain_density_exponent[c] << ','
             << s.printer_lights[c] << ',' << s.filtration_ymc[c];
@@ -298,7 +307,7 @@ struct BandJob {
     uint64_t seed;
     int grain_frame;
     const HostImage* output;
-    OfxRectI frame;
+    OfxRectI film;  // the film frame (Placement)
     std::vector<Window> bands;  // core coordinates
     std::atomic<size_t> next{0};
     std::atomic<bool> stop{false}, aborted{false};
@@ -322,7 +331,7 @@ void render_band(BandJob& job, const Window& band) {
             std::copy_n(out.at(x, y), channels, px);
             if (premultiply)
                 for (int c = 0; c < 3; ++c) px[c] *= px[3];
-            job.output->write(x + job.frame.x1, job.frame.y2 - 1 - y, px);
+            job.output->write(x + job.film.x1, job.film.y2 - 1 - y, px);
         }
 }
 
@@ -357,18 +366,21 @@ void run_bands(BandJob& job) {
         band_worker(0, 1, &job);
 }
 
-FrameGeometry frame_geometry(const OfxRectI& frame) {
+FrameGeometry frame_geometry(const Placement& p) {
+    const OfxRectI& frame = p.image;
     long long w = (long long)frame.x2 - frame.x1, h = (long long)frame.y2 - frame.y1;
     if (w <= 0 || h <= 0) throw RenderError("the Source image is empty: its region of definition is " + rect_text(frame));
     if (w > kMaxFrameSidePx || h > kMaxFrameSidePx || w * h > kMaxFramePixels)
         throw RenderError("the Source image is " + std::to_string(w) + "x" + std::to_string(h) +
                           " pixels; Darkroom renders frames up to " + std::to_string(kMaxFrameSidePx) +
                           " pixels a side and 2^30 pixels in all");
-    return {(int)w, (int)h};
+    const long long film_width = (long long)p.film.x2 - p.film.x1;
+    const Window image = to_core(p.image, p.film);
+    return {(int)w, (int)h, false, image.x0, image.y0, (int)std::clamp(film_width, 1LL, (long long)kMaxFrameSidePx)};
 }
 
-// The Source clip's frame in pixels at `scale`; throws when the clip is not connected.
-OfxRectI source_frame(OfxImageEffectHandle effect, OfxTime time, OfxPointD scale, OfxImageClipHandle* source_out) {
+// The Source image and the film frame at `scale`; throws when the Source is not connected.
+Placement source_placement(OfxImageEffectHandle effect, OfxTime time, OfxPointD scale, OfxImageClipHandle* source_out) {
     OfxImageClipHandle source = clip_handle(effect, kOfxImageEffectSimpleSourceClipName);
     Props props = clip_props(source);
     if (!props.get_int_or(kOfxImageClipPropConnected, 1))
@@ -381,7 +393,19 @@ OfxRectI source_frame(OfxImageEffectHandle effect, OfxTime time, OfxPointD scale
     if (!(pixel_aspect > 0) || !std::isfinite(pixel_aspect)) pixel_aspect = 1.0;
     if (!(scale.x > 0 && scale.y > 0 && scale.x <= 1e3 && scale.y <= 1e3))
         throw RenderError("the host asked for render scale " + std::to_string(scale.x) + " x " + std::to_string(scale.y));
-    return frame_pixels(rod, scale, pixel_aspect);
+    Placement p;
+    p.image = p.film = frame_pixels(rod, scale, pixel_aspect);
+    // The project's format, where the host says (canonical coordinates; a host without it
+    // leaves the film frame the image's own).
+    Props effect_set = effect_props(effect);
+    const double size_x = effect_set.get_double_or(kOfxImageEffectPropProjectSize, 0.0, 0),
+                 size_y = effect_set.get_double_or(kOfxImageEffectPropProjectSize, 0.0, 1),
+                 offset_x = effect_set.get_double_or(kOfxImageEffectPropProjectOffset, 0.0, 0),
+                 offset_y = effect_set.get_double_or(kOfxImageEffectPropProjectOffset, 0.0, 1);
+    const bool usable = size_x >= 1 && size_y >= 1 && size_x <= 1e7 && size_y <= 1e7 && std::abs(offset_x) <= 1e7 &&
+                        std::abs(offset_y) <= 1e7;
+    if (usable) p.film = frame_pixels({offset_x, offset_y, offset_x + size_x, offset_y + size_y}, scale, pixel_aspect);
+    return p;
 }
 
 OfxPointD render_scale(const Props& args) {
@@ -399,8 +423,9 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
 
     NodeSettings settings = read_parameters(effect, time);
     OfxImageClipHandle source_clip = nullptr;
-    const OfxRectI frame = source_frame(effect, time, scale, &source_clip);
-    const FrameGeometry geometry = frame_geometry(frame);
+    const Placement placement = source_placement(effect, time, scale, &source_clip);
+    const OfxRectI& film = placement.film;
+    const FrameGeometry geometry = frame_geometry(placement);
 
     HostImage output(clip_handle(effect, kOfxImageEffectOutputClipName), time, "Output");
     const OfxRectI& ob = output.bounds();
@@ -411,13 +436,13 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     Colour colour = colour_for(inst, settings);
 
     // Pixels of the window outside the frame are black and transparent.
-    const Window frame_core{0, 0, geometry.width, geometry.height};
-    const Window out_core = to_core(window, frame).intersected(frame_core);
+    const Window frame_core = to_core(placement.image, film);
+    const Window out_core = to_core(window, film).intersected(frame_core);
     {
         const float zero[4] = {0, 0, 0, 0};
         for (int y = window.y1; y < window.y2; ++y)
             for (int x = window.x1; x < window.x2; ++x) {
-                int cx = x - frame.x1, cy = frame.y2 - 1 - y;
+                int cx = x - film.x1, cy = film.y2 - 1 - y;
                 if (cx < out_core.x0 || cx >= out_core.x1 || cy < out_core.y0 || cy >= out_core.y1)
                     output.write(x, y, zero);
             }
@@ -437,7 +462,7 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     for (int y = in_core.y0; y < in_core.y1; ++y)
         for (int x = in_core.x0; x < in_core.x1; ++x) {
             float* px = in.at(x, y);
-            int ox = x + frame.x1, oy = frame.y2 - 1 - y;
+            int ox = x + film.x1, oy = film.y2 - 1 - y;
             if (!source.holds(ox, oy)) {
                 std::fill_n(px, in_channels, 0.0f);
                 continue;
@@ -465,7 +490,7 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     job.seed = settings.develop.seed;
     job.grain_frame = settings.develop.frame;
     job.output = &output;
-    job.frame = frame;
+    job.film = film;
     unsigned cpus = 1;
     if (suites.thread) suites.thread->multiThreadNumCPUs(&cpus);
     int band_rows = std::max(kMinBandRows, out_core.height() / std::max(1, 4 * (int)cpus));
@@ -498,16 +523,16 @@ OfxStatus regions_of_interest(OfxImageEffectHandle effect, const Props& in_args,
     OfxRectD region{};
     for (int i = 0; i < 4; ++i) (&region.x1)[i] = in_args.get_double(kOfxImageEffectPropRegionOfInterest, i);
     OfxImageClipHandle source = nullptr;
-    const OfxRectI frame = source_frame(effect, time, scale, &source);
+    const Placement placement = source_placement(effect, time, scale, &source);
     const double pixel_aspect = clip_props(source).get_double_or(kOfxImagePropPixelAspectRatio, 1.0);
     const double sx = scale.x / (pixel_aspect > 0 ? pixel_aspect : 1.0), sy = scale.y;
     const OfxRectI region_px{(int)std::floor(std::max(region.x1 * sx, -1e9)), (int)std::floor(std::max(region.y1 * sy, -1e9)),
                              (int)std::ceil(std::min(region.x2 * sx, 1e9)), (int)std::ceil(std::min(region.y2 * sy, 1e9))};
-    const FrameGeometry geometry = frame_geometry(frame);
-    const Window out_core = to_core(region_px, frame).intersected({0, 0, geometry.width, geometry.height});
+    const FrameGeometry geometry = frame_geometry(placement);
+    const Window out_core = to_core(region_px, placement.film).intersected(to_core(placement.image, placement.film));
     if (out_core.empty()) return kOfxStatReplyDefault;
     auto plan = plan_for(instance_of(effect), read_parameters(effect, time), geometry);
-    const OfxRectI roi = to_ofx(plan->input_window(out_core), frame);
+    const OfxRectI roi = to_ofx(plan->input_window(out_core), placement.film);
     out_args.set_doubles((std::string(kOfxImageClipPropRoIPrefix) + kOfxImageEffectSimpleSourceClipName).c_str(),
                          {roi.x1 / sx, roi.y1 / sy, roi.x2 / sx, roi.y2 / sy});
     return kOfxStatOK;

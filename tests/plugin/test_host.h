@@ -136,6 +136,13 @@ public:
     // definition in canonical coordinates (defaults to the frame at scale 1), its state.
     void set_source(const Frame& frame, const std::string& premultiplication = kOfxImagePreMultiplied);
     void set_source_rod(const OfxRectD& rod) { effect_.clips["Source"]->rod = rod; }
+    // The project's format (canonical coordinates), as a host sets kOfxImageEffectPropProjectSize/Offset.
+    void set_project(const OfxRectD& format) {
+        effect_.props.set("OfxImageEffectPropProjectSize", format.x2 - format.x1, 0);
+        effect_.props.set("OfxImageEffectPropProjectSize", format.y2 - format.y1, 1);
+        effect_.props.set("OfxImageEffectPropProjectOffset", format.x1, 0);
+        effect_.props.set("OfxImageEffectPropProjectOffset", format.y1, 1);
+    }
     void disconnect_source();
     void set_source_depth(const std::string& depth) { effect_.clips["Source"]->image_depth = depth; }
 

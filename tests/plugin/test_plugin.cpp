@@ -1,6 +1,7 @@
 // The OpenFX bundle, loaded by a test host exactly as a compositing host loads it.
 #include <OpenImageIO/imagebuf.h>
 #include <catch2/catch.hpp>
+#include <algorithm>
 
 #include <cmath>
 #include <cstdio>
@@ -226,6 +227,41 @@ TEST_CASE("a frame whose region of definition is not at the origin develops the 
     REQUIRE(a.status == kOfxStatOK);
     REQUIRE(b.status == kOfxStatOK);
     CHECK(same_bits(a.output, b.output));
+}
+
+TEST_CASE("a Source that is part of the project's format (a bounding box, overscan) develops as that part of the frame",
+          "[plugin][determinism]") {
+    // The film frame is the project's format: a Source whose region of definition is a CG
+    // element's bounding box, or overscan, gets the frame's pixel pitch and grain, so away
+    // from its edges (where filters clamp) its pixels are those of the whole frame.
+    const int w = 96, h = 64;
+    const Frame whole = Frame::from_top_down(scene(w, h, 4), w, h, 4);
+    auto inst = make_instance();
+    set_common_look(*inst);
+    inst->set_double("halation", 0);
+    inst->set_project({0, 0, (double)w, (double)h});
+    inst->set_source(whole);
+    RenderResult expected = inst->render(2, whole.bounds);
+    REQUIRE(expected.status == kOfxStatOK);
+    struct Part {
+        OfxRectI bounds, compare;  // OFX pixels; compare: 10 or more from the part's edges, inside the frame
+    };
+    for (const Part& part : {Part{{24, 16, 72, 48}, {34, 26, 62, 38}}, Part{{-8, -6, 104, 70}, {10, 10, 86, 54}}}) {
+        Frame source;
+        source.bounds = part.bounds;
+        source.channels = 4;
+        source.pixels.resize(size_t(source.width()) * source.height() * 4);
+        for (int y = part.bounds.y1; y < part.bounds.y2; ++y)
+            for (int x = part.bounds.x1; x < part.bounds.x2; ++x)
+                std::copy_n(whole.at(std::clamp(x, 0, w - 1), std::clamp(y, 0, h - 1)), 4, source.at(x, y));
+        inst->set_source(source);
+        RenderResult got = inst->render_tiles(2, part.bounds, 40, 24);
+        INFO(inst->effect().persistent_message);
+        REQUIRE(got.status == kOfxStatOK);
+        for (int y = part.compare.y1; y < part.compare.y2; ++y)
+            for (int x = part.compare.x1; x < part.compare.x2; ++x)
+                for (int c = 0; c < 4; ++c) REQUIRE(got.output.at(x, y)[c] == expected.output.at(x, y)[c]);
+    }
 }
 
 TEST_CASE("render scale 0.5 renders the half-resolution frame with the same physical sizes", "[plugin][cli]") {
