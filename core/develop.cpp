@@ -399,10 +399,9 @@ Plan Plan::for_frame(int frame) const {
     return p;
 }
 
-Window Plan::input_window(const Window& output) const {
-    int halo = film_stages_.halo_px() + (print_ ? paper_stages_.halo_px() : 0);
-    return output.grown(halo).intersected(frame_);
-}
+int Plan::halo_px() const { return film_stages_.halo_px() + (print_ ? paper_stages_.halo_px() : 0); }
+
+Window Plan::input_window(const Window& output) const { return output.grown(halo_px()).intersected(frame_); }
 
 std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& film_out, int threads,
                                       StageTimes* times) const {

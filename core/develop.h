@@ -129,6 +129,8 @@ public:
 
     // The input window needed to render `output` (grown by the halo, clipped to the frame).
     Window input_window(const Window& output) const;
+    // How far the input a pixel needs reaches, in pixels (the film's and the paper's halos).
+    int halo_px() const;
     // Renders `out.window` from `in`, which must cover input_window(out.window). The input
     // is grey (1 channel), grey and alpha (2), RGB (3) or RGB and alpha first of the rest
     // (4 or more). Writes channels 0-2 of `out`, and copies the input's alpha to its 4th

@@ -493,7 +493,13 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     job.film = film;
     unsigned cpus = 1;
     if (suites.thread) suites.thread->multiThreadNumCPUs(&cpus);
-    int band_rows = std::max(kMinBandRows, out_core.height() / std::max(1, 4 * (int)cpus));
+    // Each band also develops its halo (halation's reaches ~100 px at 4K): bands of at least
+    // twice the halo keep that overhead within 2x on the film's first stages, unless that
+    // would leave threads without a band. Four bands per thread otherwise balance the load.
+    const int threads = std::max(1, (int)cpus), height = out_core.height();
+    const int per_thread = (height + threads - 1) / threads;
+    int band_rows = std::max(height / (4 * threads), std::min(2 * plan->halo_px(), per_thread));
+    band_rows = std::max(kMinBandRows, band_rows);
     for (int y = out_core.y0; y < out_core.y1; y += band_rows)
         job.bands.push_back({out_core.x0, y, out_core.x1, std::min(out_core.y1, y + band_rows)});
     run_bands(job);
