@@ -155,10 +155,12 @@ FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px) {
 Plan PlanCache::plan_for(const FrameGeometry& frame, int frame_number) {
     // Held while compiling: the other frames of this size need the same plan.
     std::lock_guard<std::mutex> lock(mutex_);
-    const auto key = std::make_tuple(frame.width, frame.height, frame.monochrome, frame.x0, frame.y0, frame.film_width);
+    // The film frame's width and grey input need their own compile; each image's window of
+    // that frame (its data window) is a copy of it.
+    const auto key = std::make_pair(frame.film_width > 0 ? frame.film_width : frame.width, frame.monochrome);
     auto it = plans_.find(key);
     if (it == plans_.end()) it = plans_.emplace(key, compile_look(look_, frame)).first;
-    return it->second.for_frame(frame_number);
+    return it->second.in_image(frame).for_frame(frame_number);
 }
 
 Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window) {

@@ -318,8 +318,10 @@ int MaterialStages::halo_px() const {
     return r;
 }
 
-Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
-                   const FrameGeometry& frame) {
+namespace {
+
+// The image's window in the film frame's coordinates; throws for an unusable geometry.
+Window image_window(const FrameGeometry& frame) {
     if (frame.width <= 0 || frame.height <= 0)
         throw std::invalid_argument("frame size " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
                                     " is empty");
@@ -332,6 +334,16 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
             throw std::invalid_argument("the image's window (" + std::to_string(frame.x0) + ", " + std::to_string(frame.y0) +
                                         ") + " + std::to_string(frame.width) + "x" + std::to_string(frame.height) +
                                         " reaches beyond +-2^28 pixels of the film frame");
+    return Window{frame.x0, frame.y0, frame.x0 + frame.width, frame.y0 + frame.height};
+}
+
+int film_width_px(const FrameGeometry& frame) { return frame.film_width > 0 ? frame.film_width : frame.width; }
+
+}  // namespace
+
+Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
+                   const FrameGeometry& frame) {
+    const Window image = image_window(frame);
     if (film.kind != StockKind::negative) throw std::invalid_argument("'" + film.id + "' is not a film stock (it is a paper or print film)");
     if (paper && paper->kind == StockKind::negative)
         throw std::invalid_argument("'" + paper->id + "' is a camera film, not a paper or print film");
@@ -341,10 +353,11 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
 
     Plan p;
     p.settings_ = settings;
-    p.frame_ = Window{frame.x0, frame.y0, frame.x0 + frame.width, frame.y0 + frame.height};
-    const int film_width_px = frame.film_width > 0 ? frame.film_width : frame.width;
+    p.frame_ = image;
+    p.film_width_px_ = film_width_px(frame);
+    p.monochrome_ = frame.monochrome;
     double film_width_mm = settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm;
-    p.film_stages_ = build_stages(film, film_width_mm, film_width_px, settings, 0, "film", p.skipped_);
+    p.film_stages_ = build_stages(film, film_width_mm, p.film_width_px_, settings, 0, "film", p.skipped_);
     p.monochrome_input_ = frame.monochrome && settings.skip_noop_stages;
     if (p.monochrome_input_ && settings.output != OutputMode::texture)
         p.skipped_.push_back("spectral sensitivity: the input is grey, so each layer's exposure is one scale of it");
@@ -354,7 +367,7 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
 
     if (settings.output == OutputMode::print) {
         double print_width_mm = settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm;
-        p.paper_stages_ = build_stages(*paper, print_width_mm, film_width_px, settings, 16, "paper", p.skipped_);
+        p.paper_stages_ = build_stages(*paper, print_width_mm, p.film_width_px_, settings, 16, "paper", p.skipped_);
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev});
@@ -384,6 +397,14 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     } else if (paper) {
         p.skipped_.push_back("print: the output stops at the negative");
     }
+    return p;
+}
+
+Plan Plan::in_image(const FrameGeometry& image) const {
+    if (film_width_px(image) != film_width_px_ || image.monochrome != monochrome_)
+        throw std::invalid_argument("Plan::in_image: another film frame width or channel count needs its own plan");
+    Plan p = *this;
+    p.frame_ = image_window(image);
     return p;
 }
 

@@ -141,6 +141,10 @@ public:
     // The same plan for another frame of a sequence: only the grain's noise depends on the
     // frame, so a sequence compiles once (seconds) and copies the plan per frame.
     Plan for_frame(int frame) const;
+    // The same plan for another image of the same film frame (a sequence whose data windows
+    // differ, a CG element's bounding box per frame): only the image's window changes. The
+    // film frame's width and the grey input must be the plan's (else std::invalid_argument).
+    Plan in_image(const FrameGeometry& image) const;
 
     // The stages in order and those left out, one line each, for -v.
     std::vector<std::string> describe() const;
@@ -159,6 +163,8 @@ private:
     // The fast tiers' printing of a colour negative: film densities -> log2 paper exposures,
     // print densities -> log2 XYZ (stages/tables.h).
     std::optional<Table3D> enlarger_table_, view_table_;
+    int film_width_px_ = 0;                  // the film frame's width (FrameGeometry)
+    bool monochrome_ = false;                // compiled for grey input
     double film_exposure_scale_ = 1.0;       // lux-seconds per unit of input
     bool monochrome_input_ = false;          // the spectral stage is one scale per layer
     std::vector<std::string> skipped_;

@@ -86,8 +86,8 @@ struct RenderError : std::runtime_error {
 struct Instance {
     std::mutex mutex;
     // Compiled plans by their inputs (frame included); a render and its region-of-interest
-    // query share one. The plans of other frames are copies of one compiled plan
-    // (Plan::for_frame): scrubbing a sequence compiles once.
+    // query share one. The plans of other frames and Source regions are copies of one
+    // compiled plan (Plan::in_image, Plan::for_frame): scrubbing a sequence compiles once.
     std::map<std::string, std::shared_ptr<const Plan>> plans;
     std::map<std::string, std::shared_ptr<const ocio::ColorConverter>> converters;
 };
@@ -114,15 +114,20 @@ std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, cons
     const DevelopSettings& s = n.develop;
     std::ostringstream key;
     key.precision(17);
-    key << stock_key(n.film, n.film_from_file) << '|' << stock_key(n.paper, n.paper_from_file) << '|' << frame.width
-        << 'x' << frame.height << '|' << s.exposure_ev << ',' << s.print_exposure_ev << ',' << int(s.output) << ','
+    key << stock_key(n.film, n.film_from_file) << '|' << stock_key(n.paper, n.paper_from_file) << '|' << frame.film_width
+        << '|' << s.exposure_ev << ',' << s.print_exposure_ev << ',' << int(s.output) << ','
         << int(s.input_units) << ',' << s.grain << ',' << s.mtf << ',' << s.halation << ',' << s.seed << ','
         << s.frame_width_mm << ',' << s.print_width_mm << ',' << quality_name(s.quality) << ','
-        << s.skip_noop_stages << ',' << frame.monochrome << '|' << frame.x0 << ',' << frame.y0 << ',' << frame.film_width;
+        << s.skip_noop_stages << ',' << frame.monochrome;
     for (int c = 0; c < 3; ++c)
         key << ',' << s.grain_amount[c] << ',' << s.grain_size[c] << ',' << s.grain_density_exponent[c] << ','
             << s.printer_lights[c] << ',' << s.filtration_ymc[c];
-    const std::string any_frame = key.str(), this_frame = any_frame + "|frame " + std::to_string(s.frame);
+    // One compile per film frame and settings; each image window (the Source's region) and
+    // frame is a copy of it.
+    const std::string any_frame = key.str(),
+                      this_frame = any_frame + "|image " + std::to_string(frame.x0) + ',' + std::to_string(frame.y0) + ',' +
+                                   std::to_string(frame.width) + 'x' + std::to_string(frame.height) + "|frame " +
+                                   std::to_string(s.frame);
     std::shared_ptr<const Plan> compiled;
     {
         std::lock_guard<std::mutex> lock(inst.mutex);
@@ -136,7 +141,7 @@ std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, cons
         Stock paper = n.paper.empty() ? Stock{} : load_stock(n.paper, n.paper_from_file);
         compiled = std::make_shared<const Plan>(Plan::compile(film, n.paper.empty() ? nullptr : &paper, s, frame));
     }
-    auto plan = std::make_shared<const Plan>(compiled->for_frame(s.frame));
+    auto plan = std::make_shared<const Plan>(compiled->in_image(frame).for_frame(s.frame));
     std::lock_guard<std::mutex> lock(inst.mutex);
     // Plans of other frames and settings are dropped once a few accumulate (each holds
     // kernels and tables, not images, so a handful is cheap); the compiled one is kept.

@@ -123,14 +123,19 @@ TEST_CASE("an image that is part of the film frame develops as that part of the 
         for (int y = w.y0; y < w.y1; ++y)
             for (int x = w.x0; x < w.x1; ++x)
                 std::copy_n(scene.at(std::clamp(x, 0, 159), std::clamp(y, 0, 119)), 3, pixels.at(x, y));
-        const Plan plan = Plan::compile(film, &paper, s, FrameGeometry{w.width(), w.height(), false, w.x0, w.y0, 160});
-        Image got(w, 3);
+        const FrameGeometry geometry{w.width(), w.height(), false, w.x0, w.y0, 160};
+        const Plan plan = Plan::compile(film, &paper, s, geometry);
+        Image got(w, 3), moved(w, 3);
         plan.run(pixels.view(), got.view(), 3);
+        // The whole frame's plan moved to this image window is the same plan.
+        whole.in_image(geometry).run(pixels.view(), moved.view(), 2);
+        CHECK(moved.pixels == got.pixels);
         for (int y = part.compare.y0; y < part.compare.y1; ++y)
             for (int x = part.compare.x0; x < part.compare.x1; ++x)
                 for (int c = 0; c < 3; ++c) REQUIRE(got.at(x, y)[c] == expected.at(x, y)[c]);
     }
     CHECK_THROWS_WITH(Plan::compile(film, &paper, s, FrameGeometry{10, 10, false, 0, 0, -1}), Catch::Contains("negative"));
+    CHECK_THROWS_AS(whole.in_image(FrameGeometry{80, 60, false, 0, 0, 0}), std::invalid_argument);  // another pitch
     CHECK_THROWS_WITH(Plan::compile(film, &paper, s, FrameGeometry{10, 10, false, std::numeric_limits<int>::max() - 5, 0, 0}),
                       Catch::Contains("beyond"));
 }
