@@ -157,7 +157,7 @@ Plan PlanCache::plan_for(const FrameGeometry& frame, int frame_number) {
     std::lock_guard<std::mutex> lock(mutex_);
     // The film frame's width and grey input need their own compile; each image's window of
     // that frame (its data window) is a copy of it.
-    const auto key = std::make_pair(frame.film_width > 0 ? frame.film_width : frame.width, frame.monochrome);
+    const auto key = std::make_pair(frame.film_width_px(), frame.monochrome);
     auto it = plans_.find(key);
     if (it == plans_.end()) it = plans_.emplace(key, compile_look(look_, frame)).first;
     return it->second.in_image(frame).for_frame(frame_number);

@@ -337,8 +337,6 @@ Window image_window(const FrameGeometry& frame) {
     return Window{frame.x0, frame.y0, frame.x0 + frame.width, frame.y0 + frame.height};
 }
 
-int film_width_px(const FrameGeometry& frame) { return frame.film_width > 0 ? frame.film_width : frame.width; }
-
 }  // namespace
 
 Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
@@ -354,7 +352,7 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     Plan p;
     p.settings_ = settings;
     p.frame_ = image;
-    p.film_width_px_ = film_width_px(frame);
+    p.film_width_px_ = frame.film_width_px();
     p.monochrome_ = frame.monochrome;
     double film_width_mm = settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm;
     p.film_stages_ = build_stages(film, film_width_mm, p.film_width_px_, settings, 0, "film", p.skipped_);
@@ -401,7 +399,7 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
 }
 
 Plan Plan::in_image(const FrameGeometry& image) const {
-    if (film_width_px(image) != film_width_px_ || image.monochrome != monochrome_)
+    if (image.film_width_px() != film_width_px_ || image.monochrome != monochrome_)
         throw std::invalid_argument("Plan::in_image: another film frame width or channel count needs its own plan");
     Plan p = *this;
     p.frame_ = image_window(image);

@@ -95,6 +95,7 @@ struct FrameGeometry {
     // film-frame pixels whatever part of the frame a file holds; filters clamp at the image.
     int x0 = 0, y0 = 0;
     int film_width = 0;
+    int film_width_px() const { return film_width > 0 ? film_width : width; }
 };
 
 // One material's run of the pipeline, precomputed.
