@@ -12,9 +12,13 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <limits>
 #include <memory>
+#include <new>
 #include <utility>
 #include <vector>
+
+#include "core/plane_memory.h"
 
 namespace darkroom {
 
@@ -61,13 +65,28 @@ using ImageView = BasicImageView<float>;
 using ConstImageView = BasicImageView<const float>;
 
 // Storage whose resize() leaves new floats unset: a stage that writes every pixel of its
-// output plane need not pay for zeroing it first (about a copy pass per plane).
+// output plane need not pay for zeroing it first (about a copy pass per plane). Large
+// blocks are recycled (core/plane_memory.h).
 template <typename T>
 struct UnsetAllocator : std::allocator<T> {
     template <typename U>
     struct rebind {
         using other = UnsetAllocator<U>;
     };
+    UnsetAllocator() = default;
+    template <typename U>
+    UnsetAllocator(const UnsetAllocator<U>&) noexcept {}
+    T* allocate(size_t n) {
+        if (n > std::numeric_limits<size_t>::max() / sizeof(T)) throw std::bad_array_new_length();
+        if (n * sizeof(T) < kPooledBytes) return std::allocator<T>::allocate(n);
+        return static_cast<T*>(take_plane_memory(n * sizeof(T)));
+    }
+    void deallocate(T* p, size_t n) noexcept {
+        if (n * sizeof(T) < kPooledBytes)
+            std::allocator<T>::deallocate(p, n);
+        else
+            give_plane_memory(p, n * sizeof(T));
+    }
     template <typename U>
     void construct(U* p) noexcept {
         ::new (static_cast<void*>(p)) U;

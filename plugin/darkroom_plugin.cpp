@@ -29,6 +29,7 @@
 #include <sstream>
 
 #include "core/develop.h"
+#include "core/plane_memory.h"
 #include "core/plate/grain_synthesis.h"
 #include "core/stock.h"
 #include "ocio/transform.h"
@@ -690,6 +691,7 @@ OfxStatus dispatch(const char* action, OfxImageEffectHandle effect, OfxPropertyS
         std::lock_guard<std::mutex> lock(inst.mutex);
         inst.plans.clear();
         inst.converters.clear();
+        release_plane_memory();  // the planes' memory kept for the next render (core/plane_memory.h)
         return kOfxStatOK;
     }
     return kOfxStatReplyDefault;
