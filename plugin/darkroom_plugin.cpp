@@ -587,6 +587,12 @@ OfxStatus clip_preferences(OfxImageEffectHandle effect, const Props& out_args) {
 
 OfxStatus create_instance(OfxImageEffectHandle effect) {
     effect_props(effect).set(kOfxPropInstanceData, static_cast<void*>(new Instance));
+    // A host that refuses values set here keeps the choices as loaded (their behaviour before
+    // the saved ids); the node is still created.
+    try {
+        restore_stock_choices(effect);
+    } catch (const std::exception&) {
+    }
     return kOfxStatOK;
 }
 
@@ -684,6 +690,9 @@ OfxStatus dispatch(const char* action, OfxImageEffectHandle effect, OfxPropertyS
     if (!std::strcmp(action, kOfxImageEffectActionGetClipPreferences)) return clip_preferences(effect, Props(out_args));
     if (!std::strcmp(action, kOfxActionInstanceChanged)) {
         clear_message(effect);  // the user changed something; the next render judges it afresh
+        Props args(in_args);
+        if (args.get_string_or(kOfxPropType, "") == kOfxTypeParameter)
+            follow_stock_choice(effect, args.get_string_or(kOfxPropName, ""), args.get_string_or(kOfxPropChangeReason, ""));
         return kOfxStatOK;
     }
     if (!std::strcmp(action, kOfxActionPurgeCaches)) {

@@ -217,6 +217,9 @@ inline constexpr int kOfxImageEffectPluginApiVersion = 1;
 #define kOfxPropPluginDescription "OfxPropPluginDescription"
 #define kOfxPropInstanceData "OfxPropInstanceData"
 #define kOfxPropChangeReason "OfxPropChangeReason"
+#define kOfxChangeUserEdited "OfxChangeUserEdited"
+#define kOfxChangePluginEdited "OfxChangePluginEdited"
+#define kOfxTypeParameter "OfxTypeParameter"
 
 // Image effect descriptor and instance properties.
 #define kOfxImageEffectPluginPropGrouping "OfxImageEffectPluginPropGrouping"
@@ -297,6 +300,7 @@ inline constexpr int kOfxImageEffectPluginApiVersion = 1;
 #define kOfxParamPropParent "OfxParamPropParent"
 #define kOfxParamPropAnimates "OfxParamPropAnimates"
 #define kOfxParamPropEnabled "OfxParamPropEnabled"
+#define kOfxParamPropSecret "OfxParamPropSecret"
 #define kOfxParamPropGroupOpen "OfxParamPropGroupOpen"
 #define kOfxParamPropChoiceOption "OfxParamPropChoiceOption"
 #define kOfxParamPropDimensionLabel "OfxParamPropDimensionLabel"

@@ -16,6 +16,10 @@ constexpr const char* kFilm = "film";
 constexpr const char* kFilmFile = "filmFile";
 constexpr const char* kPaper = "paper";
 constexpr const char* kPaperFile = "paperFile";
+// Hidden: the id of the option each stock choice is set to (stock_options), so that a saved
+// node keeps its stocks when a later version's lists put them at other indices.
+constexpr const char* kFilmStock = "filmStock";
+constexpr const char* kPaperStock = "paperStock";
 constexpr const char* kOutput = "output";
 constexpr const char* kQuality = "quality";
 constexpr const char* kExposure = "exposure";
@@ -38,8 +42,6 @@ constexpr const char* kOcioConfig = "ocioConfig";
 constexpr const char* kInputSpace = "inputColorspace";
 constexpr const char* kOutputSpace = "outputColorspace";
 
-constexpr const char* kStockFileOption = "Stock file...";
-constexpr const char* kNoPaperOption = "None (stop at the negative)";
 
 // Output modes in the order of the choice parameter.
 const std::array<std::pair<const char*, OutputMode>, 5> kOutputs{{{"Print", OutputMode::print},
@@ -48,27 +50,44 @@ const std::array<std::pair<const char*, OutputMode>, 5> kOutputs{{{"Print", Outp
                                                                   {"Scan", OutputMode::scan},
                                                                   {"Texture", OutputMode::texture}}};
 
-std::vector<const Stock*> stocks_of_kind(StockKind kind) {
-    std::vector<const Stock*> out;
+// An option of a stock choice: what it stands for (a built-in stock's id, or one of the
+// two below) and what the user sees.
+struct StockOption {
+    std::string id, label;
+};
+constexpr const char* kStockFileId = "file";
+constexpr const char* kNoPaperId = "none";
+
+// Film choice: the built-in films, then a stock file. Paper: built-in papers, none, a file.
+std::vector<StockOption> stock_options(StockKind kind) {
+    std::vector<StockOption> options;
     for (const Stock& s : builtin_stocks())
-        if (s.kind == kind) out.push_back(&s);
+        if (s.kind == kind) options.push_back({s.id, s.name});
+    if (kind == StockKind::paper) options.push_back({kNoPaperId, "None (stop at the negative)"});
+    options.push_back({kStockFileId, "Stock file..."});
+    return options;
+}
+
+int option_index(const std::vector<StockOption>& options, const std::string& id) {
+    for (size_t i = 0; i < options.size(); ++i)
+        if (options[i].id == id) return int(i);
+    return -1;
+}
+
+std::vector<std::string> labels(const std::vector<StockOption>& options) {
+    std::vector<std::string> out;
+    for (const StockOption& o : options) out.push_back(o.label);
     return out;
 }
 
-// Film choice: the built-in films, then a stock file. Paper: built-in papers, none, a file.
-std::vector<std::string> film_options() {
-    std::vector<std::string> options;
-    for (const Stock* s : stocks_of_kind(StockKind::negative)) options.push_back(s->name);
-    options.push_back(kStockFileOption);
-    return options;
-}
-std::vector<std::string> paper_options() {
-    std::vector<std::string> options;
-    for (const Stock* s : stocks_of_kind(StockKind::paper)) options.push_back(s->name);
-    options.push_back(kNoPaperOption);
-    options.push_back(kStockFileOption);
-    return options;
-}
+// A stock choice, its hidden id parameter and the options it offers.
+struct StockChoice {
+    const char* choice;
+    const char* id;
+    StockKind kind;
+};
+const std::array<StockChoice, 2> kStockChoices{{{kFilm, kFilmStock, StockKind::negative},
+                                                {kPaper, kPaperStock, StockKind::paper}}};
 
 Props define(OfxParamSetHandle params, const char* type, const char* name, const char* label, const char* hint,
              const char* parent) {
@@ -133,19 +152,14 @@ void define_choice(OfxParamSetHandle params, const char* name, const char* label
     p.set(kOfxParamPropAnimates, 0);
 }
 
-void define_string(OfxParamSetHandle params, const char* name, const char* label, const char* hint, const char* parent,
-                   const char* def, bool file_path) {
+Props define_string(OfxParamSetHandle params, const char* name, const char* label, const char* hint, const char* parent,
+                    const char* def, bool file_path) {
     Props p = define(params, kOfxParamTypeString, name, label, hint, parent);
     p.set(kOfxParamPropDefault, def);
     p.set(kOfxParamPropStringMode, file_path ? kOfxParamStringIsFilePath : kOfxParamStringIsSingleLine);
     if (file_path) p.set(kOfxParamPropStringFilePathExists, 1);
     p.set(kOfxParamPropAnimates, 0);
-}
-
-int index_of_stock(const std::vector<const Stock*>& stocks, const std::string& id) {
-    for (size_t i = 0; i < stocks.size(); ++i)
-        if (stocks[i]->id == id) return (int)i;
-    return 0;
+    return p;
 }
 
 // Reading values from an instance.
@@ -204,6 +218,16 @@ public:
                                  std::to_string(option_count - 1) + ")");
         return v;
     }
+    // The id of the option a stock choice is set to. A node saved with a stock this version
+    // does not have keeps that stock's id (restore_stock_choices) until the user chooses.
+    std::string stock_choice(const StockChoice& c) const {
+        const auto options = stock_options(c.kind);
+        const std::string saved = get_string(c.id);
+        if (!saved.empty() && option_index(options, saved) < 0)
+            throw ParameterError(label(c.choice) + ": this node was saved with the stock '" + saved +
+                                 "', which this version of Darkroom does not have; choose another");
+        return options[size_t(checked_choice(c.choice, int(options.size())))].id;
+    }
 
 private:
     OfxParamHandle handle(const char* name) const {
@@ -235,18 +259,21 @@ std::string stock_file(const Reader& r, const char* choice, const char* file) {
 void define_parameters(OfxParamSetHandle params) {
     const char* stocks = "stocksGroup";
     define_group(params, stocks, "Stocks", true);
-    const auto films = stocks_of_kind(StockKind::negative);
-    const auto papers = stocks_of_kind(StockKind::paper);
+    const auto films = stock_options(StockKind::negative), papers = stock_options(StockKind::paper);
     define_choice(params, kFilm, "Film", "The camera negative: a built-in stock, or a stock file (below)", stocks,
-                  film_options(), index_of_stock(films, "kodak-tri-x-400"));
+                  labels(films), option_index(films, "kodak-tri-x-400"));
     define_string(params, kFilmFile, "Film stock file", "A Darkroom stock file (.json) used when Film is 'Stock file'",
                   stocks, "", true);
     define_choice(params, kPaper, "Paper",
                   "The print paper: a built-in stock, none (only for the negative, density and scan outputs), or a "
                   "stock file",
-                  stocks, paper_options(), index_of_stock(papers, "vdr-paper-grade-2"));
+                  stocks, labels(papers), option_index(papers, "vdr-paper-grade-2"));
     define_string(params, kPaperFile, "Paper stock file", "A Darkroom stock file (.json) used when Paper is 'Stock file'",
                   stocks, "", true);
+    // Empty until the node is created (restore_stock_choices), as in nodes saved before them.
+    for (const StockChoice& c : kStockChoices)
+        define_string(params, c.id, c.id, "The id of the stock chosen above, saved with the node", stocks, "", false)
+            .set(kOfxParamPropSecret, 1);
     std::vector<std::string> outputs;
     for (const auto& o : kOutputs) outputs.push_back(o.first);
     define_choice(params, kOutput, "Output",
@@ -335,20 +362,18 @@ NodeSettings read_parameters(OfxImageEffectHandle instance, OfxTime time) {
     NodeSettings n;
     DevelopSettings& s = n.develop;
 
-    const auto films = stocks_of_kind(StockKind::negative);
-    const auto papers = stocks_of_kind(StockKind::paper);
-    int film_option = r.checked_choice(kFilm, (int)films.size() + 1);
-    n.film_from_file = film_option == (int)films.size();
-    n.film = n.film_from_file ? stock_file(r, kFilm, kFilmFile) : films[film_option]->id;
+    const std::string film = r.stock_choice(kStockChoices[0]);
+    n.film_from_file = film == kStockFileId;
+    n.film = n.film_from_file ? stock_file(r, kFilm, kFilmFile) : film;
     s.output = kOutputs[r.checked_choice(kOutput, (int)kOutputs.size())].second;
     s.quality = kQualities[r.checked_choice(kQuality, int(std::size(kQualities)))];
     // Only the print output uses a paper.
-    int paper_option = r.checked_choice(kPaper, (int)papers.size() + 2);
+    const std::string paper = r.stock_choice(kStockChoices[1]);
     if (s.output == OutputMode::print) {
-        if (paper_option == (int)papers.size())
+        if (paper == kNoPaperId)
             throw ParameterError("the Print output needs a paper: choose one, or the Negative, Density or Scan output");
-        n.paper_from_file = paper_option == (int)papers.size() + 1;
-        n.paper = n.paper_from_file ? stock_file(r, kPaper, kPaperFile) : papers[paper_option]->id;
+        n.paper_from_file = paper == kStockFileId;
+        n.paper = n.paper_from_file ? stock_file(r, kPaper, kPaperFile) : paper;
     }
 
     s.exposure_ev = r.checked_double(kExposure, -64, 64);
@@ -381,6 +406,53 @@ NodeSettings read_parameters(OfxImageEffectHandle instance, OfxTime time) {
     if (n.input_space.empty()) throw ParameterError(r.label(kInputSpace) + " is empty: name a colour space of the config");
     if (n.output_space.empty()) throw ParameterError(r.label(kOutputSpace) + " is empty: name a colour space of the config");
     return n;
+}
+
+namespace {
+
+OfxParamHandle param_handle(OfxImageEffectHandle instance, const char* name) {
+    OfxParamSetHandle params = nullptr;
+    check(suites.effect->getParamSet(instance, &params), "getting the parameter set");
+    OfxParamHandle h = nullptr;
+    check(suites.param->paramGetHandle(params, name, &h, nullptr), name);
+    return h;
+}
+
+// The choice set to the option with this id; false when no option has it.
+bool set_choice_to(OfxImageEffectHandle instance, const StockChoice& c, const std::string& id) {
+    const int index = option_index(stock_options(c.kind), id);
+    if (index < 0) return false;
+    if (Reader(instance, 0).get_int(c.choice) != index)
+        check(suites.param->paramSetValue(param_handle(instance, c.choice), index), c.choice);
+    return true;
+}
+
+// The id parameter set to the option the choice shows.
+void record_choice(OfxImageEffectHandle instance, const StockChoice& c) {
+    const auto options = stock_options(c.kind);
+    const int index = Reader(instance, 0).get_int(c.choice);
+    if (index < 0 || index >= int(options.size())) return;  // read_parameters reports it
+    check(suites.param->paramSetValue(param_handle(instance, c.id), options[size_t(index)].id.c_str()), c.id);
+}
+
+}  // namespace
+
+void restore_stock_choices(OfxImageEffectHandle instance) {
+    for (const StockChoice& c : kStockChoices) {
+        const std::string saved = Reader(instance, 0).get_string(c.id);
+        if (saved.empty())
+            record_choice(instance, c);  // a new node, or one saved before the ids were
+        else
+            set_choice_to(instance, c, saved);  // (an unknown stock stays, for read_parameters to report)
+    }
+}
+
+void follow_stock_choice(OfxImageEffectHandle instance, const std::string& param, const std::string& reason) {
+    for (const StockChoice& c : kStockChoices) {
+        if (param == c.choice && reason == kOfxChangeUserEdited) record_choice(instance, c);
+        // A host that sets the saved id after creating the node (or a script that sets it).
+        if (param == c.id && reason != kOfxChangePluginEdited) set_choice_to(instance, c, Reader(instance, 0).get_string(c.id));
+    }
 }
 
 }  // namespace darkroom::ofx

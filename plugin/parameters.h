@@ -35,4 +35,13 @@ void define_parameters(OfxParamSetHandle params);
 // Reads and validates the parameters of an instance at `time`; throws ParameterError.
 NodeSettings read_parameters(OfxImageEffectHandle instance, OfxTime time);
 
+// The stock choices are indices into lists that grow as stocks are added, so each choice
+// also saves its stock's id in a hidden parameter. On creating an instance (a saved node
+// loaded), each choice is set to the option of its saved id, or the id recorded where none
+// was saved; a saved stock this version does not have makes renders fail with its name until
+// the user chooses another. When the user changes a choice (kOfxActionInstanceChanged), its
+// id follows.
+void restore_stock_choices(OfxImageEffectHandle instance);
+void follow_stock_choice(OfxImageEffectHandle instance, const std::string& param, const std::string& reason);
+
 }  // namespace darkroom::ofx

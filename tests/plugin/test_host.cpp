@@ -308,10 +308,29 @@ OfxStatus param_get_value_at_time(OfxParamHandle h, OfxTime time, ...) {
     return s;
 }
 
-// The plugin reads values at the render's time only; it calls none of the others.
+// Sets the value (the plugin sets its hidden stock ids and choices).
+OfxStatus param_set_value(OfxParamHandle h, ...) {
+    if (!h) return kOfxStatErrBadHandle;
+    Param* p = param_of(h);
+    va_list ap;
+    va_start(ap, h);
+    OfxStatus s = kOfxStatOK;
+    if (p->type == kOfxParamTypeString)
+        p->text = va_arg(ap, const char*);
+    else if (is_int_type(p->type))
+        p->integer = va_arg(ap, int);
+    else if (p->type == kOfxParamTypeDouble || p->type == kOfxParamTypeDouble3D)
+        for (int i = 0; i < dimensions(p->type); ++i) p->doubles.at(i) = va_arg(ap, double);
+    else
+        s = kOfxStatErrUnsupported;
+    va_end(ap);
+    return s;
+}
+
+// The plugin reads values at the render's time and sets values; it calls none of the others.
 const OfxParameterSuiteV1 param_suite = {param_define, param_get_handle, param_set_get_property_set,
                                          param_get_property_set, nullptr, param_get_value_at_time,
-                                         nullptr, nullptr, nullptr, nullptr, nullptr, nullptr, nullptr,
+                                         nullptr, nullptr, param_set_value, nullptr, nullptr, nullptr, nullptr,
                                          nullptr, nullptr, nullptr, nullptr, nullptr};
 
 // --- Memory, threads, messages --------------------------------------------------------------
@@ -500,11 +519,13 @@ OfxStatus Plugin::call(const char* action, Effect* effect, PropertySet* in_args,
                               out_args ? out_args->handle() : nullptr);
 }
 
-std::unique_ptr<Instance> Plugin::create_instance() { return std::make_unique<Instance>(*this); }
+std::unique_ptr<Instance> Plugin::create_instance(const std::function<void(Instance&)>& load_setup) {
+    return std::make_unique<Instance>(*this, load_setup);
+}
 
 // --- Instances ---------------------------------------------------------------------------------
 
-Instance::Instance(Plugin& plugin) : plugin_(plugin) {
+Instance::Instance(Plugin& plugin, const std::function<void(Instance&)>& load_setup) : plugin_(plugin) {
     const Effect& desc = plugin.context_descriptor();
     effect_.props = desc.props;
     effect_.props.set(kOfxImageEffectPropContext, std::string(kOfxImageEffectContextFilter));
@@ -532,6 +553,7 @@ Instance::Instance(Plugin& plugin) : plugin_(plugin) {
         c->props.set(kOfxImagePropPixelAspectRatio, 1.0);
         effect_.clips[name] = std::move(c);
     }
+    if (load_setup) load_setup(*this);
     create_status_ = plugin_.call(kOfxActionCreateInstance, &effect_, nullptr, nullptr);
 }
 
@@ -543,6 +565,19 @@ void Instance::set_double3(const std::string& name, double a, double b, double c
 }
 void Instance::set_int(const std::string& name, int v) { effect_.params.find(name)->integer = v; }
 void Instance::set_string(const std::string& name, const std::string& v) { effect_.params.find(name)->text = v; }
+int Instance::get_int(const std::string& name) const { return effect_.params.find(name)->integer; }
+std::string Instance::get_string(const std::string& name) const { return effect_.params.find(name)->text; }
+
+OfxStatus Instance::user_edited(const std::string& name) {
+    PropertySet args;
+    args.set(kOfxPropType, std::string(kOfxTypeParameter));
+    args.set(kOfxPropName, name);
+    args.set(kOfxPropChangeReason, std::string(kOfxChangeUserEdited));
+    args.set(kOfxPropTime, 0.0);
+    args.set(kOfxImageEffectPropRenderScale, 1.0, 0);
+    args.set(kOfxImageEffectPropRenderScale, 1.0, 1);
+    return plugin_.call(kOfxActionInstanceChanged, &effect_, &args, nullptr);
+}
 
 int Instance::choice_index(const std::string& name, const std::string& text) const {
     const Property& options = effect_.params.find(name)->props.props.at(kOfxParamPropChoiceOption);

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -108,7 +109,9 @@ public:
     OfxPlugin* ofx() const { return plugin_; }
     Effect& descriptor() { return descriptor_; }
     Effect& context_descriptor() { return context_; }
-    std::unique_ptr<Instance> create_instance();
+    // A new instance; load_setup, when given, sets parameters before the plugin's create
+    // instance action, as a host loading a saved node does.
+    std::unique_ptr<Instance> create_instance(const std::function<void(Instance&)>& load_setup = {});
     OfxStatus call(const char* action, Effect* effect, PropertySet* in_args, PropertySet* out_args);
 
 private:
@@ -120,7 +123,7 @@ private:
 
 class Instance {
 public:
-    explicit Instance(Plugin& plugin);
+    Instance(Plugin& plugin, const std::function<void(Instance&)>& load_setup);
     ~Instance();
     Effect& effect() { return effect_; }
     OfxStatus create_status() const { return create_status_; }
@@ -129,6 +132,10 @@ public:
     void set_double3(const std::string& name, double a, double b, double c);
     void set_int(const std::string& name, int v);  // integers, booleans and choices
     void set_string(const std::string& name, const std::string& v);
+    int get_int(const std::string& name) const;
+    std::string get_string(const std::string& name) const;
+    // Tells the plugin the user changed a parameter (kOfxActionInstanceChanged), after set_*.
+    OfxStatus user_edited(const std::string& name);
     // The index of a choice parameter's option whose label contains `text`; -1 if none.
     int choice_index(const std::string& name, const std::string& text) const;
 

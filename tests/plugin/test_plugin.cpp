@@ -146,7 +146,7 @@ TEST_CASE("describe declares the contexts, depths, clips and parameters", "[plug
     for (const char* name : {"film", "filmFile", "paper", "paperFile", "output", "exposure", "printExposure",
                              "printerLights", "filtration", "grain", "grainAmount", "grainSize", "grainResponse",
                              "seed", "staticGrain", "halation", "mtf", "frameWidthMm", "printWidthMm", "ocioConfig",
-                             "inputColorspace", "outputColorspace"}) {
+                             "inputColorspace", "outputColorspace", "filmStock", "paperStock"}) {
         INFO(name);
         Param* param = ctx.params.find(name);
         REQUIRE(param);
@@ -387,6 +387,59 @@ TEST_CASE("changing Quality on an instance renders that tier, as a new instance 
     RenderResult high = switched->render(3, {0, 0, w, h});
     CHECK(same_bits(high.output, fresh->render(3, {0, 0, w, h}).output));
     CHECK_FALSE(same_bits(high.output, fast.output));  // the plan of the other tier is not reused
+}
+
+TEST_CASE("a saved node keeps its stocks when the plugin's list of stocks changes", "[plugin]") {
+    const int w = 32, h = 24;
+    Frame source = Frame::from_top_down(scene(w, h, 4), w, h, 4);
+    auto chosen = make_instance();
+    const int portra = chosen->choice_index("film", "Portra"), trix = chosen->choice_index("film", "Tri-X");
+    REQUIRE(portra >= 0);
+    REQUIRE(trix >= 0);
+    REQUIRE(portra != trix);
+    // A new node records the id of its default stock; a user's choice moves the id with it.
+    CHECK(chosen->get_string("filmStock") == "kodak-tri-x-400");
+    CHECK(chosen->get_string("paperStock") == "vdr-paper-grade-2");
+    chosen->set_int("film", portra);
+    REQUIRE(chosen->user_edited("film") == kOfxStatOK);
+    CHECK(chosen->get_string("filmStock") == "kodak-portra-400");
+    chosen->set_source(source);
+    RenderResult expected = chosen->render(2, {0, 0, w, h});
+    REQUIRE(expected.status == kOfxStatOK);
+
+    SECTION("a node saved when Portra was at another index develops through Portra") {
+        // As if the list had changed: the saved index now shows Tri-X, the saved id says Portra.
+        auto loaded = Plugin::get().create_instance([&](Instance& i) {
+            i.set_int("film", trix);
+            i.set_string("filmStock", "kodak-portra-400");
+        });
+        REQUIRE(loaded->create_status() == kOfxStatOK);
+        CHECK(loaded->get_int("film") == portra);
+        loaded->set_source(source);
+        CHECK(same_bits(loaded->render(2, {0, 0, w, h}).output, expected.output));
+    }
+    SECTION("a node saved before the ids keeps its choice and records its id") {
+        auto loaded = Plugin::get().create_instance([&](Instance& i) { i.set_int("film", portra); });
+        CHECK(loaded->get_int("film") == portra);
+        CHECK(loaded->get_string("filmStock") == "kodak-portra-400");
+    }
+    SECTION("a host that sets the saved id after creating the node") {
+        auto loaded = make_instance();
+        loaded->set_string("filmStock", "kodak-portra-400");
+        REQUIRE(loaded->user_edited("filmStock") == kOfxStatOK);
+        CHECK(loaded->get_int("film") == portra);
+    }
+    SECTION("a node saved with a stock this version does not have fails to render, naming it") {
+        auto loaded = Plugin::get().create_instance([&](Instance& i) { i.set_string("filmStock", "kodak-ektachrome-e100"); });
+        REQUIRE(loaded->create_status() == kOfxStatOK);
+        loaded->set_source(source);
+        CHECK(loaded->render(2, {0, 0, w, h}).status == kOfxStatFailed);
+        CHECK(loaded->effect().persistent_message.find("kodak-ektachrome-e100") != std::string::npos);
+        // Choosing a stock clears it.
+        loaded->set_int("film", portra);
+        REQUIRE(loaded->user_edited("film") == kOfxStatOK);
+        CHECK(same_bits(loaded->render(2, {0, 0, w, h}).output, expected.output));
+    }
 }
 
 TEST_CASE("settings that change nothing are reported as identity", "[plugin]") {
