@@ -7,8 +7,9 @@
 //
 // Coordinates: OFX pixel coordinates have their origin at the bottom left; core's frames
 // are top-down like the files the CLI reads. The film frame is the project's format (its
-// size from its offset) at the render scale, where the host gives one, else the Source
-// clip's region of definition; core's (0, 0) is the film frame's top-left pixel and row y
+// size from its offset) at the render scale, where the host gives one and the Film frame
+// parameter does not ask for the Source's own, else the Source clip's region of
+// definition; core's (0, 0) is the film frame's top-left pixel and row y
 // of core is OFX row (film top - 1 - y). The Source image (its region of definition) is the
 // part of the film frame it covers: a CG element's bounding box, or overscan, gets the
 // frame's pixel pitch and the grain those frame pixels get, as `darkroom develop` gives a
@@ -386,7 +387,8 @@ FrameGeometry frame_geometry(const Placement& p) {
 }
 
 // The Source image and the film frame at `scale`; throws when the Source is not connected.
-Placement source_placement(OfxImageEffectHandle effect, OfxTime time, OfxPointD scale, OfxImageClipHandle* source_out) {
+Placement source_placement(OfxImageEffectHandle effect, OfxTime time, OfxPointD scale, const NodeSettings& settings,
+                           OfxImageClipHandle* source_out) {
     OfxImageClipHandle source = clip_handle(effect, kOfxImageEffectSimpleSourceClipName);
     Props props = clip_props(source);
     if (!props.get_int_or(kOfxImageClipPropConnected, 1))
@@ -402,7 +404,8 @@ Placement source_placement(OfxImageEffectHandle effect, OfxTime time, OfxPointD 
     Placement p;
     p.image = p.film = frame_pixels(rod, scale, pixel_aspect);
     // The project's format, where the host says (canonical coordinates; a host without it
-    // leaves the film frame the image's own).
+    // leaves the film frame the image's own), unless the node takes the Source's.
+    if (settings.film_frame_is_source) return p;
     Props effect_set = effect_props(effect);
     const double size_x = effect_set.get_double_or(kOfxImageEffectPropProjectSize, 0.0, 0),
                  size_y = effect_set.get_double_or(kOfxImageEffectPropProjectSize, 0.0, 1),
@@ -429,7 +432,7 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
 
     NodeSettings settings = read_parameters(effect, time);
     OfxImageClipHandle source_clip = nullptr;
-    const Placement placement = source_placement(effect, time, scale, &source_clip);
+    const Placement placement = source_placement(effect, time, scale, settings, &source_clip);
     const OfxRectI& film = placement.film;
     const FrameGeometry geometry = frame_geometry(placement);
 
@@ -535,7 +538,8 @@ OfxStatus regions_of_interest(OfxImageEffectHandle effect, const Props& in_args,
     OfxRectD region{};
     for (int i = 0; i < 4; ++i) (&region.x1)[i] = in_args.get_double(kOfxImageEffectPropRegionOfInterest, i);
     OfxImageClipHandle source = nullptr;
-    const Placement placement = source_placement(effect, time, scale, &source);
+    const NodeSettings settings = read_parameters(effect, time);
+    const Placement placement = source_placement(effect, time, scale, settings, &source);
     const double pixel_aspect = clip_props(source).get_double_or(kOfxImagePropPixelAspectRatio, 1.0);
     const double sx = scale.x / (pixel_aspect > 0 ? pixel_aspect : 1.0), sy = scale.y;
     const OfxRectI region_px{(int)std::floor(std::max(region.x1 * sx, -1e9)), (int)std::floor(std::max(region.y1 * sy, -1e9)),
@@ -543,7 +547,7 @@ OfxStatus regions_of_interest(OfxImageEffectHandle effect, const Props& in_args,
     const FrameGeometry geometry = frame_geometry(placement);
     const Window out_core = to_core(region_px, placement.film).intersected(to_core(placement.image, placement.film));
     if (out_core.empty()) return kOfxStatReplyDefault;
-    auto plan = plan_for(instance_of(effect), read_parameters(effect, time), geometry);
+    auto plan = plan_for(instance_of(effect), settings, geometry);
     const OfxRectI roi = to_ofx(plan->input_window(out_core), placement.film);
     out_args.set_doubles((std::string(kOfxImageClipPropRoIPrefix) + kOfxImageEffectSimpleSourceClipName).c_str(),
                          {roi.x1 / sx, roi.y1 / sy, roi.x2 / sx, roi.y2 / sy});

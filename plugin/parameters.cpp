@@ -38,6 +38,7 @@ constexpr const char* kHalation = "halation";
 constexpr const char* kMtf = "mtf";
 constexpr const char* kFrameWidth = "frameWidthMm";
 constexpr const char* kPrintWidth = "printWidthMm";
+constexpr const char* kFilmFrame = "filmFrame";
 constexpr const char* kOcioConfig = "ocioConfig";
 constexpr const char* kInputSpace = "inputColorspace";
 constexpr const char* kOutputSpace = "outputColorspace";
@@ -344,6 +345,10 @@ void define_parameters(OfxParamSetHandle params) {
     define_double(params, kPrintWidth, "Print width (mm)", "Width of the print (0 = the paper's format)", optics, 0, 0,
                   10000, 0, 500)
         .set(kOfxParamPropAnimates, 0);
+    define_choice(params, kFilmFrame, "Film frame",
+                  "What the frame width spans: the project's format (a CG element's bounding box or overscan is that "
+                  "part of the frame), or the Source image itself (a plate whose format differs from the project's)",
+                  optics, {"Project format", "Source image"}, 0);
 
     const char* colour = "colourGroup";
     define_group(params, colour, "Colour management (OCIO)", false);
@@ -396,6 +401,7 @@ NodeSettings read_parameters(OfxImageEffectHandle instance, OfxTime time) {
     s.mtf = r.get_bool(kMtf);
     s.frame_width_mm = r.checked_double(kFrameWidth, 0, 10000);
     s.print_width_mm = r.checked_double(kPrintWidth, 0, 10000);
+    n.film_frame_is_source = r.checked_choice(kFilmFrame, 2) == 1;
 
     n.grain_profile = r.get_string(kGrainProfile);
     if (!n.grain_profile.empty()) s.grain = false;  // the plate's grain replaces the stock's

@@ -22,6 +22,9 @@ struct NodeSettings {
     // A plate's grain profile file (darkroom grain analyze/predict); when set it replaces the
     // stock's grain (develop.grain is false) and is added in the output colour space.
     std::string grain_profile;
+    // The film frame is the project's format (false), or the Source image itself (true: a plate
+    // whose format differs from the project's).
+    bool film_frame_is_source = false;
 };
 
 // A parameter value the plugin cannot use; the message names the parameter by its label.

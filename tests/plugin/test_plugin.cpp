@@ -146,7 +146,7 @@ TEST_CASE("describe declares the contexts, depths, clips and parameters", "[plug
     for (const char* name : {"film", "filmFile", "paper", "paperFile", "output", "exposure", "printExposure",
                              "printerLights", "filtration", "grain", "grainAmount", "grainSize", "grainResponse",
                              "seed", "staticGrain", "halation", "mtf", "frameWidthMm", "printWidthMm", "ocioConfig",
-                             "inputColorspace", "outputColorspace", "filmStock", "paperStock"}) {
+                             "inputColorspace", "outputColorspace", "filmStock", "paperStock", "filmFrame"}) {
         INFO(name);
         Param* param = ctx.params.find(name);
         REQUIRE(param);
@@ -262,6 +262,29 @@ TEST_CASE("a Source that is part of the project's format (a bounding box, oversc
             for (int x = part.compare.x1; x < part.compare.x2; ++x)
                 for (int c = 0; c < 4; ++c) REQUIRE(got.output.at(x, y)[c] == expected.output.at(x, y)[c]);
     }
+}
+
+TEST_CASE("Film frame 'Source image' develops a plate whose format differs from the project's as its own frame",
+          "[plugin]") {
+    // A 64x48 plate in a 128x96 project: with the project's format as the film frame the plate
+    // is half the frame (twice the pitch); as its own frame it develops as a host without a
+    // project format develops it.
+    const int w = 64, h = 48;
+    const Frame plate = Frame::from_top_down(scene(w, h, 4), w, h, 4);
+    auto own = make_instance(), project = make_instance(), no_project = make_instance();
+    for (auto* inst : {own.get(), project.get(), no_project.get()}) {
+        set_common_look(*inst);
+        inst->set_source(plate);
+    }
+    own->set_project({0, 0, 128, 96});
+    project->set_project({0, 0, 128, 96});
+    own->set_int("filmFrame", own->choice_index("filmFrame", "Source image"));
+    RenderResult expected = no_project->render(4, plate.bounds);
+    RenderResult got = own->render_tiles(4, plate.bounds, 40, 24);
+    INFO(own->effect().persistent_message);
+    REQUIRE(got.status == kOfxStatOK);
+    CHECK(same_bits(got.output, expected.output));
+    CHECK_FALSE(same_bits(project->render(4, plate.bounds).output, expected.output));
 }
 
 TEST_CASE("render scale 0.5 renders the half-resolution frame with the same physical sizes", "[plugin][cli]") {
