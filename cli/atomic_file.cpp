@@ -39,6 +39,16 @@ std::string host_name() {
 
 bool process_exists(long pid) { return kill(pid_t(pid), 0) == 0 || errno == EPERM; }
 
+// The interrupt hook, and a lock held while it is set or runs.
+std::mutex& hook_mutex() {
+    static std::mutex m;
+    return m;
+}
+std::function<void(int)>& interrupt_hook() {
+    static std::function<void(int)> hook;
+    return hook;
+}
+
 }  // namespace
 
 void install_interrupt_cleanup() {
@@ -49,6 +59,14 @@ void install_interrupt_cleanup() {
     std::thread([] {
         int signal_number = 0;
         if (sigwait(&signals, &signal_number) != 0) return;
+        // The hook first, before the registry is held (it may write a file through a
+        // TempFile); its lock is held until exit, so its owner cannot clear it meanwhile.
+        hook_mutex().lock();
+        if (interrupt_hook()) try {
+                interrupt_hook()(signal_number);
+            } catch (const std::exception& e) {
+                std::fprintf(stderr, "darkroom: %s\n", e.what());
+            }
         // Hold the registry until exit: no new temporary can be registered after this.
         registry_mutex().lock();
         int removed = 0;
@@ -58,6 +76,11 @@ void install_interrupt_cleanup() {
         std::fflush(stderr);
         _exit(128 + signal_number);
     }).detach();
+}
+
+void set_interrupt_hook(std::function<void(int)> hook) {
+    std::lock_guard<std::mutex> lock(hook_mutex());
+    interrupt_hook() = std::move(hook);
 }
 
 TempFile::TempFile(const fs::path& target) : target_(target) {

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 
 namespace darkroom::cli {
@@ -17,6 +18,19 @@ namespace darkroom::cli {
 // afterwards) and starts a thread that waits for them, removes the temporaries in flight
 // and exits. Call once, first thing in main, before any other thread exists.
 void install_interrupt_cleanup();
+
+// What to do on such a signal before the temporaries are removed (the develop command writes
+// its --log of the frames finished so far), on the waiting thread; an empty function clears
+// it. Setting or clearing waits for a hook that is running to finish.
+void set_interrupt_hook(std::function<void(int signal_number)> hook);
+
+// Clears the interrupt hook when it goes out of scope (before what the hook refers to does).
+struct InterruptHookScope {
+    explicit InterruptHookScope(std::function<void(int signal_number)> hook) { set_interrupt_hook(std::move(hook)); }
+    ~InterruptHookScope() { set_interrupt_hook({}); }
+    InterruptHookScope(const InterruptHookScope&) = delete;
+    InterruptHookScope& operator=(const InterruptHookScope&) = delete;
+};
 
 // A temporary file beside `target`, registered for removal on interrupt. Destroying it
 // without commit() removes the file.

@@ -201,7 +201,15 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
     Progress progress(jobs.size(), quiet, isatty(STDERR_FILENO) && sequence && !o.run.dry_run);
     const int threads = resolve_threads(o.look.threads);
     OIIO::attribute("threads", threads);  // OpenImageIO's own pool (EXR decoding) keeps to --threads too
-    run_frames(o, jobs, threads, progress);
+    {
+        // Interrupted (Ctrl-C, a farm's kill), the log still tells which frames were finished.
+        InterruptHookScope log_on_interrupt([&](int signal_number) {
+            if (!o.run.log_path.empty())
+                write_run_log(o.run.log_path, progress.reports(), progress.elapsed_seconds(), command_line(),
+                              signal_number);
+        });
+        run_frames(o, jobs, threads, progress);
+    }
     progress.finish();
     const std::vector<FrameReport> reports = progress.reports();
     if (!o.run.log_path.empty()) write_run_log(o.run.log_path, reports, progress.elapsed_seconds(), command_line());

@@ -75,7 +75,7 @@ std::vector<FrameReport> Progress::reports() const {
 }
 
 void write_run_log(const std::string& path, const std::vector<FrameReport>& reports, double elapsed_seconds,
-                   const std::string& command_line) {
+                   const std::string& command_line, int interrupted_by_signal) {
     nlohmann::json frames = nlohmann::json::array();
     size_t failed = 0;
     for (const FrameReport& r : reports) {
@@ -98,6 +98,7 @@ void write_run_log(const std::string& path, const std::vector<FrameReport>& repo
                             {"failed", failed},
                             {"elapsed_seconds", elapsed_seconds},
                             {"frames_per_second", elapsed_seconds > 0 ? reports.size() / elapsed_seconds : 0.0}}}};
+    if (interrupted_by_signal) log["summary"]["interrupted_by_signal"] = interrupted_by_signal;
     write_text_atomically(path, log.dump(2) + "\n");
 }
 

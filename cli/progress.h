@@ -45,8 +45,9 @@ private:
     std::vector<FrameReport> reports_;
 };
 
-// The --log file: every frame's report and a summary, written atomically.
+// The --log file: every frame's report and a summary, written atomically. A run stopped by
+// a signal logs the frames finished before it, and the signal's number in the summary.
 void write_run_log(const std::string& path, const std::vector<FrameReport>& reports, double elapsed_seconds,
-                   const std::string& command_line);
+                   const std::string& command_line, int interrupted_by_signal = 0);
 
 }  // namespace darkroom::cli

@@ -126,7 +126,8 @@ TEST_CASE("a missing frame fails with its name and --skip-bad-frames goes on and
     }
 }
 
-TEST_CASE("a run killed halfway leaves only complete frames and --no-clobber finishes it", "[cli][batch][safe-writes]") {
+TEST_CASE("a run killed halfway leaves only complete frames, logs them, and --no-clobber finishes it",
+          "[cli][batch][safe-writes]") {
     fs::path dir = fresh_dir("killed");
     const int frames = 8;
     make_plates(dir, 1, frames, 96, 72);
@@ -135,10 +136,13 @@ TEST_CASE("a run killed halfway leaves only complete frames and --no-clobber fin
 
     for (int signal_number : {SIGTERM, SIGKILL}) {
         for (int f = 1; f <= frames; ++f) fs::remove(frame_name(dir, "out", f));
+        const fs::path interrupted_log = dir / "interrupted.json";
+        fs::remove(interrupted_log);
         pid_t pid = fork();
         REQUIRE(pid >= 0);
         if (pid == 0) {
-            std::string command = std::string(DARKROOM_EXE) + " develop " + in + " -o " + out + look + " -q --threads 1";
+            std::string command = std::string(DARKROOM_EXE) + " develop " + in + " -o " + out + look +
+                                  " -q --threads 1 --log " + interrupted_log.string();
             execl("/bin/sh", "sh", "-c", ("exec " + command).c_str(), (char*)nullptr);
             _exit(127);
         }
@@ -166,6 +170,19 @@ TEST_CASE("a run killed halfway leaves only complete frames and --no-clobber fin
                 CHECK(pixels(frame_name(dir, "out", f)).size() == 96 * 72 * 3);
             }
         CHECK(done < frames);
+        if (signal_number == SIGTERM) {
+            // The log lists the frames finished before the signal, and says it came.
+            REQUIRE(fs::exists(interrupted_log));
+            nlohmann::json log = nlohmann::json::parse(file_bytes(interrupted_log));
+            CHECK(log["summary"]["interrupted_by_signal"] == SIGTERM);
+            int logged = 0;
+            for (const auto& f : log["frames"]) {
+                CHECK(f["status"] == "developed");
+                CHECK(fs::exists(f["output"].get<std::string>()));
+                ++logged;
+            }
+            CHECK(logged == done);
+        }
 
         // The re-run keeps the finished frames, makes the rest and cleans what the kill left.
         Result r = darkroom("develop " + in + " -o " + out + look + " --no-clobber --log " + (dir / "log.json").string());
