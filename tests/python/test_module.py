@@ -75,6 +75,14 @@ class ModuleEqualsProgram(unittest.TestCase):
             self.assertEqual(json.load(f), json.load(g))
         self.assertEqual(darkroom.look(look=self.look)["settings"]["seed"], 7)
 
+    def test_working_memory_is_kept_for_the_next_image_until_released(self):
+        # 512x512 planes (1 MiB each) are pooled; the 30x40 plate's are not.
+        big = np.resize(self.plate, (512, 512, 4))
+        darkroom.release_memory()
+        darkroom.develop(big, look=self.look, frame=1)
+        self.assertGreaterEqual(darkroom.release_memory(), 512 * 512 * 4)
+        self.assertEqual(darkroom.release_memory(), 0)
+
     def test_bad_settings_are_named(self):
         with self.assertRaisesRegex(TypeError, "exposur"):
             darkroom.develop(self.plate, exposur=1)
