@@ -43,7 +43,6 @@ constexpr const char* kOcioConfig = "ocioConfig";
 constexpr const char* kInputSpace = "inputColorspace";
 constexpr const char* kOutputSpace = "outputColorspace";
 
-
 // Output modes in the order of the choice parameter.
 const std::array<std::pair<const char*, OutputMode>, 5> kOutputs{{{"Print", OutputMode::print},
                                                                   {"Negative", OutputMode::negative},
@@ -372,9 +371,9 @@ NodeSettings read_parameters(OfxImageEffectHandle instance, OfxTime time) {
     n.film = n.film_from_file ? stock_file(r, kFilm, kFilmFile) : film;
     s.output = kOutputs[r.checked_choice(kOutput, (int)kOutputs.size())].second;
     s.quality = kQualities[r.checked_choice(kQuality, int(std::size(kQualities)))];
-    // Only the print output uses a paper.
-    const std::string paper = r.stock_choice(kStockChoices[1]);
+    // Only the print output uses a paper (and only then is its choice checked).
     if (s.output == OutputMode::print) {
+        const std::string paper = r.stock_choice(kStockChoices[1]);
         if (paper == kNoPaperId)
             throw ParameterError("the Print output needs a paper: choose one, or the Negative, Density or Scan output");
         n.paper_from_file = paper == kStockFileId;

@@ -463,6 +463,14 @@ TEST_CASE("a saved node keeps its stocks when the plugin's list of stocks change
         REQUIRE(loaded->user_edited("film") == kOfxStatOK);
         CHECK(same_bits(loaded->render(2, {0, 0, w, h}).output, expected.output));
     }
+    SECTION("a missing paper matters only to the Print output, the one that uses a paper") {
+        auto loaded = Plugin::get().create_instance([&](Instance& i) { i.set_string("paperStock", "agfa-discontinued"); });
+        loaded->set_source(source);
+        CHECK(loaded->render(2, {0, 0, w, h}).status == kOfxStatFailed);
+        CHECK(loaded->effect().persistent_message.find("agfa-discontinued") != std::string::npos);
+        loaded->set_int("output", loaded->choice_index("output", "Negative"));
+        CHECK(loaded->render(2, {0, 0, w, h}).status == kOfxStatOK);
+    }
 }
 
 TEST_CASE("settings that change nothing are reported as identity", "[plugin]") {
