@@ -265,10 +265,10 @@ std::string stock_kind_name(StockKind kind) {
     return "negative";
 }
 
-Spectrum spectral_density(const Stock& stock, const double* layer_density) {
+Spectrum spectral_density(const Stock& stock, const double* layer_density, const double* layer_d_min) {
     Spectrum d = stock.base_density;
     for (size_t l = 0; l < stock.layers.size(); ++l) {
-        double net = layer_density[l] - stock.layers[l].density_curve.y_min();
+        double net = layer_density[l] - (layer_d_min ? layer_d_min[l] : stock.layers[l].density_curve.y_min());
         for (int i = 0; i < kSpectralSamples; ++i) d[i] += net * stock.layers[l].dye_density[i];
     }
     return d;

@@ -83,9 +83,10 @@ struct Stock {
     bool is_colour() const { return layers.size() == 3; }
 };
 
-// The spectral density of a developed material from its layers' densities (one per layer).
-// Per pixel.
-Spectrum spectral_density(const Stock& stock, const double* layer_density);
+// The spectral density of a developed material from its layers' densities (one per layer):
+// base + sum_l (D_l - d_min_l) dye_l. Per pixel; layer_d_min, when given, are the layers'
+// minimum densities cached by the caller (else each curve's is found again).
+Spectrum spectral_density(const Stock& stock, const double* layer_density, const double* layer_d_min = nullptr);
 
 // "negative", "paper" or "print-film", as stock files spell the kind.
 std::string stock_kind_name(StockKind kind);

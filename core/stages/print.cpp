@@ -154,12 +154,7 @@ PrintView::PrintView(const Stock& paper) : paper_(&paper) {
 }
 
 Spectrum PrintView::reflectance(const double* paper_density) const {
-    Spectrum d = paper_->base_density;
-    for (size_t l = 0; l < paper_->layers.size(); ++l) {
-        const double net = paper_density[l] - d_min_[l];
-        const Spectrum& dye = paper_->layers[l].dye_density;
-        for (int i = 0; i < kSpectralSamples; ++i) d[i] += net * dye[i];
-    }
+    Spectrum d = spectral_density(*paper_, paper_density, d_min_.data());
     for (double& v : d) v = std::exp(-kLn10 * v);
     return d;
 }
