@@ -4,6 +4,8 @@
 #include <mutex>
 #include <new>
 
+#include <pthread.h>
+
 namespace darkroom {
 
 namespace {
@@ -40,7 +42,14 @@ struct Pool {
 };
 
 Pool& pool() {
-    static Pool* p = new Pool;  // never destroyed: planes may be freed during static destruction
+    // Never destroyed: planes may be freed during static destruction.
+    static Pool* p = [] {
+        Pool* created = new Pool;
+        // A fork while another thread holds the lock would leave the child's copy of it held
+        // for ever (Python's multiprocessing forks): hold it across fork, as malloc does.
+        pthread_atfork([] { pool().mutex.lock(); }, [] { pool().mutex.unlock(); }, [] { pool().mutex.unlock(); });
+        return created;
+    }();
     return *p;
 }
 

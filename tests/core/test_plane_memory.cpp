@@ -1,5 +1,10 @@
 #include <catch2/catch.hpp>
+#include <atomic>
+#include <csignal>
 #include <cstdint>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
 
 #include "core/image.h"
 #include "core/plane_memory.h"
@@ -80,4 +85,39 @@ TEST_CASE("the plane memory kept stays within its limit, the longest unused free
     }
     set_plane_memory_limit_bytes(2 * kMiB);
     CHECK(kept_plane_memory_bytes() == 0);
+}
+
+TEST_CASE("a process forked while another thread uses plane memory can still allocate planes", "[plane_memory]") {
+    // Python's multiprocessing forks processes whose other threads may be developing: a child
+    // must not inherit the pool's lock held.
+    PoolLimit limit(64 * kMiB);
+    std::atomic<bool> stop{false};
+    std::thread churn([&] {
+        while (!stop) Plane::unset(Window{0, 0, 512, 512});  // 1 MiB: taken and given back
+    });
+    int hung = 0;
+    for (int i = 0; i < 40; ++i) {
+        pid_t pid = fork();
+        REQUIRE(pid >= 0);
+        if (pid == 0) {
+            Plane plane = Plane::unset(Window{0, 0, 512, 512});
+            _exit(plane.pixels.empty() ? 1 : 0);
+        }
+        int status = 0;
+        bool exited = false;
+        for (int wait = 0; wait < 200 && !exited; ++wait) {  // up to 2 s
+            exited = waitpid(pid, &status, WNOHANG) == pid;
+            if (!exited) usleep(10000);
+        }
+        if (!exited) {
+            ++hung;
+            kill(pid, SIGKILL);
+            waitpid(pid, &status, 0);
+        } else {
+            CHECK((WIFEXITED(status) && WEXITSTATUS(status) == 0));
+        }
+    }
+    stop = true;
+    churn.join();
+    CHECK(hung == 0);
 }
