@@ -152,18 +152,17 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         m.boolean_grain.push_back(std::nullopt);
         GrainSpec spec = layer_grain(layer.grain, s, i);
         if (!s.grain) spec.rms_granularity = 0;
-        GrainModel g = design_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um,
-                                    NoiseKey{s.seed, s.frame, stream_base + uint32_t(i)},
-                                    tier.grain == GrainMethod::hashed_noise);
+        const NoiseKey key{s.seed, s.frame, stream_base + uint32_t(i)};
         // (The texture output takes its exposure fluctuation from the filtered-noise field.)
         if (tier.grain == GrainMethod::boolean_model && s.output != OutputMode::texture) {
-            BooleanGrain boolean = design_boolean_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um,
-                                                        NoiseKey{s.seed, s.frame, stream_base + uint32_t(i)});
+            BooleanGrain boolean = design_boolean_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um, key);
             if (!boolean.is_noop() || !s.skip_noop_stages) {
                 m.boolean_grain.back() = boolean;
                 continue;
             }
         }
+        GrainModel g = design_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um, key,
+                                    tier.grain == GrainMethod::hashed_noise);
         if (!s.skip_noop_stages)
             m.grain.back() = g;
         else if (!s.grain)
