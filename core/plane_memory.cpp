@@ -85,10 +85,12 @@ void give_plane_memory(void* block, size_t bytes) noexcept {
     p.kept_bytes += size;
 }
 
-void release_plane_memory() noexcept {
+size_t release_plane_memory() noexcept {
     Pool& p = pool();
     std::lock_guard<std::mutex> lock(p.mutex);
+    const size_t kept = p.kept_bytes;
     p.trim_to(0);
+    return kept;
 }
 
 size_t kept_plane_memory_bytes() noexcept {

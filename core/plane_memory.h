@@ -22,8 +22,9 @@ void* take_plane_memory(size_t bytes);
 // Gives back a block from take_plane_memory, with the same `bytes` it was asked for.
 void give_plane_memory(void* block, size_t bytes) noexcept;
 
-// Frees every block kept for reuse (an OFX host's purge-caches action calls it).
-void release_plane_memory() noexcept;
+// Frees every block kept for reuse (an OFX host's purge-caches action calls it); returns
+// the bytes freed.
+size_t release_plane_memory() noexcept;
 // The bytes kept for reuse now, and the most that is kept (the oldest go first beyond it).
 size_t kept_plane_memory_bytes() noexcept;
 size_t plane_memory_limit_bytes() noexcept;

@@ -229,12 +229,14 @@ public:
         return options[size_t(checked_choice(c.choice, int(options.size())))].id;
     }
 
-private:
+    // A parameter's handle (also for setting its value).
     OfxParamHandle handle(const char* name) const {
         OfxParamHandle h = nullptr;
         check(suites.param->paramGetHandle(params_, name, &h, nullptr), name);
         return h;
     }
+
+private:
     static std::string trimmed(double v) {
         std::string s = std::to_string(v);
         s.erase(s.find_last_not_of('0') + 1);
@@ -415,29 +417,21 @@ NodeSettings read_parameters(OfxImageEffectHandle instance, OfxTime time) {
 
 namespace {
 
-OfxParamHandle param_handle(OfxImageEffectHandle instance, const char* name) {
-    OfxParamSetHandle params = nullptr;
-    check(suites.effect->getParamSet(instance, &params), "getting the parameter set");
-    OfxParamHandle h = nullptr;
-    check(suites.param->paramGetHandle(params, name, &h, nullptr), name);
-    return h;
-}
-
-// The choice set to the option with this id; false when no option has it.
-bool set_choice_to(OfxImageEffectHandle instance, const StockChoice& c, const std::string& id) {
+// The choice set to the option with this id, when one has it.
+void set_choice_to(OfxImageEffectHandle instance, const StockChoice& c, const std::string& id) {
     const int index = option_index(stock_options(c.kind), id);
-    if (index < 0) return false;
-    if (Reader(instance, 0).get_int(c.choice) != index)
-        check(suites.param->paramSetValue(param_handle(instance, c.choice), index), c.choice);
-    return true;
+    const Reader r(instance, 0);
+    if (index >= 0 && r.get_int(c.choice) != index)
+        check(suites.param->paramSetValue(r.handle(c.choice), index), c.choice);
 }
 
 // The id parameter set to the option the choice shows.
 void record_choice(OfxImageEffectHandle instance, const StockChoice& c) {
     const auto options = stock_options(c.kind);
-    const int index = Reader(instance, 0).get_int(c.choice);
+    const Reader r(instance, 0);
+    const int index = r.get_int(c.choice);
     if (index < 0 || index >= int(options.size())) return;  // read_parameters reports it
-    check(suites.param->paramSetValue(param_handle(instance, c.id), options[size_t(index)].id.c_str()), c.id);
+    check(suites.param->paramSetValue(r.handle(c.id), options[size_t(index)].id.c_str()), c.id);
 }
 
 }  // namespace

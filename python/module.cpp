@@ -95,15 +95,9 @@ PYBIND11_MODULE(darkroom, m) {
           "Develops a scene-linear float image of shape (height, width[, channels]); returns (height, width, "
           "max(3, channels)) float32. look: a look file; frame: the frame number (each frame has its own grain); "
           "other keywords: the program's look flags with '_' for '-', overriding the look file.");
-    m.def(
-        "release_memory",
-        [] {
-            const size_t kept = darkroom::kept_plane_memory_bytes();
-            darkroom::release_plane_memory();
-            return kept;
-        },
-        "Frees the working memory develop keeps for the next image (up to 2 GB, about 0.35 GB after a 4K frame); "
-        "returns the bytes freed.");
+    m.def("release_memory", &darkroom::release_plane_memory,
+          "Frees the working memory develop keeps for the next image (up to 2 GB, about 0.35 GB after a 4K frame); "
+          "returns the bytes freed.");
     m.def("look", &look_settings, py::kw_only(), py::arg("look") = "",
           "The look (a dict, as a look file holds it) that these keywords and look file give.");
     m.def("save_look", &save_look, py::arg("path"), py::kw_only(), py::arg("look") = "",
