@@ -1,5 +1,6 @@
 #include "core/develop.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -307,6 +308,44 @@ void validate(const DevelopSettings& s) {
     }
 }
 
+// The print tables span each layer's densities, widened for grain; beyond, they clamp.
+void table_density_range(const Stock& stock, std::array<double, 3>& lo, std::array<double, 3>& hi) {
+    for (int l = 0; l < 3; ++l) {
+        lo[l] = stock.layers[l].density_curve.y_min() - kTableDensityMargin;
+        hi[l] = stock.layers[l].density_curve.y_max() + kTableDensityMargin;
+    }
+}
+
+// Printing through one table (QualityTier::print_in_one_table) leaves out the paper's grain
+// and halation (and its tabulated curves, which the table composes); its MTF is applied to
+// the negative's densities instead (Plan::print).
+void leave_out_paper_grain(MaterialStages& paper, std::vector<std::string>& skipped) {
+    for (size_t i = 0; i < paper.stock.layers.size(); ++i) {
+        const std::string where = "paper layer " + paper.stock.layers[i].name;
+        if (paper.grain[i] || paper.boolean_grain[i])
+            skipped.push_back("grain (" + where + "): left out, the print being one table");
+        if (paper.halation[i]) skipped.push_back("halation (" + where + "): left out, the print being one table");
+        paper.grain[i].reset();
+        paper.boolean_grain[i].reset();
+        paper.halation[i].reset();
+    }
+    paper.curve_tables.clear();
+}
+
+// Print densities (or, through print_table_, the negative's) -> linear Rec.709 through a
+// table of log2 XYZ, for one row.
+void xyz_table_to_rgb(const Table3D& table, const float* const* d, float* const* rgb, int width) {
+    const Matrix3& m = print_xyz_to_rgb();
+    float* const* xyz = rgb;  // XYZ first, in the result rows
+    table.apply_row(d, xyz, width);
+    for (int c = 0; c < 3; ++c) fast_exp2_row(xyz[c], width);
+    for (int x = 0; x < width; ++x) {
+        const float v[3] = {xyz[0][x], xyz[1][x], xyz[2][x]};
+        for (int c = 0; c < 3; ++c)
+            rgb[c][x] = float(m[c][0]) * v[0] + float(m[c][1]) * v[1] + float(m[c][2]) * v[2];
+    }
+}
+
 }  // namespace
 
 int MaterialStages::halo_px() const {
@@ -353,7 +392,13 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     p.frame_ = image;
     p.film_width_px_ = frame.film_width_px();
     p.monochrome_ = frame.monochrome;
-    double film_width_mm = settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm;
+    const QualityTier& tier = quality_tier(settings.quality);
+    const bool printing = settings.output == OutputMode::print;
+    const bool one_print_table =
+        printing && tier.print_in_one_table && tier.print_table_nodes > 0 && film.is_colour() && paper->is_colour();
+    const double film_width_mm = settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm;
+    const double print_width_mm =
+        !printing ? 0.0 : settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm;
     p.film_stages_ = build_stages(film, film_width_mm, p.film_width_px_, settings, 0, "film", p.skipped_);
     p.monochrome_input_ = frame.monochrome && settings.skip_noop_stages;
     if (p.monochrome_input_ && settings.output != OutputMode::texture)
@@ -362,29 +407,36 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
                                  ? 1.0
                                  : mid_grey_exposure_lux_s(film.iso_speed) / 0.18 * std::exp2(settings.exposure_ev);
 
-    if (settings.output == OutputMode::print) {
-        double print_width_mm = settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm;
+    if (printing) {
         p.paper_stages_ = build_stages(*paper, print_width_mm, p.film_width_px_, settings, 16, "paper", p.skipped_);
+        if (one_print_table) leave_out_paper_grain(p.paper_stages_, p.skipped_);
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev});
-        const int nodes = quality_tier(settings.quality).print_table_nodes;
-        if (nodes > 0 && film.is_colour() && paper->is_colour()) {
-            // The tables span each layer's densities, widened for grain; beyond, they clamp.
-            auto density_range = [](const Stock& stock, std::array<double, 3>& lo, std::array<double, 3>& hi) {
-                for (int l = 0; l < 3; ++l) {
-                    lo[l] = stock.layers[l].density_curve.y_min() - kTableDensityMargin;
-                    hi[l] = stock.layers[l].density_curve.y_max() + kTableDensityMargin;
-                }
-            };
+        const int nodes = tier.print_table_nodes;
+        if (one_print_table) {
             std::array<double, 3> lo, hi;
-            density_range(film, lo, hi);
+            table_density_range(film, lo, hi);
+            const PrintExposure& enlarger = *p.print_;
+            const PrintView view(*paper);
+            p.print_table_ = Table3D(lo, hi, nodes, [&](const double* d, double* log2_xyz) {
+                double h[3], paper_density[3];
+                enlarger.expose(d, h);
+                for (int j = 0; j < 3; ++j)
+                    paper_density[j] =
+                        paper->layers[j].density_curve(std::log10(std::clamp(h[j], 1e-30, kMaxInput)));
+                Xyz xyz = view.xyz(paper_density);
+                for (int c = 0; c < 3; ++c) log2_xyz[c] = std::log2(std::max(xyz[c], 1e-30));
+            });
+        } else if (nodes > 0 && film.is_colour() && paper->is_colour()) {
+            std::array<double, 3> lo, hi;
+            table_density_range(film, lo, hi);
             const PrintExposure& enlarger = *p.print_;
             p.enlarger_table_ = Table3D(lo, hi, nodes, [&](const double* d, double* log2_h) {
                 enlarger.expose(d, log2_h);
                 for (int j = 0; j < 3; ++j) log2_h[j] = std::log2(std::clamp(log2_h[j], 1e-30, kMaxInput));
             });
-            density_range(*paper, lo, hi);
+            table_density_range(*paper, lo, hi);
             const PrintView view(*paper);
             p.view_table_ = Table3D(lo, hi, nodes, [&](const double* d, double* log2_xyz) {
                 Xyz xyz = view.xyz(d);
@@ -451,8 +503,24 @@ std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& fi
     return develop_material(film_stages_, std::move(exposure), film_out, frame_, threads, times);
 }
 
-std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window& out, int threads,
+std::vector<Plane> Plan::print(std::vector<Plane> negative, const Window& out, int threads,
                                StageTimes* times) const {
+    if (print_table_) {
+        // The paper's MTF on the negative's densities, layer i's kernel on film layer i (the
+        // paper layer its dye mostly prints on: cyan dye modulates the red light).
+        if (paper_stages_.halo_px() > 0) {
+            StageTimer timer(times, "scatter");
+            for (size_t l = 0; l < negative.size(); ++l) {
+                Plane spread = Plane::unset(out);
+                scatter(negative[l], spread, paper_stages_.scatter[l], frame_, threads);
+                negative[l] = std::move(spread);
+            }
+        }
+        StageTimer timer(times, "print table");
+        return per_row(negative, out, 3, threads, [&](const float* const* d, float* const* rgb, int width) {
+            xyz_table_to_rgb(*print_table_, d, rgb, width);
+        });
+    }
     const PrintExposure& enlarger = *print_;
     StageTimer enlarger_timer(times, "enlarger");
     std::vector<Plane> paper_exposure;
@@ -473,19 +541,10 @@ std::vector<Plane> Plan::print(const std::vector<Plane>& negative, const Window&
     std::vector<Plane> paper_density =
         develop_material(paper_stages_, std::move(paper_exposure), out, frame_, threads, times);
     StageTimer view_timer(times, "view");
-    if (view_table_) {
-        const Matrix3& m = print_xyz_to_rgb();
+    if (view_table_)
         return per_row(paper_density, out, 3, threads, [&](const float* const* d, float* const* rgb, int width) {
-            float* const* xyz = rgb;  // XYZ first, in the result rows
-            view_table_->apply_row(d, xyz, width);
-            for (int c = 0; c < 3; ++c) fast_exp2_row(xyz[c], width);
-            for (int x = 0; x < width; ++x) {
-                const float v[3] = {xyz[0][x], xyz[1][x], xyz[2][x]};
-                for (int c = 0; c < 3; ++c)
-                    rgb[c][x] = float(m[c][0]) * v[0] + float(m[c][1]) * v[1] + float(m[c][2]) * v[2];
-            }
+            xyz_table_to_rgb(*view_table_, d, rgb, width);
         });
-    }
     const PrintView view(paper_stages_.stock);
     return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view.rgb(d, rgb); });
 }
@@ -636,6 +695,10 @@ std::vector<std::string> Plan::describe() const {
             std::string lights;
             for (int j = 0; j < e.paper_layers(); ++j)
                 lights += (j ? ", " : "") + fmt(e.light_lux_s()[j]) + " (aim D " + fmt(e.aim_density()[j], 3) + ")";
+            if (print_table_)
+                lines.push_back("print: one table of " + std::to_string(print_table_->nodes()) +
+                                " nodes per axis from the negative's densities to the print's colour; the "
+                                "paper's MTF on the negative's densities");
             lines.push_back("print: 3200 K enlarger, " +
                             std::string(e.spectral() ? "spectral transmittance of the dyed negative"
                                                      : "neutral (silver) negative") +

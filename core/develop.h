@@ -153,7 +153,7 @@ public:
 private:
     std::vector<Plane> develop_film(const ConstImageView& in, const Window& film_out, int threads,
                                     StageTimes* times) const;
-    std::vector<Plane> print(const std::vector<Plane>& negative, const Window& out, int threads,
+    std::vector<Plane> print(std::vector<Plane> negative, const Window& out, int threads,
                              StageTimes* times) const;
     std::vector<Plane> texture(const ConstImageView& in, const Window& out, int threads, StageTimes* times) const;
 
@@ -164,6 +164,9 @@ private:
     // The fast tiers' printing of a colour negative: film densities -> log2 paper exposures,
     // print densities -> log2 XYZ (stages/tables.h).
     std::optional<Table3D> enlarger_table_, view_table_;
+    // Or both and the paper's development in one: film densities -> log2 XYZ of the print
+    // (QualityTier::print_in_one_table).
+    std::optional<Table3D> print_table_;
     int film_width_px_ = 0;                  // the film frame's width (FrameGeometry)
     bool monochrome_ = false;                // compiled for grey input
     double film_exposure_scale_ = 1.0;       // lux-seconds per unit of input

@@ -10,7 +10,9 @@
 //   fast       printing and viewing through 3D tables on layer densities, the PSF tapered
 //              to a compact kernel, halation on a 4x coarser grid, tabulated H&D curves,
 //              grain noise from a hashed quantile table
-//   preview    as fast with smaller tables and kernels
+//   preview    as fast with smaller kernels, and the print as one 3D table from the
+//              negative's densities to the print's colour, the paper's MTF applied to the
+//              negative's densities and its grain left out
 //
 // Every tier is measured against the reference by `darkroom bench`.
 #pragma once
@@ -43,6 +45,13 @@ struct QualityTier {
     // H&D curves: 0 = evaluated per pixel; otherwise a table with 2^bits samples per
     // octave of exposure (stages/tables.h).
     int curve_table_bits;
+    // Printing a colour negative on colour paper as one 3D table (print_table_nodes per
+    // axis) from the negative's densities to the print's log XYZ: the enlarger, the paper's
+    // H&D curves and the viewing composed, which needs the paper's stages between them to be
+    // pointwise. So the paper's MTF is applied before, to the negative's densities (as
+    // accurate as on its transmittance against the reference, measured, and two passes
+    // cheaper), and the paper's grain and halation are left out.
+    bool print_in_one_table = false;
 };
 
 // The default of the command line, the plugin and the Python module: the fastest tier
