@@ -316,6 +316,89 @@ void table_density_range(const Stock& stock, std::array<double, 3>& lo, std::arr
     }
 }
 
+// The paper's layer densities printed from the negative's (colour on colour): the enlarger's
+// exposure developed through the paper's curves.
+void print_densities(const PrintExposure& enlarger, const Stock& paper, const double* negative_density,
+                     double* paper_density) {
+    double h[3];
+    enlarger.expose(negative_density, h);
+    for (int j = 0; j < 3; ++j)
+        paper_density[j] = paper.layers[j].density_curve(std::log10(std::clamp(h[j], 1e-30, kMaxInput)));
+}
+
+// The share of a grain field's variance that a scatter kernel keeps: sum (K * G)^2 / sum G^2,
+// G the grain's 2D kernel (its 1D kernel's outer product), K the scatter's as applied.
+double variance_kept_by_scatter(const GrainModel& grain, const ScatterKernel& scatter) {
+    const int rg = grain.radius, rs = scatter.radius, side_s = 2 * rs + 1, r = rg + rs, side = 2 * r + 1;
+    std::vector<double> taps(size_t(side_s) * side_s, 0.0);  // the scatter kernel as applied
+    if (scatter.separable.empty())
+        for (size_t i = 0; i < taps.size(); ++i) taps[i] = scatter.taps[i];
+    else
+        for (size_t k = 0; k < scatter.separable.size(); ++k)
+            for (int y = 0; y < side_s; ++y)
+                for (int x = 0; x < side_s; ++x)
+                    taps[size_t(y) * side_s + x] +=
+                        double(scatter.separable_sign[k]) * scatter.separable[k][y] * scatter.separable[k][x];
+    double kept = 0, grain_sum = 0;
+    for (float a : grain.kernel)
+        for (float b : grain.kernel) grain_sum += double(a) * a * b * b;
+    for (int y = -r; y <= r; ++y)
+        for (int x = -r; x <= r; ++x) {
+            double v = 0;
+            for (int sy = -rs; sy <= rs; ++sy)
+                for (int sx = -rs; sx <= rs; ++sx) {
+                    const int gy = y - sy, gx = x - sx;
+                    if (std::abs(gy) > rg || std::abs(gx) > rg) continue;
+                    v += taps[size_t(sy + rs) * side_s + sx + rs] * grain.kernel[gy + rg] * grain.kernel[gx + rg];
+                }
+            kept += v * v;
+        }
+    return kept / grain_sum;
+}
+
+// Printing through one table leaves no place for the paper's grain, so it is folded into the
+// film's: each film layer's grain amplitude a(D) (its tabulated curve's second function) is
+// raised so that the print's density grain per pixel has the variance of both grains,
+//   a'(D)^2 = a(D)^2 + (sigma_paper(Dp) / (g kappa sqrt(rho)))^2,
+// with Dp the density the paper layer prints from D, g = dDp/dD the print's contrast there,
+// kappa the film grain filter's gain per pixel and rho the share of variance the paper's MTF
+// keeps of the film's grain (it keeps all of the paper's own, which is added after it). Dp
+// and g are taken along the grey scale (scene grey exposed at the plan's exposure) and held
+// at least kMinPrintContrast: in the print's toe and shoulder the negative cannot carry the
+// paper's grain, whose share `darkroom bench`'s grain rows and the README measure.
+constexpr double kMinPrintContrast = 0.5;
+void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
+                      double exposure_scale, int curve_table_bits) {
+    for (size_t i = 0; i < 3; ++i) {
+        if (!film.grain[i] || !paper.grain[i] || film.curve_tables.empty()) continue;
+        const GrainModel& film_grain = *film.grain[i];
+        const GrainModel& paper_grain = *paper.grain[i];
+        const double kappa = film_grain.pixel_sigma_at_unit_density() / film_grain.sigma_per_pixel;
+        const double rho = variance_kept_by_scatter(film_grain, paper.scatter[i]);
+        std::vector<double> density, extra;
+        for (double stops = -16; stops <= 16; stops += 0.125) {
+            double d[3], dp[3], dp_up[3];
+            for (size_t l = 0; l < 3; ++l) {
+                const auto& w = film.rgb_weights[l];
+                const double h = 0.18 * std::exp2(stops) * exposure_scale * (w[0] + w[1] + w[2]);
+                d[l] = film.stock.layers[l].density_curve(std::log10(std::max(h, 1e-30)));
+            }
+            print_densities(enlarger, paper.stock, d, dp);
+            constexpr double kStep = 0.01;
+            d[i] += kStep;
+            print_densities(enlarger, paper.stock, d, dp_up);
+            const double contrast = std::max(std::abs(dp_up[i] - dp[i]) / kStep, kMinPrintContrast);
+            density.push_back(d[i] - kStep);
+            extra.push_back(grain_sigma_at(paper_grain, dp[i]) / (contrast * kappa * std::sqrt(rho)));
+        }
+        const Curve extra_at = make_curve(std::move(density), std::move(extra), "paper grain on the film's densities");
+        film.curve_tables[i] = LogAxisTable(film.stock.layers[i].density_curve, curve_table_bits,
+                                            [film_grain, extra_at](double d) {
+                                                return std::hypot(film_grain.amplitude_at(d), extra_at(d));
+                                            });
+    }
+}
+
 // Printing through one table (QualityTier::print_in_one_table) leaves out the paper's grain
 // and halation (and its tabulated curves, which the table composes); its MTF is applied to
 // the negative's densities instead (Plan::print).
@@ -323,7 +406,7 @@ void leave_out_paper_grain(MaterialStages& paper, std::vector<std::string>& skip
     for (size_t i = 0; i < paper.stock.layers.size(); ++i) {
         const std::string where = "paper layer " + paper.stock.layers[i].name;
         if (paper.grain[i] || paper.boolean_grain[i])
-            skipped.push_back("grain (" + where + "): left out, the print being one table");
+            skipped.push_back("grain (" + where + "): folded into the film layer's, the print being one table");
         if (paper.halation[i]) skipped.push_back("halation (" + where + "): left out, the print being one table");
         paper.grain[i].reset();
         paper.boolean_grain[i].reset();
@@ -409,10 +492,14 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
 
     if (printing) {
         p.paper_stages_ = build_stages(*paper, print_width_mm, p.film_width_px_, settings, 16, "paper", p.skipped_);
-        if (one_print_table) leave_out_paper_grain(p.paper_stages_, p.skipped_);
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev});
+        if (one_print_table) {
+            fold_paper_grain(p.film_stages_, p.paper_stages_, *p.print_, p.film_exposure_scale_,
+                             tier.curve_table_bits);
+            leave_out_paper_grain(p.paper_stages_, p.skipped_);
+        }
         const int nodes = tier.print_table_nodes;
         if (one_print_table) {
             std::array<double, 3> lo, hi;
@@ -420,11 +507,8 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
             const PrintExposure& enlarger = *p.print_;
             const PrintView view(*paper);
             p.print_table_ = Table3D(lo, hi, nodes, [&](const double* d, double* log2_xyz) {
-                double h[3], paper_density[3];
-                enlarger.expose(d, h);
-                for (int j = 0; j < 3; ++j)
-                    paper_density[j] =
-                        paper->layers[j].density_curve(std::log10(std::clamp(h[j], 1e-30, kMaxInput)));
+                double paper_density[3];
+                print_densities(enlarger, *paper, d, paper_density);
                 Xyz xyz = view.xyz(paper_density);
                 for (int c = 0; c < 3; ++c) log2_xyz[c] = std::log2(std::max(xyz[c], 1e-30));
             });

@@ -12,7 +12,7 @@
 //              grain noise from a hashed quantile table
 //   preview    as fast with smaller kernels, and the print as one 3D table from the
 //              negative's densities to the print's colour, the paper's MTF applied to the
-//              negative's densities and its grain left out
+//              negative's densities and its grain folded into the film's
 //
 // Every tier is measured against the reference by `darkroom bench`.
 #pragma once
@@ -50,7 +50,8 @@ struct QualityTier {
     // H&D curves and the viewing composed, which needs the paper's stages between them to be
     // pointwise. So the paper's MTF is applied before, to the negative's densities (as
     // accurate as on its transmittance against the reference, measured, and two passes
-    // cheaper), and the paper's grain and halation are left out.
+    // cheaper), the paper's grain is folded into the film's (develop.cpp, fold_paper_grain),
+    // and its halation is left out.
     bool print_in_one_table = false;
 };
 

@@ -217,7 +217,7 @@ TEST_CASE("every tier prints within its stated colour error of the reference tie
     }
 }
 
-TEST_CASE("the preview tier prints through one table, the paper's MTF on the negative's densities and its grain left out",
+TEST_CASE("the preview tier prints through one table, the paper's MTF on the negative's densities",
           "[quality][print]") {
     Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     Image scene = demo_scene(96, 64);
@@ -232,11 +232,7 @@ TEST_CASE("the preview tier prints through one table, the paper's MTF on the neg
         return false;
     };
     CHECK(has("print: one table of 33 nodes per axis"));
-    CHECK(has("skipped grain (paper layer blue): left out"));
-    // The paper's grain is left out: a paper without grain prints the same pixels.
-    Stock grainless = paper;
-    for (Layer& l : grainless.layers) l.grain.rms_granularity = 0;
-    CHECK(test::render(film, &grainless, s, scene, 2).pixels == test::render(film, &paper, s, scene, 2).pixels);
+    CHECK(has("skipped grain (paper layer blue): folded into the film layer's"));
     // The paper's MTF still acts: a paper without one prints otherwise.
     Stock sharp = paper;
     for (Layer& l : sharp.layers) l.mtf = make_curve({0, 1000}, {1, 1}, "flat");
@@ -250,6 +246,50 @@ TEST_CASE("the preview tier prints through one table, the paper's MTF on the neg
         for (int y = w.y0; y < w.y1; ++y)
             for (int x = w.x0; x < w.x1; ++x)
                 for (int c = 0; c < 3; ++c) REQUIRE(part.at(x, y)[c] == whole.at(x, y)[c]);
+    }
+}
+
+namespace {
+
+// The RMS of log10 of the print's green on a flat patch of scene-linear `level`, at a 4K
+// frame's pixel pitch on Super 35.
+double print_grain_rms(const Stock& film, const Stock& paper, Quality quality, float level) {
+    constexpr int kSide = 256;
+    Image flat(Window{0, 0, kSide, kSide}, 3);
+    std::fill(flat.pixels.begin(), flat.pixels.end(), level);
+    DevelopSettings s;
+    s.quality = quality;
+    s.frame_width_mm = 4096 * 0.00608;
+    Plan plan = Plan::compile(film, &paper, s, {kSide, kSide, false, 0, 0, 4096});
+    Image out(flat.window, 3);
+    plan.run(flat.view(), out.view(), 2);
+    double sum = 0, sum2 = 0;
+    for (size_t i = 1; i < out.pixels.size(); i += 3) {
+        const double v = std::log10(out.pixels[i]);
+        sum += v;
+        sum2 += v * v;
+    }
+    const double n = double(out.pixels.size() / 3), mean = sum / n;
+    return std::sqrt(sum2 / n - mean * mean);
+}
+
+}  // namespace
+
+TEST_CASE("the preview's print has the grain of both film and paper, the paper's folded into the film's",
+          "[quality][print][grain]") {
+    Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    Stock grainless = paper;
+    for (Layer& l : grainless.layers) l.grain.rms_granularity = 0;
+    // From a scene's shadows to its highlights, where the print's contrast carries the
+    // paper's grain back to the negative (at least kMinPrintContrast).
+    for (float level : {0.05f, 0.18f, 0.9f}) {
+        const double fast = print_grain_rms(film, paper, Quality::fast, level);
+        const double preview = print_grain_rms(film, paper, Quality::preview, level);
+        const double film_alone = print_grain_rms(film, grainless, Quality::fast, level);
+        INFO("scene " << level << ": fast " << fast << ", preview " << preview << ", fast without the paper's grain "
+                      << film_alone);
+        CHECK(film_alone < 0.97 * fast);  // the paper's grain is worth folding in
+        CHECK(preview == Approx(fast).epsilon(0.05));
     }
 }
 
