@@ -5,6 +5,8 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <mutex>
+#include <sstream>
 #include <set>
 #include <thread>
 #include <unistd.h>
@@ -58,6 +60,32 @@ Window output_window(const DevelopOptions& o, const Window& frame) {
     return w;
 }
 
+// The reference tier's grain costs about this much CPU time per silver grain drawn: 0.75 us
+// on the 2-core AMD EPYC of the README's benchmark (its 4K reference frame, extrapolated from
+// its sample windows: 24 700 s on 2 threads for 7 500 grains a pixel).
+constexpr double kCpuSecondsPerSilverGrain = 0.75e-6;
+// Past this the reference render is said to be long before it starts (a quarter of an hour).
+constexpr double kLongRenderCpuSeconds = 900;
+
+// The reference tier's time grows with the film's area a pixel covers, not the pixel count
+// (a thumbnail of a whole film frame draws millions of grains a pixel): say so once, before
+// a render that may take hours rather than after it.
+void warn_of_long_reference_render(const Plan& plan, const Window& out, FrameReport& report) {
+    const double grains = plan.silver_grains_per_pixel() * double(out.width()) * double(out.height());
+    const double cpu_hours = grains * kCpuSecondsPerSilverGrain / 3600;
+    if (grains * kCpuSecondsPerSilverGrain < kLongRenderCpuSeconds) return;
+    static std::once_flag warned;
+    std::call_once(warned, [&] {
+        std::ostringstream message;
+        message.precision(2);
+        message << "--quality reference draws every silver grain: about " << grains << " here ("
+                << plan.silver_grains_per_pixel() << " a pixel), roughly " << cpu_hours
+                << " CPU hours; --quality high gives the same grain statistics as filtered noise";
+        std::cerr << "darkroom: warning: " << message.str() << "\n";
+        report.warnings.push_back(message.str());
+    });
+}
+
 size_t count_non_finite(const Image& image) {
     return size_t(std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
 }
@@ -82,7 +110,9 @@ void develop_frame(const DevelopOptions& o, PlanCache& plans, const FrameJob& jo
     ConstImageView view = in.pixels.view();
     view.window = view.window.moved(dx, dy);
     const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width), job.frame);
-    Image out = develop_image(look, plan, view, output_window(o, in.pixels.window).moved(dx, dy));
+    const Window out_window = output_window(o, in.pixels.window).moved(dx, dy);
+    warn_of_long_reference_render(plan, out_window, report);
+    Image out = develop_image(look, plan, view, out_window);
     out.window = out.window.moved(-dx, -dy);  // write_image takes the data window's coordinates
     report.develop_seconds = seconds_since(start);
 

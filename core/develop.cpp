@@ -733,6 +733,14 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
     });
 }
 
+double Plan::silver_grains_per_pixel() const {
+    double grains = 0;
+    for (const MaterialStages* m : {&film_stages_, &paper_stages_})
+        for (const auto& g : m->boolean_grain)
+            if (g) grains += g->intensity_at(1.0) * m->pixel_pitch_um * m->pixel_pitch_um;
+    return grains;
+}
+
 std::vector<std::string> Plan::describe() const {
     std::vector<std::string> lines;
     auto material = [&](const MaterialStages& m, const char* role, bool exposed_by_scene) {
@@ -764,7 +772,9 @@ std::vector<std::string> Plan::describe() const {
             if (m.boolean_grain[i])
                 lines.push_back("  grain (" + l.name + "): silver disks (Boolean model), radius " +
                                 fmt(m.boolean_grain[i]->radius_at(1.0), 3) + " um at net density 1, " +
-                                fmt(m.boolean_grain[i]->intensity_at(1.0), 3) + " grains per um^2");
+                                fmt(m.boolean_grain[i]->intensity_at(1.0), 3) + " grains per um^2, " +
+                                fmt(m.boolean_grain[i]->intensity_at(1.0) * m.pixel_pitch_um * m.pixel_pitch_um, 3) +
+                                " per pixel");
         }
     };
     if (settings_.input_units == InputUnits::lux_seconds)

@@ -147,6 +147,11 @@ public:
     // film frame's width and the grey input must be the plan's (else std::invalid_argument).
     Plan in_image(const FrameGeometry& image) const;
 
+    // The silver grains the reference tier draws per pixel at net density 1, summed over
+    // the layers it draws them for (0 at the other tiers). Its time per pixel grows with
+    // them, so with the film's area a pixel covers, not with the pixel count.
+    double silver_grains_per_pixel() const;
+
     // The stages in order and those left out, one line each, for -v.
     std::vector<std::string> describe() const;
 

@@ -202,6 +202,47 @@ TEST_CASE("a run killed halfway leaves only complete frames, logs them, and --no
     for (int f : {1, frames}) CHECK(pixels(frame_name(clean, "out", f)) == pixels(frame_name(dir, "out", f)));
 }
 
+TEST_CASE("a reference render that will take hours says so before it starts", "[cli][batch][quality]") {
+    fs::path dir = fresh_dir("reference-warning");
+    const std::string in = make_input("reference-thumbnail.exr", 32, 24);
+    // 32 px across a whole Super 35 frame: 780 um pixels, tens of millions of grains each.
+    const fs::path out = dir / "thumb.exr", err = dir / "stderr.txt";
+    pid_t pid = fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+        std::string command = std::string(DARKROOM_EXE) + " develop " + in + " -o " + out.string() +
+                              " --quality reference --threads 1 2> " + err.string();
+        execl("/bin/sh", "sh", "-c", ("exec " + command).c_str(), (char*)nullptr);
+        _exit(127);
+    }
+    // The warning comes before the render: wait for it (a minute at most), then stop the run.
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    int status = 0;
+    bool exited = false;
+    while (file_bytes(err).find("warning") == std::string::npos && !exited &&
+           std::chrono::steady_clock::now() < give_up) {
+        exited = waitpid(pid, &status, WNOHANG) == pid;
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    CHECK_FALSE(exited);  // still rendering: the warning came first
+    if (!exited) {
+        kill(pid, SIGTERM);
+        waitpid(pid, &status, 0);
+    }
+    const std::string text = file_bytes(err);
+    INFO(text);
+    CHECK(text.find("--quality reference draws every silver grain") != std::string::npos);
+    CHECK(text.find("CPU hours") != std::string::npos);
+    CHECK_FALSE(fs::exists(out));
+    // At a 4K frame's pitch (6 um on the film, 5.5 on the print) the same image is a quick
+    // render and no warning.
+    Result quick = darkroom("develop " + in + " -o " + (dir / "quick.exr").string() +
+                            " --quality reference --frame-width-mm 0.195 --print-width-mm 0.175");
+    INFO(quick.output);
+    REQUIRE(quick.exit_code == 0);
+    CHECK(quick.output.find("warning") == std::string::npos);
+}
+
 TEST_CASE("grey and alpha input develops as grey and keeps its alpha, as RGBA", "[cli][batch][metadata]") {
     fs::path dir = fresh_dir("grey-alpha");
     auto write_grey = [&](const std::string& path, bool with_alpha) {

@@ -293,6 +293,22 @@ TEST_CASE("the preview's print has the grain of both film and paper, the paper's
     }
 }
 
+TEST_CASE("the reference tier's silver grains per pixel grow with the film's area a pixel covers", "[quality][grain]") {
+    Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    DevelopSettings s;
+    s.quality = Quality::reference;
+    const double at_4k = Plan::compile(film, &paper, s, {4096, 2160}).silver_grains_per_pixel();
+    const double at_2k = Plan::compile(film, &paper, s, {2048, 1080}).silver_grains_per_pixel();
+    CHECK(at_4k > 100);  // thousands of disks a pixel on a 4K frame of 250D and 2383
+    CHECK(at_2k == Approx(4 * at_4k).epsilon(1e-9));
+    s.output = OutputMode::density;  // the film's layers alone
+    const double film_alone = Plan::compile(film, &paper, s, {4096, 2160}).silver_grains_per_pixel();
+    CHECK(film_alone > 0);
+    CHECK(film_alone < at_4k);
+    s.quality = Quality::high;
+    CHECK(Plan::compile(film, &paper, s, {4096, 2160}).silver_grains_per_pixel() == 0);
+}
+
 TEST_CASE("quality tiers are named, parsed and ordered reference first", "[quality]") {
     for (Quality q : kQualities) CHECK(parse_quality(quality_name(q)) == q);
     CHECK_FALSE(parse_quality("ultra"));
