@@ -399,14 +399,17 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
     }
 }
 
-// Printing through one table (QualityTier::print_in_one_table) leaves out the paper's grain
-// and halation (and its tabulated curves, which the table composes); its MTF is applied to
-// the negative's densities instead (Plan::print).
-void leave_out_paper_grain(MaterialStages& paper, std::vector<std::string>& skipped) {
+// Printing through one table (QualityTier::print_in_one_table) runs no grain or halation on
+// the paper (nor its tabulated curves, which the table composes): its grain is in the film's
+// where the film layer has grain (fold_paper_grain), and its MTF is applied to the negative's
+// densities (Plan::print).
+void leave_out_paper_grain(MaterialStages& paper, const MaterialStages& film, std::vector<std::string>& skipped) {
     for (size_t i = 0; i < paper.stock.layers.size(); ++i) {
         const std::string where = "paper layer " + paper.stock.layers[i].name;
         if (paper.grain[i] || paper.boolean_grain[i])
-            skipped.push_back("grain (" + where + "): folded into the film layer's, the print being one table");
+            skipped.push_back("grain (" + where + "): " +
+                              (film.grain[i] ? "folded into the film layer's" : "left out (the film layer has none)") +
+                              ", the print being one table");
         if (paper.halation[i]) skipped.push_back("halation (" + where + "): left out, the print being one table");
         paper.grain[i].reset();
         paper.boolean_grain[i].reset();
@@ -498,7 +501,7 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
         if (one_print_table) {
             fold_paper_grain(p.film_stages_, p.paper_stages_, *p.print_, p.film_exposure_scale_,
                              tier.curve_table_bits);
-            leave_out_paper_grain(p.paper_stages_, p.skipped_);
+            leave_out_paper_grain(p.paper_stages_, p.film_stages_, p.skipped_);
         }
         const int nodes = tier.print_table_nodes;
         if (one_print_table) {
