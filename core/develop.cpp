@@ -329,7 +329,7 @@ void print_densities(const PrintExposure& enlarger, const Stock& paper, const do
 // The share of a grain field's variance that a scatter kernel keeps: sum (K * G)^2 / sum G^2,
 // G the grain's 2D kernel (its 1D kernel's outer product), K the scatter's as applied.
 double variance_kept_by_scatter(const GrainModel& grain, const ScatterKernel& scatter) {
-    const int rg = grain.radius, rs = scatter.radius, side_s = 2 * rs + 1, r = rg + rs, side = 2 * r + 1;
+    const int rg = grain.radius, rs = scatter.radius, side_s = 2 * rs + 1, r = rg + rs;
     std::vector<double> taps(size_t(side_s) * side_s, 0.0);  // the scatter kernel as applied
     if (scatter.separable.empty())
         for (size_t i = 0; i < taps.size(); ++i) taps[i] = scatter.taps[i];
@@ -364,8 +364,8 @@ double variance_kept_by_scatter(const GrainModel& grain, const ScatterKernel& sc
 // kappa the film grain filter's gain per pixel and rho the share of variance the paper's MTF
 // keeps of the film's grain (it keeps all of the paper's own, which is added after it). Dp
 // and g are taken along the grey scale (scene grey exposed at the plan's exposure) and held
-// at least kMinPrintContrast: in the print's toe and shoulder the negative cannot carry the
-// paper's grain, whose share `darkroom bench`'s grain rows and the README measure.
+// at least kMinPrintContrast: in the print's toe and shoulder the negative cannot carry all
+// of the paper's grain (README, "How preview prints", measures what is left).
 constexpr double kMinPrintContrast = 0.5;
 void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
                       double exposure_scale, int curve_table_bits) {
