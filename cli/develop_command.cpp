@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <iostream>
 #include <mutex>
-#include <sstream>
 #include <set>
 #include <thread>
 #include <unistd.h>
@@ -60,29 +59,14 @@ Window output_window(const DevelopOptions& o, const Window& frame) {
     return w;
 }
 
-// The reference tier's grain costs about this much CPU time per silver grain drawn: 0.75 us
-// on the 2-core AMD EPYC of the README's benchmark (its 4K reference frame, extrapolated from
-// its sample windows: 24 700 s on 2 threads for 7 500 grains a pixel).
-constexpr double kCpuSecondsPerSilverGrain = 0.75e-6;
-// Past this the reference render is said to be long before it starts (a quarter of an hour).
-constexpr double kLongRenderCpuSeconds = 900;
-
-// The reference tier's time grows with the film's area a pixel covers, not the pixel count
-// (a thumbnail of a whole film frame draws millions of grains a pixel): say so once, before
-// a render that may take hours rather than after it.
+// Say once, before it starts, that a reference render will take long (look_options.h).
 void warn_of_long_reference_render(const Plan& plan, const Window& out, FrameReport& report) {
-    const double grains = plan.silver_grains_per_pixel() * double(out.width()) * double(out.height());
-    const double cpu_hours = grains * kCpuSecondsPerSilverGrain / 3600;
-    if (grains * kCpuSecondsPerSilverGrain < kLongRenderCpuSeconds) return;
+    const std::string warning = long_reference_render_warning(plan, out);
+    if (warning.empty()) return;
     static std::once_flag warned;
     std::call_once(warned, [&] {
-        std::ostringstream message;
-        message.precision(2);
-        message << "--quality reference draws every silver grain: about " << grains << " here ("
-                << plan.silver_grains_per_pixel() << " a pixel), roughly " << cpu_hours
-                << " CPU hours; --quality high gives the same grain statistics as filtered noise";
-        std::cerr << "darkroom: warning: " << message.str() << "\n";
-        report.warnings.push_back(message.str());
+        std::cerr << "darkroom: warning: " << warning << "\n";
+        report.warnings.push_back(warning);
     });
 }
 

@@ -3,6 +3,7 @@
 // (exposure=0.5, print_exposure=-1, grain=False, film="kodak-t-max-100"); they go through
 // the same CLI11 flag definitions and look-file reader, so every flag the program knows is
 // known here, with the same checks, and keywords override the look file as flags do.
+#include <optional>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
@@ -65,10 +66,19 @@ py::array_t<float> develop(py::array_t<float, py::array::c_style | py::array::fo
 
     const darkroom::Window full{0, 0, width, height};
     const darkroom::ConstImageView in{pixels.data(), full, channels, channels, (std::ptrdiff_t)channels * width};
+    std::optional<darkroom::Plan> plan;
+    {
+        py::gil_scoped_release release;
+        plan = darkroom::cli::compile_look(parsed.look, darkroom::cli::frame_geometry(in));
+    }
+    // Before a render that will take hours (a filter set to "error" refuses it).
+    const std::string warning = darkroom::cli::long_reference_render_warning(*plan, full);
+    if (!warning.empty() && PyErr_WarnEx(PyExc_RuntimeWarning, ("darkroom: " + warning).c_str(), 1) < 0)
+        throw py::error_already_set();
     darkroom::Image out;
     {
         py::gil_scoped_release release;
-        out = darkroom::cli::develop_image(parsed.look, in, full);
+        out = darkroom::cli::develop_image(parsed.look, *plan, in, full);
     }
     py::array_t<float> result({height, width, out.channels});
     std::copy(out.pixels.begin(), out.pixels.end(), result.mutable_data());

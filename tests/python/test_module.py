@@ -7,6 +7,7 @@ import os
 import subprocess
 import tempfile
 import unittest
+import warnings
 
 import numpy as np
 import OpenImageIO as oiio
@@ -82,6 +83,14 @@ class ModuleEqualsProgram(unittest.TestCase):
         darkroom.develop(big, look=self.look, frame=1)
         self.assertGreaterEqual(darkroom.release_memory(), 512 * 512 * 4)
         self.assertEqual(darkroom.release_memory(), 0)
+
+    def test_an_hours_long_reference_render_warns_before_it_starts(self):
+        # 30x40 pixels across a whole Super 35 frame: tens of millions of silver grains a
+        # pixel. With the warning made an error the render never starts.
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            with self.assertRaisesRegex(RuntimeWarning, "draws every silver grain.*CPU hours"):
+                darkroom.develop(self.plate, quality="reference")
 
     def test_bad_settings_are_named(self):
         with self.assertRaisesRegex(TypeError, "exposur"):
