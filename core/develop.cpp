@@ -369,8 +369,9 @@ double variance_kept_by_scatter(const GrainModel& grain, const ScatterKernel& sc
 constexpr double kMinPrintContrast = 0.5;
 void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
                       double exposure_scale, int curve_table_bits) {
+    if (film.curve_tables.empty()) return;  // (the tiers that print through one table tabulate curves)
     for (size_t i = 0; i < 3; ++i) {
-        if (!film.grain[i] || !paper.grain[i] || film.curve_tables.empty()) continue;
+        if (!film.grain[i] || !paper.grain[i]) continue;
         const GrainModel& film_grain = *film.grain[i];
         const GrainModel& paper_grain = *paper.grain[i];
         const double kappa = film_grain.pixel_sigma_at_unit_density() / film_grain.sigma_per_pixel;
@@ -498,13 +499,11 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev});
+        const int nodes = tier.print_table_nodes;
         if (one_print_table) {
             fold_paper_grain(p.film_stages_, p.paper_stages_, *p.print_, p.film_exposure_scale_,
                              tier.curve_table_bits);
             leave_out_paper_grain(p.paper_stages_, p.film_stages_, p.skipped_);
-        }
-        const int nodes = tier.print_table_nodes;
-        if (one_print_table) {
             std::array<double, 3> lo, hi;
             table_density_range(film, lo, hi);
             const PrintExposure& enlarger = *p.print_;
@@ -740,7 +739,7 @@ double Plan::silver_grains_per_pixel() const {
     double grains = 0;
     for (const MaterialStages* m : {&film_stages_, &paper_stages_})
         for (const auto& g : m->boolean_grain)
-            if (g) grains += g->intensity_at(1.0) * m->pixel_pitch_um * m->pixel_pitch_um;
+            if (g) grains += g->grains_per_pixel_at(1.0);
     return grains;
 }
 
@@ -776,7 +775,7 @@ std::vector<std::string> Plan::describe() const {
                 lines.push_back("  grain (" + l.name + "): silver disks (Boolean model), radius " +
                                 fmt(m.boolean_grain[i]->radius_at(1.0), 3) + " um at net density 1, " +
                                 fmt(m.boolean_grain[i]->intensity_at(1.0), 3) + " grains per um^2, " +
-                                fmt(m.boolean_grain[i]->intensity_at(1.0) * m.pixel_pitch_um * m.pixel_pitch_um, 3) +
+                                fmt(m.boolean_grain[i]->grains_per_pixel_at(1.0), 3) +
                                 " per pixel");
         }
     };

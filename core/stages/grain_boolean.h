@@ -108,6 +108,8 @@ struct BooleanGrain {
     // r and lambda (per um^2) at a net density (clamped to [0, kNetCap]).
     double radius_at(double net) const;
     double intensity_at(double net) const;
+    // Grains whose centres fall in one pixel at a net density (intensity x pitch^2).
+    double grains_per_pixel_at(double net) const { return intensity_at(net) * pixel_pitch_um * pixel_pitch_um; }
 };
 
 BooleanGrain design_boolean_grain(const GrainSpec& spec, double d_min, double pixel_pitch_um, NoiseKey key);
