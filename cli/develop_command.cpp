@@ -59,9 +59,9 @@ Window output_window(const DevelopOptions& o, const Window& frame) {
     return w;
 }
 
-// Say once, before it starts, that a reference render will take long (look_options.h).
+// Say once, before it starts, that a reference render will take long (core/develop.h).
 void warn_of_long_reference_render(const Plan& plan, const Window& out, FrameReport& report) {
-    const std::string warning = long_reference_render_warning(plan, out);
+    const std::string warning = long_reference_render_warning(plan, out, "--quality ");
     if (warning.empty()) return;
     static std::once_flag warned;
     std::call_once(warned, [&] {

@@ -1,7 +1,6 @@
 #include "cli/look_options.h"
 
 #include <iostream>
-#include <sstream>
 
 #include "cli/user_error.h"
 #include "core/plate/grain_synthesis.h"
@@ -162,24 +161,6 @@ Plan PlanCache::plan_for(const FrameGeometry& frame, int frame_number) {
     auto it = plans_.find(key);
     if (it == plans_.end()) it = plans_.emplace(key, compile_look(look_, frame)).first;
     return it->second.in_image(frame).for_frame(frame_number);
-}
-
-// The reference tier's grain costs about this much CPU time per silver grain drawn: 0.75 us
-// on the 2-core AMD EPYC of the README's benchmark (its 4K reference frame, extrapolated from
-// its sample windows: 24 700 s on 2 threads for 7 500 grains a pixel).
-constexpr double kCpuSecondsPerSilverGrain = 0.75e-6;
-constexpr double kLongRenderCpuSeconds = 900;
-
-std::string long_reference_render_warning(const Plan& plan, const Window& out) {
-    const double grains = plan.silver_grains_per_pixel() * double(out.width()) * double(out.height());
-    const double cpu_seconds = grains * kCpuSecondsPerSilverGrain;
-    if (cpu_seconds < kLongRenderCpuSeconds) return {};
-    std::ostringstream message;
-    message.precision(2);
-    message << "--quality reference draws every silver grain: about " << grains << " here ("
-            << plan.silver_grains_per_pixel() << " a pixel), roughly " << cpu_seconds / 3600
-            << " CPU hours; --quality high gives the same grain statistics as filtered noise";
-    return message.str();
 }
 
 Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window) {

@@ -66,12 +66,6 @@ Plan compile_look(const LookOptions& look, const FrameGeometry& frame);
 // coordinates, which is `film_width_px` wide (0: the image is the whole frame).
 FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px = 0);
 
-// The reference tier's time grows with the film's area a pixel covers, not the pixel count
-// (a thumbnail of a whole film frame draws millions of silver grains a pixel): a warning
-// with the estimate when rendering `out` through `plan` would take more than a quarter of
-// an hour of CPU, else empty. The program and the Python module give it before they render.
-std::string long_reference_render_warning(const Plan& plan, const Window& out);
-
 // The plans of one look for a sequence: compiled once per film frame width (a compile takes
 // seconds, about as long as developing a 2K frame) and moved to each frame's image window
 // and grain (Plan::in_image, Plan::for_frame). Shared by the threads developing frames.

@@ -179,4 +179,13 @@ private:
     std::vector<std::string> skipped_;
 };
 
+// The reference tier's time grows with the film's area a pixel covers, not the pixel count
+// (a thumbnail of a whole film frame draws millions of silver grains a pixel): a warning
+// with the estimate when rendering `out` through `plan` would take more than a quarter of
+// an hour of CPU, else empty. The program, the Python module and the plugin give it before
+// they render, each naming the tiers its own way: `quality_setting` + "reference"
+// ("--quality reference", "Quality reference").
+constexpr double kLongRenderCpuSeconds = 900;
+std::string long_reference_render_warning(const Plan& plan, const Window& out, const std::string& quality_setting);
+
 }  // namespace darkroom

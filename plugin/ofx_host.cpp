@@ -97,13 +97,23 @@ OfxImageClipHandle clip_handle(OfxImageEffectHandle effect, const char* name) {
     return clip;
 }
 
-void post_error(OfxImageEffectHandle effect, const std::string& text) {
+namespace {
+
+void post_message(OfxImageEffectHandle effect, const char* type, const std::string& text) {
     if (!suites.message) return;
     // The text goes through "%s" so that a '%' in a file name is never read as a format.
     if (suites.persistent_messages && effect)
-        suites.message->setPersistentMessage(effect, kOfxMessageError, "", "%s", text.c_str());
+        suites.message->setPersistentMessage(effect, type, "", "%s", text.c_str());
     else
-        suites.message->message(effect, kOfxMessageError, "", "%s", text.c_str());
+        suites.message->message(effect, type, "", "%s", text.c_str());
+}
+
+}  // namespace
+
+void post_error(OfxImageEffectHandle effect, const std::string& text) { post_message(effect, kOfxMessageError, text); }
+
+void post_warning(OfxImageEffectHandle effect, const std::string& text) {
+    post_message(effect, kOfxMessageWarning, text);
 }
 
 void clear_message(OfxImageEffectHandle effect) {

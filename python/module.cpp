@@ -72,7 +72,7 @@ py::array_t<float> develop(py::array_t<float, py::array::c_style | py::array::fo
         plan = darkroom::cli::compile_look(parsed.look, darkroom::cli::frame_geometry(in));
     }
     // Before a render that will take hours (a filter set to "error" refuses it).
-    const std::string warning = darkroom::cli::long_reference_render_warning(*plan, full);
+    const std::string warning = darkroom::long_reference_render_warning(*plan, full, "quality=");
     if (!warning.empty() && PyErr_WarnEx(PyExc_RuntimeWarning, ("darkroom: " + warning).c_str(), 1) < 0)
         throw py::error_already_set();
     darkroom::Image out;

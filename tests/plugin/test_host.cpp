@@ -414,7 +414,7 @@ OfxStatus message(void* handle, const char*, const char*, const char* format, ..
     if (handle) static_cast<Effect*>(handle)->messages.push_back(text);
     return kOfxStatOK;
 }
-OfxStatus set_persistent_message(void* handle, const char*, const char*, const char* format, ...) {
+OfxStatus set_persistent_message(void* handle, const char* type, const char*, const char* format, ...) {
     if (!handle) return kOfxStatErrBadHandle;
     va_list ap;
     va_start(ap, format);
@@ -422,12 +422,14 @@ OfxStatus set_persistent_message(void* handle, const char*, const char*, const c
     va_end(ap);
     std::lock_guard<std::mutex> lock(message_mutex);
     static_cast<Effect*>(handle)->persistent_message = text;
+    static_cast<Effect*>(handle)->persistent_message_type = type ? type : "";
     return kOfxStatOK;
 }
 OfxStatus clear_persistent_message(void* handle) {
     if (!handle) return kOfxStatErrBadHandle;
     std::lock_guard<std::mutex> lock(message_mutex);
     static_cast<Effect*>(handle)->persistent_message.clear();
+    static_cast<Effect*>(handle)->persistent_message_type.clear();
     return kOfxStatOK;
 }
 const OfxMessageSuiteV2 message_suite = {message, set_persistent_message, clear_persistent_message};

@@ -88,6 +88,7 @@ struct Effect {
     std::map<std::string, std::unique_ptr<Clip>> clips;
     // Messages the plugin posted on this effect.
     std::string persistent_message;
+    std::string persistent_message_type;  // kOfxMessageError, kOfxMessageWarning, ...
     std::vector<std::string> messages;
     // abort() answers 1 once it has been called this many times (-1: never).
     int abort_after = -1;

@@ -500,6 +500,27 @@ TEST_CASE("settings that change nothing are reported as identity", "[plugin]") {
     }
 }
 
+TEST_CASE("a reference render that will take hours says so on the node before it starts", "[plugin]") {
+    const int w = 32, h = 24;
+    auto inst = make_instance();
+    set_common_look(*inst);  // a 4 mm frame: 125 um of film a pixel, ~10^7 silver grains each
+    inst->set_int("quality", inst->choice_index("quality", "reference"));
+    inst->set_source(Frame::from_top_down(scene(w, h, 4), w, h, 4));
+    inst->effect().abort_after = 0;  // the user stops it as soon as it starts
+    CHECK(inst->render(1, {0, 0, w, h}).status == kOfxStatFailed);
+    INFO(inst->effect().persistent_message);
+    CHECK(inst->effect().persistent_message_type == kOfxMessageWarning);
+    CHECK(inst->effect().persistent_message.find("Quality reference draws every silver grain") != std::string::npos);
+    CHECK(inst->effect().persistent_message.find("CPU hours") != std::string::npos);
+
+    // At a 4K frame's pitch (6 um of film a pixel) it is a quick render, and nothing is said.
+    inst->set_double("frameWidthMm", 0.195);
+    inst->set_double("printWidthMm", 0.175);
+    CHECK(inst->user_edited("printWidthMm") == kOfxStatOK);  // the host clears the node's message
+    CHECK(inst->render(1, {0, 0, w, h}).status == kOfxStatFailed);
+    CHECK(inst->effect().persistent_message.empty());
+}
+
 TEST_CASE("abort stops a render", "[plugin]") {
     const int w = 32, h = 256;  // several row bands
     auto inst = make_instance();
