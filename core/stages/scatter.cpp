@@ -12,19 +12,40 @@
 
 namespace darkroom {
 
-double mtf_response(const Curve& mtf, double f) {
-    size_t n = mtf.x.size();
-    if (f <= mtf.x_max() || n < 2) return std::max(0.0, mtf(f));
-    double f0 = mtf.x[n - 2], f1 = mtf.x[n - 1], r0 = mtf.y[n - 2], r1 = mtf.y[n - 1];
-    if (!(r1 > 0)) return 0.0;
-    double slope = (r0 > r1 && r0 > 0) ? (std::log(r1) - std::log(r0)) / (f1 - f0) : 0.0;
-    return r1 * std::exp(slope * (f - f1));
-}
+namespace {
+
+// The MTF with the slope of its continuation past the last sample computed once: the
+// kernel's design evaluates it millions of times.
+class MtfResponse {
+public:
+    explicit MtfResponse(const Curve& mtf) : mtf_(mtf) {
+        const size_t n = mtf.x.size();
+        if (n < 2) return;
+        const double r0 = mtf.y[n - 2], r1 = mtf.y[n - 1];
+        if (r0 > r1 && r0 > 0 && r1 > 0) log_slope_ = (std::log(r1) - std::log(r0)) / (mtf.x[n - 1] - mtf.x[n - 2]);
+    }
+    double operator()(double f) const {
+        const size_t n = mtf_.x.size();
+        if (f <= mtf_.x_max() || n < 2) return std::max(0.0, mtf_(f));
+        const double r1 = mtf_.y[n - 1];
+        if (!(r1 > 0)) return 0.0;
+        return r1 * std::exp(log_slope_ * (f - mtf_.x[n - 1]));
+    }
+
+private:
+    const Curve& mtf_;
+    double log_slope_ = 0;  // never rising
+};
+
+}  // namespace
+
+double mtf_response(const Curve& mtf, double f) { return MtfResponse(mtf)(f); }
 
 double mtf_deviation_to_nyquist(const Curve& mtf, double pixel_pitch_um) {
     double nyquist = 1000.0 / (2.0 * pixel_pitch_um);
+    const MtfResponse response(mtf);
     double f_end = nyquist * std::sqrt(2.0), worst = 0;
-    for (int i = 0; i <= 512; ++i) worst = std::max(worst, std::abs(mtf_response(mtf, f_end * i / 512) - 1.0));
+    for (int i = 0; i <= 512; ++i) worst = std::max(worst, std::abs(response(f_end * i / 512) - 1.0));
     return worst;
 }
 
@@ -34,21 +55,31 @@ double mtf_deviation_to_nyquist(const Curve& mtf, double pixel_pitch_um) {
 // continuous PSF sampled at pixel centres: compact even where the MTF is still high at
 // Nyquist, where a band-limited design would ring across the whole grid.
 static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, int N) {
+    const MtfResponse response_at(mtf);
     const double sampling = 1.0 / pitch_mm;  // cycles/mm
     int alias_orders = 0;                      // replicas beyond which the MTF is negligible
-    while (alias_orders < 32 && mtf_response(mtf, (alias_orders + 0.5) * sampling) > 1e-5) ++alias_orders;
+    while (alias_orders < 32 && response_at((alias_orders + 0.5) * sampling) > 1e-5) ++alias_orders;
+    // H at frequency index (k, l) is even in each (the replicas are symmetric) and symmetric
+    // in the two (the MTF is radial): summed for 0 <= l <= k <= N/2, mirrored to the rest.
     std::vector<double> response(N * N, 0.0), cosines(N * N), partial(N * N, 0.0), h(N * N, 0.0);
-    for (int k = 0; k < N; ++k) {
-        int kk = k <= N / 2 ? k : k - N;
-        for (int l = 0; l < N; ++l) {
-            int ll = l <= N / 2 ? l : l - N;
-            for (int j1 = -alias_orders; j1 <= alias_orders; ++j1)
-                for (int j2 = -alias_orders; j2 <= alias_orders; ++j2)
-                    response[k * N + l] += mtf_response(mtf, std::hypot(double(kk) / (N * pitch_mm) + j1 * sampling,
-                                                                        double(ll) / (N * pitch_mm) + j2 * sampling));
+    std::vector<double> along(2 * alias_orders + 1);  // one axis's frequency in each replica
+    auto frequencies = [&](int k, std::vector<double>& f) {
+        for (int j = -alias_orders; j <= alias_orders; ++j) f[j + alias_orders] = double(k) / (N * pitch_mm) + j * sampling;
+    };
+    std::vector<double> across(along.size());
+    for (int k = 0; k <= N / 2; ++k) {
+        frequencies(k, along);
+        for (int l = 0; l <= k; ++l) {
+            frequencies(l, across);
+            double sum = 0;
+            for (double fx : along)
+                for (double fy : across) sum += response_at(std::sqrt(fx * fx + fy * fy));
+            for (int kk : {k, (N - k) % N})
+                for (int ll : {l, (N - l) % N}) response[kk * N + ll] = response[ll * N + kk] = sum;
         }
-        for (int m = 0; m < N; ++m) cosines[k * N + m] = std::cos(2.0 * M_PI * double((long long)k * m % N) / N);
     }
+    for (int k = 0; k < N; ++k)
+        for (int m = 0; m < N; ++m) cosines[k * N + m] = std::cos(2.0 * M_PI * double((long long)k * m % N) / N);
     for (int k = 0; k < N; ++k)
         for (int l = 0; l < N; ++l)
             for (int n = 0; n < N; ++n) partial[k * N + n] += response[k * N + l] * cosines[l * N + n];
