@@ -113,7 +113,8 @@ void post_message(OfxImageEffectHandle effect, const char* type, const std::stri
 void post_error(OfxImageEffectHandle effect, const std::string& text) { post_message(effect, kOfxMessageError, text); }
 
 void post_warning(OfxImageEffectHandle effect, const std::string& text) {
-    post_message(effect, kOfxMessageWarning, text);
+    // Only on the node: a transient message can be a dialog, and a render posts it every frame.
+    if (suites.persistent_messages) post_message(effect, kOfxMessageWarning, text);
 }
 
 void clear_message(OfxImageEffectHandle effect) {

@@ -75,6 +75,7 @@ OfxImageClipHandle clip_handle(OfxImageEffectHandle effect, const char* name);
 // Posts `text` on the effect: persistently where the host can (cleared by clear_message),
 // else as a transient message. Does nothing when the host has no message suite.
 void post_error(OfxImageEffectHandle effect, const std::string& text);
+// The same for a warning, but only persistently: never as a transient message.
 void post_warning(OfxImageEffectHandle effect, const std::string& text);
 void clear_message(OfxImageEffectHandle effect);
 
