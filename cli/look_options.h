@@ -66,9 +66,10 @@ Plan compile_look(const LookOptions& look, const FrameGeometry& frame);
 // coordinates, which is `film_width_px` wide (0: the image is the whole frame).
 FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px = 0);
 
-// The plans of one look for a sequence: compiled once per film frame width (a compile takes
-// seconds, about as long as developing a 2K frame) and moved to each frame's image window
-// and grain (Plan::in_image, Plan::for_frame). Shared by the threads developing frames.
+// The plans of one look for a sequence: compiled once per film frame width (a process's
+// first compile takes about half a second, several times a 2K frame's develop) and moved to
+// each frame's image window and grain (Plan::in_image, Plan::for_frame). Shared by the
+// threads developing frames.
 class PlanCache {
 public:
     explicit PlanCache(LookOptions look) : look_(std::move(look)) {}
