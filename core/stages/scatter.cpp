@@ -111,6 +111,17 @@ void unit_gain(ScatterKernel& kernel) {
         for (float& v : term) v *= scale;
 }
 
+// sum a[j] b[j] in four interleaved partial sums: independent additions, which the power
+// iteration's matrix-vector products (most of a large kernel's design) are bound by.
+double dot(const double* a, const double* b, int n) {
+    double partial[4] = {0, 0, 0, 0};
+    int j = 0;
+    for (; j + 4 <= n; j += 4)
+        for (int k = 0; k < 4; ++k) partial[k] += a[j + k] * b[j + k];
+    for (; j < n; ++j) partial[0] += a[j] * b[j];
+    return (partial[0] + partial[1]) + (partial[2] + partial[3]);
+}
+
 // Eigen-decomposition of the symmetric kernel matrix by power iteration with deflation,
 // largest |eigenvalue| first, until the residual is within `tolerance` of the largest tap
 // everywhere or there are `max_terms` terms. Left empty when the tolerance needs so many
@@ -146,10 +157,7 @@ void make_separable(ScatterKernel& kernel, double tolerance, int max_terms) {
             norm = std::sqrt(norm);
             if (!(norm > 0)) break;
             for (double& v : e) v /= norm;
-            for (int i = 0; i < side; ++i) {
-                next[i] = 0;
-                for (int j = 0; j < side; ++j) next[i] += residual[i * side + j] * e[j];
-            }
+            for (int i = 0; i < side; ++i) next[i] = dot(&residual[size_t(i) * side], e.data(), side);
             double rayleigh = 0, change = 0;
             for (int i = 0; i < side; ++i) rayleigh += e[i] * next[i];
             for (int i = 0; i < side; ++i) change = std::max(change, std::abs(next[i] - rayleigh * e[i]));
