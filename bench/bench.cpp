@@ -267,7 +267,9 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
             // Every stage computes at least the window and at most the window with its
             // whole halo, so the frame's time lies between the two extrapolations.
             tr.extrapolated = true;
-            tr.extrapolated_lower_seconds = tr.seconds * pixels / with_halo;
+            // (The ratio first: it is at most 1, so the bound never exceeds the time by a
+            // rounding, as seconds * pixels / with_halo can when the two counts are equal.)
+            tr.extrapolated_lower_seconds = tr.seconds * (double(pixels) / double(with_halo));
         } else {
             say(tr.name + ": whole frame, " + std::to_string(o.runs + 1) + " runs");
             Timed timed = time_frame(plan, scene, out, o.runs, o.threads);
