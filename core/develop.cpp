@@ -747,15 +747,17 @@ double Plan::silver_grains_per_pixel() const {
 // on the 2-core AMD EPYC of the README's benchmark (its 4K reference frame, extrapolated from
 // its sample windows: 24 700 s on 2 threads for 7 500 grains a pixel).
 constexpr double kCpuSecondsPerSilverGrain = 0.75e-6;
+constexpr double kLongRenderCpuSeconds = 900;
 
 std::string long_reference_render_warning(const Plan& plan, const Window& out, const std::string& quality_setting) {
-    const double grains = plan.silver_grains_per_pixel() * double(out.width()) * double(out.height());
+    const double per_pixel = plan.silver_grains_per_pixel();
+    const double grains = per_pixel * double(out.width()) * double(out.height());
     const double cpu_seconds = grains * kCpuSecondsPerSilverGrain;
     if (cpu_seconds < kLongRenderCpuSeconds) return {};
     std::ostringstream message;
     message.precision(2);
     message << quality_setting << "reference draws every silver grain: about " << grains << " here ("
-            << plan.silver_grains_per_pixel() << " a pixel), roughly " << cpu_seconds / 3600 << " CPU hours; "
+            << per_pixel << " a pixel), roughly " << cpu_seconds / 3600 << " CPU hours; "
             << quality_setting << "high gives the same grain statistics as filtered noise";
     return message.str();
 }

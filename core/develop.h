@@ -185,7 +185,6 @@ private:
 // an hour of CPU, else empty. The program, the Python module and the plugin give it before
 // they render, each naming the tiers its own way: `quality_setting` + "reference"
 // ("--quality reference", "Quality reference").
-constexpr double kLongRenderCpuSeconds = 900;
 std::string long_reference_render_warning(const Plan& plan, const Window& out, const std::string& quality_setting);
 
 }  // namespace darkroom

@@ -62,22 +62,22 @@ static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, in
     // H at frequency index (k, l) is even in each (the replicas are symmetric) and symmetric
     // in the two (the MTF is radial): summed for 0 <= l <= k <= N/2, mirrored to the rest.
     std::vector<double> response(N * N, 0.0), cosines(N * N), partial(N * N, 0.0), h(N * N, 0.0);
-    std::vector<double> along(2 * alias_orders + 1);  // one axis's frequency in each replica
-    auto frequencies = [&](int k, std::vector<double>& f) {
-        for (int j = -alias_orders; j <= alias_orders; ++j) f[j + alias_orders] = double(k) / (N * pitch_mm) + j * sampling;
-    };
-    std::vector<double> across(along.size());
-    for (int k = 0; k <= N / 2; ++k) {
-        frequencies(k, along);
+    // One axis's frequency at index k in each replica j: axis[k * replicas + j].
+    const int replicas = 2 * alias_orders + 1;
+    std::vector<double> axis(size_t(N / 2 + 1) * replicas);
+    for (int k = 0; k <= N / 2; ++k)
+        for (int j = 0; j < replicas; ++j) axis[k * replicas + j] = double(k) / (N * pitch_mm) + (j - alias_orders) * sampling;
+    for (int k = 0; k <= N / 2; ++k)
         for (int l = 0; l <= k; ++l) {
-            frequencies(l, across);
             double sum = 0;
-            for (double fx : along)
-                for (double fy : across) sum += response_at(std::sqrt(fx * fx + fy * fy));
+            for (int jx = 0; jx < replicas; ++jx)
+                for (int jy = 0; jy < replicas; ++jy) {
+                    const double fx = axis[k * replicas + jx], fy = axis[l * replicas + jy];
+                    sum += response_at(std::sqrt(fx * fx + fy * fy));
+                }
             for (int kk : {k, (N - k) % N})
                 for (int ll : {l, (N - l) % N}) response[kk * N + ll] = response[ll * N + kk] = sum;
         }
-    }
     for (int k = 0; k < N; ++k)
         for (int m = 0; m < N; ++m) cosines[k * N + m] = std::cos(2.0 * M_PI * double((long long)k * m % N) / N);
     for (int k = 0; k < N; ++k)
