@@ -100,6 +100,11 @@ TempFile::~TempFile() {
     temps_in_flight().erase(temp_.string());
 }
 
+bool TempFile::create(const std::function<bool()>& create_file) {
+    std::lock_guard<std::mutex> lock(registry_mutex());
+    return create_file();
+}
+
 void TempFile::commit() {
     std::error_code ec;
     fs::rename(temp_, target_, ec);
@@ -110,7 +115,11 @@ void TempFile::commit() {
 void write_text_atomically(const std::string& path, const std::string& text) {
     TempFile temp{fs::path(path)};
     {
-        std::ofstream out(temp.path());
+        std::ofstream out;
+        temp.create([&] {
+            out.open(temp.path());
+            return out.is_open();
+        });
         out << text;
         if (!out.flush()) throw UserError("cannot write '" + path + "'");
     }

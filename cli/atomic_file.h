@@ -42,6 +42,10 @@ public:
     TempFile& operator=(const TempFile&) = delete;
 
     const std::filesystem::path& path() const { return temp_; }
+    // Runs `create_file` (which creates the temporary at path()) while an interrupt's cleanup
+    // cannot run, and returns its result: a file created after the cleanup swept the
+    // registry, but before the process exited, would outlive it.
+    bool create(const std::function<bool()>& create_file);
     // Renames the temporary over the target. Throws UserError if that fails.
     void commit();
 

@@ -92,7 +92,7 @@ void write_image(const std::string& path, const Image& image, const OIIO::ImageS
     if (!out) throw UserError("cannot write '" + path + "': " + OIIO::geterror());
     if (!out->supports("origin")) spec.x = spec.y = 0;
     TempFile temp{fs::path(path)};
-    if (!out->open(temp.path().string(), spec) ||
+    if (!temp.create([&] { return out->open(temp.path().string(), spec); }) ||
         !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
         throw UserError("cannot write '" + path + "': " + out->geterror());
     temp.commit();
