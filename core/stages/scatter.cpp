@@ -111,27 +111,82 @@ void unit_gain(ScatterKernel& kernel) {
         for (float& v : term) v *= scale;
 }
 
-// sum a[j] b[j] in four interleaved partial sums: independent additions, which the power
-// iteration's matrix-vector products (most of a large kernel's design) are bound by.
-double dot(const double* a, const double* b, int n) {
-    double partial[4] = {0, 0, 0, 0};
-    int j = 0;
-    for (; j + 4 <= n; j += 4)
-        for (int k = 0; k < 4; ++k) partial[k] += a[j + k] * b[j + k];
-    for (; j < n; ++j) partial[0] += a[j] * b[j];
-    return (partial[0] + partial[1]) + (partial[2] + partial[3]);
+// Eigenvalues and orthonormal eigenvectors of a symmetric n x n matrix `a` (row-major, used
+// as scratch) by cyclic Jacobi rotations: each rotation zeroes one off-diagonal element, and
+// sweeps repeat until the off-diagonal part is negligible. Exact to rounding for the small,
+// nearly opposite eigenvalues of a kernel's residual too, where power iteration stalls.
+// vectors[i * n + k] is component i of eigenvector k.
+void symmetric_eigen(std::vector<double>& a, int n, std::vector<double>& values, std::vector<double>& vectors) {
+    vectors.assign(size_t(n) * n, 0.0);
+    for (int i = 0; i < n; ++i) vectors[size_t(i) * n + i] = 1.0;
+    auto at = [&](int i, int j) -> double& { return a[size_t(i) * n + j]; };
+    for (int sweep = 0; sweep < 100; ++sweep) {
+        double off = 0, diagonal = 0;
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) (i == j ? diagonal : off) += at(i, j) * at(i, j);
+        if (!(off > 1e-30 * diagonal)) break;
+        for (int p = 0; p < n; ++p)
+            for (int q = p + 1; q < n; ++q) {
+                const double apq = at(p, q);
+                if (apq == 0) continue;
+                // The rotation's tangent t = s / c zeroes a'_pq: t^2 + 2 theta t - 1 = 0,
+                // its smaller root (a rotation of at most 45 degrees).
+                const double theta = (at(q, q) - at(p, p)) / (2 * apq);
+                const double t = std::abs(theta) > 1e150 ? 0.5 / theta
+                                                         : std::copysign(1.0, theta) / (std::abs(theta) + std::sqrt(theta * theta + 1));
+                const double c = 1 / std::sqrt(t * t + 1), s = t * c;
+                for (int k = 0; k < n; ++k) {
+                    const double kp = at(k, p), kq = at(k, q);
+                    at(k, p) = c * kp - s * kq;
+                    at(k, q) = s * kp + c * kq;
+                }
+                for (int k = 0; k < n; ++k) {
+                    const double pk = at(p, k), qk = at(q, k);
+                    at(p, k) = c * pk - s * qk;
+                    at(q, k) = s * pk + c * qk;
+                }
+                for (int k = 0; k < n; ++k) {
+                    double& vp = vectors[size_t(k) * n + p];
+                    double& vq = vectors[size_t(k) * n + q];
+                    const double kp = vp, kq = vq;
+                    vp = c * kp - s * kq;
+                    vq = s * kp + c * kq;
+                }
+            }
+    }
+    values.resize(n);
+    for (int i = 0; i < n; ++i) values[i] = at(i, i);
 }
 
-// Eigen-decomposition of the symmetric kernel matrix by power iteration with deflation,
-// largest |eigenvalue| first, until the residual is within `tolerance` of the largest tap
-// everywhere or there are `max_terms` terms. Left empty when the tolerance needs so many
-// terms that the direct sum is cheaper (2 passes of 2r+1 taps per term against (2r+1)^2).
+// The kernel matrix's eigen-decomposition as separable terms, largest |eigenvalue| first
+// (the best approximation of each rank), until the residual is within `tolerance` of the
+// largest tap everywhere or there are `max_terms` terms. Left empty when the tolerance needs
+// so many terms that the direct sum is cheaper (2 passes of 2r+1 taps per term against
+// (2r+1)^2).
+// The PSF is even in x and in y, so every eigenvector with a non-zero eigenvalue is even:
+// the decomposition runs on the r + 1 components from the centre out, in the coordinates
+// w_0 = u_0, w_b = sqrt(2) u_b (where the full vector's norm is |w|), whose matrix
+// S_ab = d_a d_b K(a, b) is symmetric (d_0 = 1, d_b = sqrt(2)); K is the kernel's even part.
 void make_separable(ScatterKernel& kernel, double tolerance, int max_terms) {
-    const int side = 2 * kernel.radius + 1;
+    const int r = kernel.radius, side = 2 * r + 1, n = r + 1;
+    auto tap = [&](int x, int y) { return double(kernel.taps[size_t(y + r) * side + (x + r)]); };
+    std::vector<double> s(size_t(n) * n);
+    for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) {
+            const double even = (tap(a, b) + tap(-a, b) + tap(a, -b) + tap(-a, -b) + tap(b, a) + tap(-b, a) + tap(b, -a) +
+                                 tap(-b, -a)) / 8;
+            s[size_t(a) * n + b] = (a ? M_SQRT2 : 1.0) * (b ? M_SQRT2 : 1.0) * even;
+        }
+    std::vector<double> values, vectors;
+    symmetric_eigen(s, n, values, vectors);
+    std::vector<int> order(n);
+    for (int k = 0; k < n; ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](int i, int j) { return std::abs(values[i]) > std::abs(values[j]); });
+
     std::vector<double> residual(kernel.taps.begin(), kernel.taps.end());
     double largest = 0;
     for (double v : residual) largest = std::max(largest, std::abs(v));
-    const int cheaper_terms = kernel.radius;  // k terms cost less than the direct sum: 2 (2r+1) k < (2r+1)^2
+    const int cheaper_terms = r;  // k terms cost less than the direct sum: 2 (2r+1) k < (2r+1)^2
     for (int term = 0; term <= cheaper_terms; ++term) {
         double worst = 0;
         for (double v : residual) worst = std::max(worst, std::abs(v));
@@ -140,42 +195,15 @@ void make_separable(ScatterKernel& kernel, double tolerance, int max_terms) {
             return;
         }
         if (term == cheaper_terms) break;
-        // Start from the residual's strongest column; iterate e <- R e / |R e|.
-        int column = 0;
-        double best = -1;
-        for (int j = 0; j < side; ++j) {
-            double norm = 0;
-            for (int i = 0; i < side; ++i) norm += residual[i * side + j] * residual[i * side + j];
-            if (norm > best) best = norm, column = j;
-        }
-        std::vector<double> e(side), next(side);
-        for (int i = 0; i < side; ++i) e[i] = residual[i * side + column];
-        double eigenvalue = 0;
-        for (int iteration = 0; iteration < 500; ++iteration) {
-            double norm = 0;
-            for (double v : e) norm += v * v;
-            norm = std::sqrt(norm);
-            if (!(norm > 0)) break;
-            for (double& v : e) v /= norm;
-            for (int i = 0; i < side; ++i) next[i] = dot(&residual[size_t(i) * side], e.data(), side);
-            double rayleigh = 0, change = 0;
-            for (int i = 0; i < side; ++i) rayleigh += e[i] * next[i];
-            for (int i = 0; i < side; ++i) change = std::max(change, std::abs(next[i] - rayleigh * e[i]));
-            eigenvalue = rayleigh;
-            e = next;
-            for (double& v : e) v /= (rayleigh != 0 ? rayleigh : 1.0);
-            if (change <= 1e-12 * std::abs(rayleigh)) break;
-        }
-        double norm = 0;
-        for (double v : e) norm += v * v;
-        norm = std::sqrt(norm);
-        for (double& v : e) v /= norm;
+        const int k = order[term];
+        const double scale = std::sqrt(std::abs(values[k]));
         std::vector<float> scaled(side);
-        for (int i = 0; i < side; ++i) scaled[i] = float(e[i] * std::sqrt(std::abs(eigenvalue)));
-        float sign = eigenvalue < 0 ? -1.0f : 1.0f;
+        for (int b = 0; b < n; ++b)
+            scaled[r + b] = scaled[r - b] = float(vectors[size_t(b) * n + k] / (b ? M_SQRT2 : 1.0) * scale);
+        const float sign = values[k] < 0 ? -1.0f : 1.0f;
         // Deflate with the float term, so the residual measures what the convolution uses.
         for (int i = 0; i < side; ++i)
-            for (int j = 0; j < side; ++j) residual[i * side + j] -= double(sign) * scaled[i] * scaled[j];
+            for (int j = 0; j < side; ++j) residual[size_t(i) * side + j] -= double(sign) * scaled[i] * scaled[j];
         kernel.separable.push_back(scaled);
         kernel.separable_sign.push_back(sign);
     }
