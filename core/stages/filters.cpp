@@ -39,11 +39,13 @@ using simd::store;
 using Vec = simd::Float8;
 constexpr int kLanes = 8, kVecs = 8, kBlock = kLanes * kVecs;
 
-// out[x] += sum_k taps[k] row_of(k)[x] for x in [0, width). Symmetric taps (taps[k] ==
+// out[x] (+)= sum_k taps[k] row_of(k)[x] for x in [0, width): added to out when
+// `accumulate`, else summed from 0 in registers (the same additions, without a pass that
+// clears out first). Symmetric taps (taps[k] ==
 // taps[n-1-k], as every filter here has) are folded: the two inputs a tap shares are added
 // before the one multiply, which saves a quarter of the arithmetic.
-template <typename RowOf>
-__attribute__((always_inline)) inline void add_tap_sums(const std::vector<float>& taps, int width, float* __restrict out, RowOf row_of) {
+template <bool accumulate, typename RowOf>
+__attribute__((always_inline)) inline void tap_sums(const std::vector<float>& taps, int width, float* __restrict out, RowOf row_of) {
     const int n = int(taps.size());
     const float* tap = taps.data();
     const bool symmetric = std::equal(tap, tap + n / 2, taps.rbegin());
@@ -51,7 +53,11 @@ __attribute__((always_inline)) inline void add_tap_sums(const std::vector<float>
     int x = 0;
     for (; x + kBlock <= width; x += kBlock) {
         Vec sum[kVecs];
-        for (int v = 0; v < kVecs; ++v) load(sum[v], out + x + v * kLanes);
+        for (int v = 0; v < kVecs; ++v)
+            if (accumulate)
+                load(sum[v], out + x + v * kLanes);
+            else
+                sum[v] = Vec{};
         for (int k = 0; k < pairs; ++k) {
             const Vec t = Vec{} + tap[k];
             const float *row = row_of(k) + x, *mirror = row_of(n - 1 - k) + x;
@@ -74,7 +80,7 @@ __attribute__((always_inline)) inline void add_tap_sums(const std::vector<float>
         for (int v = 0; v < kVecs; ++v) store(out + x + v * kLanes, sum[v]);
     }
     for (; x < width; ++x) {
-        float sum = out[x];
+        float sum = accumulate ? out[x] : 0.0f;
         for (int k = 0; k < pairs; ++k) sum += tap[k] * (row_of(k)[x] + row_of(n - 1 - k)[x]);
         for (int k = pairs; k < n - pairs; ++k) sum += tap[k] * row_of(k)[x];
         out[x] = sum;
@@ -85,14 +91,19 @@ __attribute__((always_inline)) inline void add_tap_sums(const std::vector<float>
 
 __attribute__((target_clones("avx2", "default"))) void convolve_row(const float* in, const std::vector<float>& taps,
                                                                      int width, float* out) {
-    std::fill_n(out, width, 0.0f);
-    add_tap_sums(taps, width, out, [in](int k) { return in + k; });
+    tap_sums<false>(taps, width, out, [in](int k) { return in + k; });
+}
+
+__attribute__((target_clones("avx2", "default"))) void convolve_column(const float* const* rows,
+                                                                        const std::vector<float>& taps, int width,
+                                                                        float* out) {
+    tap_sums<false>(taps, width, out, [rows](int k) { return rows[k]; });
 }
 
 __attribute__((target_clones("avx2", "default"))) void convolve_column_add(const float* const* rows,
                                                                             const std::vector<float>& taps, int width,
                                                                             float* out) {
-    add_tap_sums(taps, width, out, [rows](int k) { return rows[k]; });
+    tap_sums<true>(taps, width, out, [rows](int k) { return rows[k]; });
 }
 
 void filter_separable(const Window& out, const SeparableFilter& filter, int row_begin, int row_end, int threads,
@@ -118,10 +129,9 @@ void filter_separable(const Window& out, const SeparableFilter& filter, int row_
                 for (int t = 0; t < terms; ++t) convolve_row(padded.data(), filter.terms[t], width, ring_row(t, next));
             }
             float* result = target ? target(y) : filtered.data();
-            std::fill_n(result, width, 0.0f);
             for (int t = 0; t < terms; ++t) {
                 for (int k = -r; k <= r; ++k) rows[k + r] = ring_row(t, std::clamp(y + k, row_begin, row_end - 1));
-                convolve_column_add(rows.data(), vertical[t], width, result);
+                (t == 0 ? convolve_column : convolve_column_add)(rows.data(), vertical[t], width, result);
             }
             if (sink) sink(y, result);
         }

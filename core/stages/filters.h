@@ -19,7 +19,8 @@ std::vector<float> pixel_integrated_gaussian(double sigma_px);
 // independent of where the row starts): the order of k, except that symmetric taps sum
 // taps[k] (in[x + k] + in[x + n-1-k]) for k < n/2 first, then the middle tap.
 void convolve_row(const float* in, const std::vector<float>& taps, int width, float* out);
-// One row of a vertical pass, added to out: out[x] += sum_k taps[k] rows[k][x].
+// One row of a vertical pass: out[x] = sum_k taps[k] rows[k][x], or added to out.
+void convolve_column(const float* const* rows, const std::vector<float>& taps, int width, float* out);
 void convolve_column_add(const float* const* rows, const std::vector<float>& taps, int width, float* out);
 
 // A sum of separable filters, sum_t sign_t (taps_t in x, then taps_t in y), all of 2r + 1

@@ -206,8 +206,9 @@ TEST_CASE("row and column convolutions sum their taps in the documented order, i
         convolve_row(in.data(), taps, width, out.data());
         std::vector<const float*> rows;
         for (int k = 0; k < 9; ++k) rows.push_back(in.data() + k);  // the same sums, as a column pass
-        std::vector<float> column(width, 0.5f);
+        std::vector<float> column(width, 0.5f), column_written(width, 0.5f);
         convolve_column_add(rows.data(), taps, width, column.data());
+        convolve_column(rows.data(), taps, width, column_written.data());
         for (int x = 0; x < width; ++x) {
             // The definition, in float from `start`: mirrored taps folded when symmetric, else in order.
             auto definition = [&](float start) {
@@ -221,6 +222,7 @@ TEST_CASE("row and column convolutions sum their taps in the documented order, i
             };
             REQUIRE(out[x] == definition(0.0f));
             REQUIRE(column[x] == definition(0.5f));
+            REQUIRE(column_written[x] == definition(0.0f));
             double exact = 0;
             for (int k = 0; k < 9; ++k) exact += double(taps[k]) * in[x + k];
             CHECK(out[x] == Approx(exact).margin(1e-5));
