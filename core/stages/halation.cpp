@@ -16,8 +16,6 @@ int floor_div(int a, int d) { return a >= 0 ? a / d : -((-a + d - 1) / d); }
 // Halation on the coarse grid: out = src + strength * blur(src) on out.window.
 void coarse_halation(const Plane& src, Plane& out, const HalationKernel& k, const Window& frame, int threads) {
     const int d = k.decimation, r = int(k.taps.size() / 2);
-    const Window coarse_frame{floor_div(frame.x0, d), floor_div(frame.y0, d), floor_div(frame.x1 - 1, d) + 1,
-                              floor_div(frame.y1 - 1, d) + 1};
     // Fine pixel x sits at u = (x + 0.5)/d - 0.5 = (2x + 1 - d)/2d on the coarse grid,
     // between blocks floor(u) and floor(u) + 1 (exact in integers).
     auto coarse_range = [&](int lo, int hi) {
@@ -25,43 +23,48 @@ void coarse_halation(const Plane& src, Plane& out, const HalationKernel& k, cons
     };
     auto [cx0, cx1] = coarse_range(out.window.x0, out.window.x1);
     auto [cy0, cy1] = coarse_range(out.window.y0, out.window.y1);
-    const Window blurred_window = Window{cx0, cy0, cx1, cy1}.intersected(coarse_frame);
-    const Window means_window = blurred_window.grown(r).intersected(coarse_frame);
+    const Window blurred_window{cx0, cy0, cx1, cy1};
+    const Window means_window = blurred_window.grown(r);
     Plane means(means_window), blurred(blurred_window);
-    // Block means over the block's pixels inside the frame: its rows summed column by column
-    // (whole rows, in vector registers), then its columns.
+    // Block means of the image extended past the frame by its edge pixels, as the Gaussian on
+    // the pixels reads it (blocks past the frame too, so that the coarse Gaussian clamps
+    // nothing of its own): each block's rows summed column by column (whole rows, in vector
+    // registers), then its columns.
+    const int px_begin = means_window.x0 * d, px_end = means_window.x1 * d;
+    const int inside0 = std::clamp(px_begin, frame.x0, frame.x1), inside1 = std::clamp(px_end, frame.x0, frame.x1);
     parallel_for(means_window.y0, means_window.y1, threads, [&](int y_begin, int y_end) {
-        const int px_begin = std::max(means_window.x0 * d, frame.x0), px_end = std::min(means_window.x1 * d, frame.x1);
         std::vector<float> column_sums(size_t(px_end - px_begin));
+        float* sums = column_sums.data() + (inside0 - px_begin);
         for (int by = y_begin; by < y_end; ++by) {
-            const int py0 = std::max(by * d, frame.y0), py1 = std::min(by * d + d, frame.y1);
-            const float* first = src.row(py0) + (px_begin - src.window.x0);
-            std::copy_n(first, column_sums.size(), column_sums.begin());
-            for (int y = py0 + 1; y < py1; ++y) {
-                const float* in = src.row(y) + (px_begin - src.window.x0);
-                for (size_t i = 0; i < column_sums.size(); ++i) column_sums[i] += in[i];
+            for (int k = 0; k < d; ++k) {
+                const float* in = src.row(std::clamp(by * d + k, frame.y0, frame.y1 - 1)) + (inside0 - src.window.x0);
+                if (k == 0)
+                    std::copy(in, in + (inside1 - inside0), sums);
+                else
+                    for (int i = 0; i < inside1 - inside0; ++i) sums[i] += in[i];
             }
+            // The columns past the frame's edges are its edge columns.
+            std::fill(column_sums.begin(), column_sums.begin() + (inside0 - px_begin), sums[0]);
+            std::fill(column_sums.begin() + (inside1 - px_begin), column_sums.end(), sums[inside1 - 1 - inside0]);
             for (int bx = means_window.x0; bx < means_window.x1; ++bx) {
-                const int px0 = std::max(bx * d, frame.x0), px1 = std::min(bx * d + d, frame.x1);
                 float sum = 0;
-                for (int x = px0; x < px1; ++x) sum += column_sums[size_t(x - px_begin)];
-                means.at(bx, by) = sum / float((py1 - py0) * (px1 - px0));
+                for (int x = bx * d; x < bx * d + d; ++x) sum += column_sums[size_t(x - px_begin)];
+                means.at(bx, by) = sum / float(d * d);
             }
         }
     });
-    convolve_separable(means, blurred, k.taps, coarse_frame, threads);
-    // Bilinear interpolation at each fine pixel's centre, clamped to the coarse frame: first
+    convolve_separable(means, blurred, k.taps, means_window, threads);
+    // Bilinear interpolation at each fine pixel's centre: first
     // along x, once per coarse row (the columns' blocks and weights are the same on every
     // row), then along y between the two rows a fine row falls between.
-    auto clamp_coarse = [&](int v, int lo, int hi) { return std::clamp(v, lo, hi - 1); };
     const int width = out.window.width();
     std::vector<int> column0(width), column1(width);
     std::vector<float> tx(width);
     for (int x = out.window.x0; x < out.window.x1; ++x) {
         const int i = floor_div(2 * x + 1 - d, 2 * d), c = x - out.window.x0;
         tx[c] = float(2 * x + 1 - d - 2 * d * i) / float(2 * d);
-        column0[c] = clamp_coarse(i, coarse_frame.x0, coarse_frame.x1) - blurred_window.x0;
-        column1[c] = clamp_coarse(i + 1, coarse_frame.x0, coarse_frame.x1) - blurred_window.x0;
+        column0[c] = i - blurred_window.x0;
+        column1[c] = i + 1 - blurred_window.x0;
     }
     Plane across = Plane::unset(Window{out.window.x0, blurred_window.y0, out.window.x1, blurred_window.y1});
     parallel_for(blurred_window.y0, blurred_window.y1, threads, [&](int y_begin, int y_end) {
@@ -76,8 +79,8 @@ void coarse_halation(const Plane& src, Plane& out, const HalationKernel& k, cons
         for (int y = y_begin; y < y_end; ++y) {
             const int j = floor_div(2 * y + 1 - d, 2 * d);
             const float ty = float(2 * y + 1 - d - 2 * d * j) / float(2 * d);
-            const float* top = across.row(clamp_coarse(j, coarse_frame.y0, coarse_frame.y1));
-            const float* bottom = across.row(clamp_coarse(j + 1, coarse_frame.y0, coarse_frame.y1));
+            const float* top = across.row(j);
+            const float* bottom = across.row(j + 1);
             const float* in = src.row(y) + (out.window.x0 - src.window.x0);
             float* o = out.row(y);
             for (int c = 0; c < width; ++c) o[c] = in[c] + strength * (top[c] + ty * (bottom[c] - top[c]));

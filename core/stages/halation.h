@@ -18,7 +18,8 @@ struct HalationKernel {
     int radius = 0;           // the halo in pixels: what a pixel's result reads around it
     std::vector<float> taps;  // 1D Gaussian, integrated over each pixel, unit sum
     // Fast tiers: the Gaussian is applied on a grid this many times coarser (blocks aligned
-    // to the frame's origin, so every window agrees): block means, the Gaussian with its
+    // to the frame's origin, so every window agrees): block means of the image extended past
+    // the frame by its edge pixels (as the exact filter reads it), the Gaussian with its
     // variance reduced by the blocks' and the interpolation's (d^2/12 + d^2/6), then
     // bilinear interpolation back to the pixels. `taps` are then on the coarse grid.
     int decimation = 1;

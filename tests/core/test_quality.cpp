@@ -164,12 +164,14 @@ TEST_CASE("halation on a coarser grid follows the exact Gaussian and any window 
     Plane light(frame);
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> u(0, 1);
-    // Highlights on a smooth ground. (Near the frame's edges the two differ by design: the
-    // exact filter repeats the edge pixel outwards, the coarse one the edge block's mean.)
+    // Highlights on a smooth ground, and bright lines along the frame's left and top edges,
+    // whose light both filters repeat outwards (the coarse one from block means of the image
+    // extended by its edge pixels).
     for (int y = 0; y < 150; ++y)
         for (int x = 0; x < 200; ++x) {
             bool inside = x > 50 && x < 150 && y > 40 && y < 110;
             light.at(x, y) = inside && u(rng) < 0.01f ? 50.0f : float(0.5 + 0.3 * std::sin(x / 17.0) * std::cos(y / 23.0));
+            if (x == 0 || y == 0) light.at(x, y) = 20.0f;
         }
     const double strength = 0.5, radius_um = 150, pitch_um = 6.0;     // sigma 25 px
     HalationKernel exact = design_halation(strength, radius_um, pitch_um, 1);
