@@ -39,6 +39,13 @@ std::string host_name() {
 
 bool process_exists(long pid) { return kill(pid_t(pid), 0) == 0 || errno == EPERM; }
 
+// Held by commits and, from before the interrupt hook runs until exit, by the waiting
+// thread; recursive, since the hook commits its own file.
+std::recursive_mutex& commit_mutex() {
+    static std::recursive_mutex m;
+    return m;
+}
+
 // The interrupt hook, and a lock held while it is set or runs.
 std::mutex& hook_mutex() {
     static std::mutex m;
@@ -59,6 +66,8 @@ void install_interrupt_cleanup() {
     std::thread([] {
         int signal_number = 0;
         if (sigwait(&signals, &signal_number) != 0) return;
+        // No commit from here on: one in progress finishes (its output and its record) first.
+        commit_mutex().lock();
         // The hook first, before the registry is held (it may write a file through a
         // TempFile); its lock is held until exit, so its owner cannot clear it meanwhile.
         hook_mutex().lock();
@@ -105,11 +114,13 @@ bool TempFile::create(const std::function<bool()>& create_file) {
     return create_file();
 }
 
-void TempFile::commit() {
+void TempFile::commit(const std::function<void()>& committed) {
+    std::lock_guard<std::recursive_mutex> lock(commit_mutex());
     std::error_code ec;
     fs::rename(temp_, target_, ec);
     if (ec) throw UserError("cannot move the finished output to '" + target_.string() + "': " + ec.message());
     committed_ = true;
+    if (committed) committed();
 }
 
 void write_text_atomically(const std::string& path, const std::string& text) {

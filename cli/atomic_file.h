@@ -46,8 +46,11 @@ public:
     // cannot run, and returns its result: a file created after the cleanup swept the
     // registry, but before the process exited, would outlive it.
     bool create(const std::function<bool()>& create_file);
-    // Renames the temporary over the target. Throws UserError if that fails.
-    void commit();
+    // Renames the temporary over the target, then runs `committed` (what records the output
+    // as finished), both before or both after an interrupt's hook: the hook (the develop
+    // command's --log) never sees a finished output unrecorded. Throws UserError if the
+    // rename fails.
+    void commit(const std::function<void()>& committed = {});
 
 private:
     std::filesystem::path target_, temp_;

@@ -74,8 +74,10 @@ size_t count_non_finite(const Image& image) {
     return size_t(std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
 }
 
+// Develops and writes one frame; its report goes to `progress` as its output takes its
+// name (so a run interrupted then logs every finished output).
 void develop_frame(const DevelopOptions& o, PlanCache& plans, const FrameJob& job, int threads, bool print_plan,
-                   FrameReport& report) {
+                   FrameReport& report, Progress& progress) {
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_image(job.input);
     report.read_seconds = seconds_since(start);
@@ -101,12 +103,15 @@ void develop_frame(const DevelopOptions& o, PlanCache& plans, const FrameJob& jo
     report.develop_seconds = seconds_since(start);
 
     start = std::chrono::steady_clock::now();
-    write_image(job.output, out, in.spec, o.run.in_place ? "" : job.input, o.write);
-    report.write_seconds = seconds_since(start);
+    write_image(job.output, out, in.spec, o.run.in_place ? "" : job.input, o.write, [&] {
+        report.write_seconds = seconds_since(start);
+        progress.add(report);
+    });
 }
 
-FrameReport process_frame(const DevelopOptions& o, PlanCache& plans, const FrameJob& job, int threads,
-                          bool print_plan) {
+// One frame, its report added to `progress`; returns its status.
+FrameReport::Status process_frame(const DevelopOptions& o, PlanCache& plans, const FrameJob& job, int threads,
+                                  bool print_plan, Progress& progress) {
     FrameReport report;
     report.frame = job.frame;
     report.input = job.input;
@@ -118,13 +123,15 @@ FrameReport process_frame(const DevelopOptions& o, PlanCache& plans, const Frame
         if (!fs::exists(job.input)) report.warnings.push_back("input '" + job.input + "' does not exist");
     } else {
         try {
-            develop_frame(o, plans, job, threads, print_plan, report);
+            develop_frame(o, plans, job, threads, print_plan, report, progress);
+            return report.status;  // added as its output took its name
         } catch (const std::exception& e) {
             report.status = FrameReport::Status::failed;
             report.error = e.what();
         }
     }
-    return report;
+    progress.add(report);
+    return report.status;
 }
 
 // Frames run in parallel, each with its share of the threads: whole frames scale better
@@ -144,9 +151,9 @@ void run_frames(const DevelopOptions& o, const std::vector<FrameJob>& jobs, int 
     std::atomic<bool> stop{false};
     auto work = [&] {
         for (size_t i = next++; i < jobs.size() && !stop; i = next++) {
-            FrameReport report = process_frame(o, plans, jobs[i], threads_per_frame, o.look.verbose && i == 0);
-            if (report.status == FrameReport::Status::failed && !o.run.skip_bad_frames) stop = true;
-            progress.add(std::move(report));
+            const FrameReport::Status status =
+                process_frame(o, plans, jobs[i], threads_per_frame, o.look.verbose && i == 0, progress);
+            if (status == FrameReport::Status::failed && !o.run.skip_bad_frames) stop = true;
         }
     };
     std::vector<std::thread> pool;

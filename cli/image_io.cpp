@@ -84,7 +84,8 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
 }  // namespace
 
 void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
-                 const std::string& protected_input, const WriteOptions& options) {
+                 const std::string& protected_input, const WriteOptions& options,
+                 const std::function<void()>& committed) {
     if (!protected_input.empty() && same_file(path, protected_input))
         throw UserError("refusing to overwrite the input '" + path + "' with the output");
     OIIO::ImageSpec spec = output_spec(image, like, path, options);
@@ -95,7 +96,7 @@ void write_image(const std::string& path, const Image& image, const OIIO::ImageS
     if (!temp.create([&] { return out->open(temp.path().string(), spec); }) ||
         !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
         throw UserError("cannot write '" + path + "': " + out->geterror());
-    temp.commit();
+    temp.commit(committed);
 }
 
 }  // namespace darkroom::cli

@@ -4,6 +4,7 @@
 #include <OpenImageIO/imageio.h>
 #include <optional>
 #include <stdexcept>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -37,10 +38,12 @@ struct WriteOptions {
 const std::vector<std::string>& output_data_types();
 
 // Writes through a TempFile (cli/atomic_file.h): a failed or interrupted write never leaves
-// a partial file. Refuses to overwrite `protected_input` (the same file under any name). `image.window` is relative to the
-// data window of `like`, whose attributes, display window, channel names and alpha channel
-// the output keeps (the first three channels are named R, G, B).
+// a partial file; `committed` runs as the finished file takes its name (TempFile::commit).
+// Refuses to overwrite `protected_input` (the same file under any name). `image.window` is
+// relative to the data window of `like`, whose attributes, display window, channel names
+// and alpha channel the output keeps (the first three channels are named R, G, B).
 void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
-                 const std::string& protected_input = "", const WriteOptions& options = {});
+                 const std::string& protected_input = "", const WriteOptions& options = {},
+                 const std::function<void()>& committed = {});
 
 }  // namespace darkroom::cli
