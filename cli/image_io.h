@@ -2,9 +2,9 @@
 #pragma once
 
 #include <OpenImageIO/imageio.h>
+#include <functional>
 #include <optional>
 #include <stdexcept>
-#include <functional>
 #include <string>
 #include <vector>
 

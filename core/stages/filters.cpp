@@ -41,9 +41,9 @@ constexpr int kLanes = 8, kVecs = 8, kBlock = kLanes * kVecs;
 
 // out[x] (+)= sum_k taps[k] row_of(k)[x] for x in [0, width): added to out when
 // `accumulate`, else summed from 0 in registers (the same additions, without a pass that
-// clears out first). Symmetric taps (taps[k] ==
-// taps[n-1-k], as every filter here has) are folded: the two inputs a tap shares are added
-// before the one multiply, which saves a quarter of the arithmetic.
+// clears out first). Symmetric taps (taps[k] == taps[n-1-k], as every filter here has) are
+// folded: the two inputs a tap shares are added before the one multiply, which saves a
+// quarter of the arithmetic.
 template <bool accumulate, typename RowOf>
 __attribute__((always_inline)) inline void tap_sums(const std::vector<float>& taps, int width, float* __restrict out, RowOf row_of) {
     const int n = int(taps.size());

@@ -170,12 +170,13 @@ void symmetric_eigen(std::vector<double>& a, int n, std::vector<double>& values,
 void make_separable(ScatterKernel& kernel, double tolerance, int max_terms) {
     const int r = kernel.radius, side = 2 * r + 1, n = r + 1;
     auto tap = [&](int x, int y) { return double(kernel.taps[size_t(y + r) * side + (x + r)]); };
+    auto d = [](int b) { return b ? M_SQRT2 : 1.0; };  // component b's scale, d_b above
     std::vector<double> s(size_t(n) * n);
     for (int a = 0; a < n; ++a)
         for (int b = 0; b < n; ++b) {
             const double even = (tap(a, b) + tap(-a, b) + tap(a, -b) + tap(-a, -b) + tap(b, a) + tap(-b, a) + tap(b, -a) +
                                  tap(-b, -a)) / 8;
-            s[size_t(a) * n + b] = (a ? M_SQRT2 : 1.0) * (b ? M_SQRT2 : 1.0) * even;
+            s[size_t(a) * n + b] = d(a) * d(b) * even;
         }
     std::vector<double> values, vectors;
     symmetric_eigen(s, n, values, vectors);
@@ -199,7 +200,7 @@ void make_separable(ScatterKernel& kernel, double tolerance, int max_terms) {
         const double scale = std::sqrt(std::abs(values[k]));
         std::vector<float> scaled(side);
         for (int b = 0; b < n; ++b)
-            scaled[r + b] = scaled[r - b] = float(vectors[size_t(b) * n + k] / (b ? M_SQRT2 : 1.0) * scale);
+            scaled[r + b] = scaled[r - b] = float(vectors[size_t(b) * n + k] / d(b) * scale);
         const float sign = values[k] < 0 ? -1.0f : 1.0f;
         // Deflate with the float term, so the residual measures what the convolution uses.
         for (int i = 0; i < side; ++i)
