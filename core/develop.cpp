@@ -47,9 +47,9 @@ std::string fmt(double v, int precision = 4) {
     return s.str();
 }
 
-// The input sanitising and exposure below, on the lanes of a double vector D (one lane or
-// four, core/simd.h): one piece of code for the vector blocks and the scalar tails, cloned
-// for AVX2 with the same double operations, so every machine gets the same exposures.
+// The input sanitising and exposure below, on the lanes of a double vector D (any number,
+// core/simd.h): one piece of code for the vector blocks and the scalar tails, so every
+// machine gets the same exposures.
 
 // NaN is 0; the rest is held within +-kMaxInput.
 template <typename D>
@@ -86,20 +86,38 @@ __attribute__((always_inline)) inline void sanitized_lanes(const float* first, i
     simd::store(out + x, v);
 }
 
-// One channel of a row of interleaved pixels, sanitised.
-__attribute__((target_clones("avx2", "default"))) void sanitized_channel(const float* first, int stride, int width,
-                                                                          double* out) {
-    int x = 0;
-    for (; x + 4 <= width; x += 4) sanitized_lanes<simd::Double4>(first, stride, x, out);
-    for (; x < width; ++x) sanitized_lanes<simd::Double1>(first, stride, x, out);
+// A row in vectors of half the float lanes' doubles, then one at a time:
+// one channel of interleaved pixels, sanitised,
+struct SanitizedChannel {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* first, int stride, int width, double* out) {
+        constexpr int doubles = lanes / 2;
+        int x = 0;
+        for (; x + doubles <= width; x += doubles)
+            sanitized_lanes<typename simd::Lanes<doubles>::D>(first, stride, x, out);
+        for (; x < width; ++x) sanitized_lanes<simd::Double1>(first, stride, x, out);
+    }
+};
+
+// and one layer's exposure (exposure_lanes).
+struct ExposureRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const double* const* rgb, const double* w, double scale, int width,
+                                                   float* h) {
+        constexpr int doubles = lanes / 2;
+        int x = 0;
+        for (; x + doubles <= width; x += doubles)
+            exposure_lanes<typename simd::Lanes<doubles>::D, typename simd::Lanes<doubles>::F>(rgb, w, scale, x, h);
+        for (; x < width; ++x) exposure_lanes<simd::Double1, simd::Float1>(rgb, w, scale, x, h);
+    }
+};
+
+void sanitized_channel(const float* first, int stride, int width, double* out) {
+    simd::dispatch<SanitizedChannel>(first, stride, width, out);
 }
 
-// One layer's exposure row (exposure_lanes).
-__attribute__((target_clones("avx2", "default"))) void exposure_row(const double* const* rgb, const double* w,
-                                                                     double scale, int width, float* h) {
-    int x = 0;
-    for (; x + 4 <= width; x += 4) exposure_lanes<simd::Double4, simd::Float4>(rgb, w, scale, x, h);
-    for (; x < width; ++x) exposure_lanes<simd::Double1, simd::Float1>(rgb, w, scale, x, h);
+void exposure_row(const double* const* rgb, const double* w, double scale, int width, float* h) {
+    simd::dispatch<ExposureRow>(rgb, w, scale, width, h);
 }
 
 // The input channel that holds colour channel c (R, G, B): grey input (one channel, or grey

@@ -41,22 +41,36 @@ const float* normal_quantile_table() {
     return table.data();
 }
 
-// The hashes, eight at a time (GCC vector types; AVX2 where the processor has it).
-__attribute__((target_clones("avx2", "default"))) void quantile_normal_run(uint32_t row_hash, int x0, int n,
-                                                                            float* out) {
-    constexpr int kLanes = 8;
-    const float* table = normal_quantile_table();
-    const simd::Uint8 lane{0, 1, 2, 3, 4, 5, 6, 7};
-    int i = 0;
-    for (; i + kLanes <= n; i += kLanes) {
-        simd::Uint8 h = uint32_t(x0 + i) + lane;
-        mix32_in_place(h);
-        h ^= row_hash;
-        mix32_in_place(h);
-        const simd::Uint8 index = h >> 16;
-        for (int k = 0; k < kLanes; ++k) out[i + k] = table[index[k]];
+namespace {
+
+// The hashes in vectors of `lanes`, then one at a time; the quantiles looked up per lane
+// (the indices through memory: a scalar load of each is cheaper than extracting it).
+struct QuantileNormalRun {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(uint32_t row_hash, int x0, int n, float* out) {
+        using U = typename simd::Lanes<lanes>::U;
+        const float* table = normal_quantile_table();
+        U lane;
+        for (int k = 0; k < lanes; ++k) lane[k] = uint32_t(k);
+        int i = 0;
+        for (; i + lanes <= n; i += lanes) {
+            U h = uint32_t(x0 + i) + lane;
+            mix32_in_place(h);
+            h ^= row_hash;
+            mix32_in_place(h);
+            uint32_t index[lanes];
+            simd::store(index, h >> 16);
+            asm("" : "+m"(index));
+            for (int k = 0; k < lanes; ++k) out[i + k] = table[index[k]];
+        }
+        for (; i < n; ++i) out[i] = table[mix32(row_hash ^ mix32(uint32_t(x0 + i))) >> 16];
     }
-    for (; i < n; ++i) out[i] = table[mix32(row_hash ^ mix32(uint32_t(x0 + i))) >> 16];
+};
+
+}  // namespace
+
+void quantile_normal_run(uint32_t row_hash, int x0, int n, float* out) {
+    simd::dispatch<QuantileNormalRun>(row_hash, x0, n, out);
 }
 
 }  // namespace darkroom

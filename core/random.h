@@ -51,7 +51,7 @@ inline float standard_normal(const NoiseKey& key, int x, int y) { return (float)
 // The fast tiers' noise: a 32-bit integer hash of (key, x, y) picks one of 2^16 equally
 // likely quantiles of the standard normal (so values reach about +-4.2 sigma). The hash
 // is the murmur3 finaliser (Appleby, MurmurHash3, public domain), applied per coordinate.
-// (In place and a template, so that core/random.cpp hashes eight lanes of a vector type
+// (In place and a template, so that core/random.cpp hashes the lanes of a vector type
 // with it: a vector never passes through a call, whose ABI would differ with and without AVX.)
 template <typename U32>
 inline void mix32_in_place(U32& h) {

@@ -1,26 +1,41 @@
-// Vector types for the hot loops (GCC and clang vector extensions) and their unaligned
-// loads and stores.
+// Vector types for the hot loops (GCC and clang vector extensions), their unaligned loads
+// and stores, and the dispatch that runs each loop at the widest vectors the processor has.
 //
-// The loops that use them are cloned for AVX2 and the baseline (target_clones), never with
-// FMA, so every machine computes the same values. A vector never passes through a call by
-// value (its ABI differs with and without AVX): helpers take references and are inlined,
-// and the cloned loops are free functions (clang 14 does not clone member functions).
+// A hot loop is written once, for any lane count, as a kernel: a struct whose static
+// member template run<lanes>(args...) is always inlined. dispatch<Kernel>(args...) runs it
+// compiled for AVX-512 (16 float lanes), AVX2 (8) or the baseline (8, in SSE2 halves),
+// chosen once per process. No build uses FMA (a product and a sum round separately, and
+// the project builds with -ffp-contract=off), and every loop works lane by lane, so every
+// processor and lane count computes the same values: each kernel is tested bit for bit
+// against its one-lane definition, and whole renders against each other on every ISA the
+// test machine has (tests/core/test_simd.cpp).
+//
+// A vector never passes through a call by value (its ABI differs with and without AVX):
+// kernels take pointers and scalars, and their helpers take references and are inlined.
 #pragma once
 
 #include <cstdint>
 
 namespace darkroom::simd {
 
-using Float8 = float __attribute__((vector_size(32)));
-using Int8 = int32_t __attribute__((vector_size(32)));
-using Uint8 = uint32_t __attribute__((vector_size(32)));
-using Float4 = float __attribute__((vector_size(16)));
-using Double4 = double __attribute__((vector_size(32)));
+// The vector types of `lanes` floats (and as many int32, uint32 and double lanes).
+template <int lanes>
+struct Lanes {
+    typedef float F __attribute__((vector_size(4 * lanes)));
+    typedef int32_t I __attribute__((vector_size(4 * lanes)));
+    typedef uint32_t U __attribute__((vector_size(4 * lanes)));
+    typedef double D __attribute__((vector_size(8 * lanes)));
+};
+using Float8 = Lanes<8>::F;
+using Int8 = Lanes<8>::I;
+using Uint8 = Lanes<8>::U;
+using Float4 = Lanes<4>::F;
+using Double4 = Lanes<4>::D;
 // One lane: the scalar tails run the same lane-generic code as the vector blocks.
-using Float1 = float __attribute__((vector_size(4)));
-using Int1 = int32_t __attribute__((vector_size(4)));
-using Uint1 = uint32_t __attribute__((vector_size(4)));
-using Double1 = double __attribute__((vector_size(8)));
+using Float1 = Lanes<1>::F;
+using Int1 = Lanes<1>::I;
+using Uint1 = Lanes<1>::U;
+using Double1 = Lanes<1>::D;
 
 // v = the values at p, one vector move. (memcpy into an array of vectors was merged by GCC
 // into one copy through the stack in 16-byte halves, and the 32-byte reads that followed
@@ -35,6 +50,43 @@ template <typename T, typename V>
 __attribute__((always_inline)) inline void store(T* p, const V& v) {
     typedef V Unaligned __attribute__((aligned(alignof(T)), may_alias));
     *reinterpret_cast<Unaligned*>(p) = v;
+}
+
+// The instruction sets the kernels are compiled for, narrowest first.
+enum class Isa { baseline, avx2, avx512 };
+const char* isa_name(Isa isa);
+// The widest this processor runs (AVX-512 needs its F, BW, DQ and VL parts).
+Isa widest_isa();
+// The one dispatch uses: the widest, unless lowered by set_isa or by the environment
+// variable DARKROOM_ISA (baseline, avx2 or avx512) when the process starts, so that tests
+// and the benchmark can compare the instruction sets in one process.
+Isa isa();
+// Uses `isa`, or the widest this processor runs if that is narrower; returns the one used.
+Isa set_isa(Isa isa);
+
+// The lanes each instruction set's kernels use.
+constexpr int kAvx512Lanes = 16, kAvx2Lanes = 8, kBaselineLanes = 8;
+
+template <typename Kernel, typename... Args>
+__attribute__((target("avx512f,avx512bw,avx512dq,avx512vl"))) void run_avx512(Args... args) {
+    Kernel::template run<kAvx512Lanes>(args...);
+}
+template <typename Kernel, typename... Args>
+__attribute__((target("avx2"))) void run_avx2(Args... args) {
+    Kernel::template run<kAvx2Lanes>(args...);
+}
+template <typename Kernel, typename... Args>
+void run_baseline(Args... args) {
+    Kernel::template run<kBaselineLanes>(args...);
+}
+
+template <typename Kernel, typename... Args>
+void dispatch(Args... args) {
+    switch (isa()) {
+        case Isa::avx512: run_avx512<Kernel>(args...); return;
+        case Isa::avx2: run_avx2<Kernel>(args...); return;
+        case Isa::baseline: run_baseline<Kernel>(args...); return;
+    }
 }
 
 }  // namespace darkroom::simd

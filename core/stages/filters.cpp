@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "core/parallel.h"
 #include "core/simd.h"
@@ -27,83 +28,95 @@ std::vector<float> pixel_integrated_gaussian(double sigma_px) {
 }
 
 // The loops below produce each output value as a sum over the taps in one fixed order, in
-// blocks of 64 values held in eight vector registers while the taps go by (the output is
-// written once, and eight independent sums keep the vector units busy). Written with GCC's
-// vector types, compiled for AVX2 where the processor has it: the same multiplies and adds
-// in the same order as the baseline build, without FMA, so every machine computes the same
-// pixels.
+// blocks of eight vectors held in registers while the taps go by (the output is written
+// once, and eight independent sums keep the vector units busy), then single vectors, then
+// one value at a time: the same multiplies and adds in the same order for every value,
+// whatever the lane count (core/simd.h).
 namespace {
 
 using simd::load;
 using simd::store;
-using Vec = simd::Float8;
-constexpr int kLanes = 8, kVecs = 8, kBlock = kLanes * kVecs;
+constexpr int kVecs = 8;
 
 // out[x] (+)= sum_k taps[k] row_of(k)[x] for x in [0, width): added to out when
 // `accumulate`, else summed from 0 in registers (the same additions, without a pass that
 // clears out first). Symmetric taps (taps[k] == taps[n-1-k], as every filter here has) are
 // folded: the two inputs a tap shares are added before the one multiply, which saves a
 // quarter of the arithmetic.
-template <bool accumulate, typename RowOf>
-__attribute__((always_inline)) inline void tap_sums(const std::vector<float>& taps, int width, float* __restrict out, RowOf row_of) {
-    const int n = int(taps.size());
-    const float* tap = taps.data();
-    const bool symmetric = std::equal(tap, tap + n / 2, taps.rbegin());
-    const int pairs = symmetric ? n / 2 : 0;  // taps k and n-1-k for k < pairs; then k in [pairs, n - pairs)
-    int x = 0;
-    for (; x + kBlock <= width; x += kBlock) {
-        Vec sum[kVecs];
-        for (int v = 0; v < kVecs; ++v)
+template <int lanes, int vecs, bool accumulate, typename RowOf>
+__attribute__((always_inline)) inline int tap_blocks(const float* tap, int n, int pairs, int x, int width,
+                                                     float* __restrict out, RowOf row_of) {
+    using Vec = typename simd::Lanes<lanes>::F;
+    constexpr int block = lanes * vecs;
+    for (; x + block <= width; x += block) {
+        Vec sum[vecs];
+        for (int v = 0; v < vecs; ++v)
             if (accumulate)
-                load(sum[v], out + x + v * kLanes);
+                load(sum[v], out + x + v * lanes);
             else
                 sum[v] = Vec{};
         for (int k = 0; k < pairs; ++k) {
             const Vec t = Vec{} + tap[k];
             const float *row = row_of(k) + x, *mirror = row_of(n - 1 - k) + x;
-            for (int v = 0; v < kVecs; ++v) {
+            for (int v = 0; v < vecs; ++v) {
                 Vec in, in_mirror;
-                load(in, row + v * kLanes);
-                load(in_mirror, mirror + v * kLanes);
+                load(in, row + v * lanes);
+                load(in_mirror, mirror + v * lanes);
                 sum[v] += t * (in + in_mirror);
             }
         }
         for (int k = pairs; k < n - pairs; ++k) {
             const Vec t = Vec{} + tap[k];
             const float* row = row_of(k) + x;
-            for (int v = 0; v < kVecs; ++v) {
+            for (int v = 0; v < vecs; ++v) {
                 Vec in;
-                load(in, row + v * kLanes);
+                load(in, row + v * lanes);
                 sum[v] += t * in;
             }
         }
-        for (int v = 0; v < kVecs; ++v) store(out + x + v * kLanes, sum[v]);
+        for (int v = 0; v < vecs; ++v) store(out + x + v * lanes, sum[v]);
     }
-    for (; x < width; ++x) {
-        float sum = accumulate ? out[x] : 0.0f;
-        for (int k = 0; k < pairs; ++k) sum += tap[k] * (row_of(k)[x] + row_of(n - 1 - k)[x]);
-        for (int k = pairs; k < n - pairs; ++k) sum += tap[k] * row_of(k)[x];
-        out[x] = sum;
-    }
+    return x;
 }
+
+template <int lanes, bool accumulate, typename RowOf>
+__attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int width, float* __restrict out,
+                                                    RowOf row_of) {
+    const bool symmetric = std::equal(tap, tap + n / 2, std::reverse_iterator<const float*>(tap + n));
+    const int pairs = symmetric ? n / 2 : 0;  // taps k and n-1-k for k < pairs; then k in [pairs, n - pairs)
+    int x = tap_blocks<lanes, kVecs, accumulate>(tap, n, pairs, 0, width, out, row_of);
+    x = tap_blocks<lanes, 1, accumulate>(tap, n, pairs, x, width, out, row_of);
+    tap_blocks<1, 1, accumulate>(tap, n, pairs, x, width, out, row_of);
+}
+
+struct ConvolveRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* in, const float* taps, int n, int width, float* out) {
+        tap_sums<lanes, false>(taps, n, width, out, [in](int k) { return in + k; });
+    }
+};
+
+template <bool accumulate>
+struct ConvolveColumn {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* const* rows, const float* taps, int n, int width,
+                                                   float* out) {
+        tap_sums<lanes, accumulate>(taps, n, width, out, [rows](int k) { return rows[k]; });
+    }
+};
 
 }  // namespace
 
-__attribute__((target_clones("avx2", "default"))) void convolve_row(const float* in, const std::vector<float>& taps,
-                                                                     int width, float* out) {
-    tap_sums<false>(taps, width, out, [in](int k) { return in + k; });
+void convolve_row(const float* in, const std::vector<float>& taps, int width, float* out) {
+    simd::dispatch<ConvolveRow>(in, taps.data(), int(taps.size()), width, out);
 }
 
-__attribute__((target_clones("avx2", "default"))) void convolve_column(const float* const* rows,
-                                                                        const std::vector<float>& taps, int width,
-                                                                        float* out) {
-    tap_sums<false>(taps, width, out, [rows](int k) { return rows[k]; });
+void convolve_column(const float* const* rows, const std::vector<float>& taps, int width, float* out) {
+    simd::dispatch<ConvolveColumn<false>>(rows, taps.data(), int(taps.size()), width, out);
 }
 
-__attribute__((target_clones("avx2", "default"))) void convolve_column_add(const float* const* rows,
-                                                                            const std::vector<float>& taps, int width,
-                                                                            float* out) {
-    tap_sums<true>(taps, width, out, [rows](int k) { return rows[k]; });
+void convolve_column_add(const float* const* rows, const std::vector<float>& taps, int width, float* out) {
+    simd::dispatch<ConvolveColumn<true>>(rows, taps.data(), int(taps.size()), width, out);
 }
 
 void filter_separable(const Window& out, const SeparableFilter& filter, int row_begin, int row_end, int threads,

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <utility>
 
 #include "core/simd.h"
 
@@ -15,13 +17,10 @@
 namespace darkroom {
 
 using simd::Float1;
-using simd::Float8;
 using simd::Int1;
-using simd::Int8;
 using simd::load;
 using simd::store;
 using simd::Uint1;
-using simd::Uint8;
 
 namespace {
 
@@ -62,29 +61,61 @@ LogAxisTable::LogAxisTable(const Curve& curve, int mantissa_bits, const Function
 
 namespace {
 
+// Index j of the in-lane interleaves of two vectors of `lanes` floats (b the second's lanes,
+// counted from `lanes`), within each 128-bit block of four: the unpacks of x86's SSE.
+constexpr int unpack_low(int j, int lanes) { return j / 4 * 4 + j % 4 / 2 + (j % 2) * lanes; }        // a0 b0 a1 b1
+constexpr int unpack_high(int j, int lanes) { return j / 4 * 4 + 2 + j % 4 / 2 + (j % 2) * lanes; }   // a2 b2 a3 b3
+constexpr int pairs_low(int j, int lanes) { return j / 4 * 4 + j % 2 + (j % 4 / 2) * lanes; }         // a0 a1 b0 b1
+constexpr int pairs_high(int j, int lanes) { return j / 4 * 4 + 2 + j % 2 + (j % 4 / 2) * lanes; }    // a2 a3 b2 b3
+
+template <typename V, size_t... J>
+__attribute__((always_inline)) inline void in_lane_transpose(const V* p, V* v, std::index_sequence<J...>) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    const V ab01 = __builtin_shufflevector(p[0], p[1], unpack_low(J, lanes)...);   // a0 a1 b0 b1 per block
+    const V cd01 = __builtin_shufflevector(p[0], p[1], unpack_high(J, lanes)...);  // c0 c1 d0 d1
+    const V ab23 = __builtin_shufflevector(p[2], p[3], unpack_low(J, lanes)...);
+    const V cd23 = __builtin_shufflevector(p[2], p[3], unpack_high(J, lanes)...);
+    v[0] = __builtin_shufflevector(ab01, ab23, pairs_low(J, lanes)...);
+    v[1] = __builtin_shufflevector(ab01, ab23, pairs_high(J, lanes)...);
+    v[2] = __builtin_shufflevector(cd01, cd23, pairs_low(J, lanes)...);
+    v[3] = __builtin_shufflevector(cd01, cd23, pairs_high(J, lanes)...);
+}
+
+// Two vectors side by side.
+template <typename V, size_t... J>
+__attribute__((always_inline)) inline auto concatenate(const V& a, const V& b, std::index_sequence<J...>) {
+    return __builtin_shufflevector(a, b, int(J)...);
+}
+
 // The four values of the 16-byte node at each lane's offset (in floats) into v[0..components).
-// Eight lanes load each node whole and transpose them in registers (four nodes per 128-bit
-// half), where lane-by-lane loads would insert the values one at a time; both load the same
-// floats.
+// Vectors of eight or sixteen lanes load each node whole and transpose them in registers
+// (nodes k, k + 4, ... side by side, one per 128-bit block, then a 4x4 transpose within
+// each block), where lane-by-lane loads would insert the values one at a time; all load the
+// same floats.
 template <int components, typename V, typename I>
 __attribute__((always_inline)) inline void node_values(const float* values, const I& offset, V* v) {
     constexpr int lanes = sizeof(V) / sizeof(float);
-    if constexpr (lanes == 8) {
-        simd::Float4 n[8];
-        for (int k = 0; k < 8; ++k) load(n[k], values + offset[k]);
-        // Lanes k and k + 4 side by side: [a b c d | a b c d].
-        const V p0 = __builtin_shufflevector(n[0], n[4], 0, 1, 2, 3, 4, 5, 6, 7);
-        const V p1 = __builtin_shufflevector(n[1], n[5], 0, 1, 2, 3, 4, 5, 6, 7);
-        const V p2 = __builtin_shufflevector(n[2], n[6], 0, 1, 2, 3, 4, 5, 6, 7);
-        const V p3 = __builtin_shufflevector(n[3], n[7], 0, 1, 2, 3, 4, 5, 6, 7);
-        const V ab01 = __builtin_shufflevector(p0, p1, 0, 8, 1, 9, 4, 12, 5, 13);  // a0 a1 b0 b1 | a4 a5 b4 b5
-        const V cd01 = __builtin_shufflevector(p0, p1, 2, 10, 3, 11, 6, 14, 7, 15);
-        const V ab23 = __builtin_shufflevector(p2, p3, 0, 8, 1, 9, 4, 12, 5, 13);
-        const V cd23 = __builtin_shufflevector(p2, p3, 2, 10, 3, 11, 6, 14, 7, 15);
-        v[0] = __builtin_shufflevector(ab01, ab23, 0, 1, 8, 9, 4, 5, 12, 13);
-        v[1] = __builtin_shufflevector(ab01, ab23, 2, 3, 10, 11, 6, 7, 14, 15);
-        v[2] = __builtin_shufflevector(cd01, cd23, 0, 1, 8, 9, 4, 5, 12, 13);
-        if constexpr (components == 4) v[3] = __builtin_shufflevector(cd01, cd23, 2, 3, 10, 11, 6, 7, 14, 15);
+    if constexpr (lanes == 8 || lanes == 16) {
+        // The offsets go through memory: a scalar load of each is cheaper than extracting it
+        // from the register, which the compiler would otherwise do (the empty asm says the
+        // stored values may have changed, so they must be loaded back).
+        int32_t at[lanes];
+        store(at, offset);
+        asm("" : "+m"(at));
+        simd::Float4 n[lanes];
+        for (int k = 0; k < lanes; ++k) load(n[k], values + at[k]);
+        V p[4], t[4];
+        for (int m = 0; m < 4; ++m) {
+            const simd::Float8 low = concatenate(n[m], n[m + 4], std::make_index_sequence<8>());
+            if constexpr (lanes == 8) {
+                p[m] = low;
+            } else {
+                const simd::Float8 high = concatenate(n[m + 8], n[m + 12], std::make_index_sequence<8>());
+                p[m] = concatenate(low, high, std::make_index_sequence<16>());
+            }
+        }
+        in_lane_transpose(p, t, std::make_index_sequence<lanes>());
+        for (int c = 0; c < components; ++c) v[c] = t[c];
     } else {
         for (int c = 0; c < components; ++c)
             for (int k = 0; k < lanes; ++k) v[c][k] = values[offset[k] + c];
@@ -92,7 +123,7 @@ __attribute__((always_inline)) inline void node_values(const float* values, cons
 }
 
 // The lookup of LogAxisTable at the lanes of v: f in place, and g into *g when asked (V
-// one float or eight, U its uint32 lanes): one piece of code for vector blocks and scalar
+// any number of float lanes, U its uint32 lanes): one piece of code for vector blocks and scalar
 // tails. (No vector passes through a call by value: its ABI would differ with and without AVX.)
 template <typename V, typename U>
 __attribute__((always_inline)) inline void log_axis_lookup(const float* nodes, uint32_t first_bits,
@@ -112,6 +143,30 @@ __attribute__((always_inline)) inline void log_axis_lookup(const float* nodes, u
     if (g) *g = node[1] + t * (node[3] - node[1]);
 }
 
+// A row of lookups (g_out may be null: f only), in vectors of `lanes`, then one at a time.
+struct LogAxisRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* nodes, uint32_t first_bits, uint32_t last_bits,
+                                                   int shift, const float* in, float* out, float* g_out, int n) {
+        using V = typename simd::Lanes<lanes>::F;
+        using U = typename simd::Lanes<lanes>::U;
+        int i = 0;
+        for (; i + lanes <= n; i += lanes) {
+            V v, g{};
+            load(v, in + i);
+            log_axis_lookup<V, U>(nodes, first_bits, last_bits, shift, v, g_out ? &g : nullptr);
+            store(out + i, v);
+            if (g_out) store(g_out + i, g);
+        }
+        for (; i < n; ++i) {
+            Float1 lane{in[i]}, g{};
+            log_axis_lookup<Float1, Uint1>(nodes, first_bits, last_bits, shift, lane, g_out ? &g : nullptr);
+            out[i] = lane[0];
+            if (g_out) g_out[i] = g[0];
+        }
+    }
+};
+
 }  // namespace
 
 float LogAxisTable::operator()(float v) const {
@@ -120,39 +175,18 @@ float LogAxisTable::operator()(float v) const {
     return lane[0];
 }
 
-// The vector loops are free functions: clang 14 does not clone member functions. g_out may
-// be null (f only).
-__attribute__((target_clones("avx2", "default"))) void log_axis_row(const float* nodes, uint32_t first_bits,
-                                                                     uint32_t last_bits, int shift, const float* in,
-                                                                     float* out, float* g_out, int n) {
-    int i = 0;
-    for (; i + 8 <= n; i += 8) {
-        Float8 v, g{};
-        load(v, in + i);
-        log_axis_lookup<Float8, Uint8>(nodes, first_bits, last_bits, shift, v, g_out ? &g : nullptr);
-        store(out + i, v);
-        if (g_out) store(g_out + i, g);
-    }
-    for (; i < n; ++i) {
-        Float1 lane{in[i]}, g{};
-        log_axis_lookup<Float1, Uint1>(nodes, first_bits, last_bits, shift, lane, g_out ? &g : nullptr);
-        out[i] = lane[0];
-        if (g_out) g_out[i] = g[0];
-    }
-}
-
 void LogAxisTable::apply_row(const float* in, float* out, int n) const {
-    log_axis_row(&nodes_[0][0], first_bits_, last_bits_, shift_, in, out, nullptr, n);
+    simd::dispatch<LogAxisRow>(&nodes_[0][0], first_bits_, last_bits_, shift_, in, out, (float*)nullptr, n);
 }
 
 void LogAxisTable::apply_row(const float* in, float* f_out, float* g_out, int n) const {
-    log_axis_row(&nodes_[0][0], first_bits_, last_bits_, shift_, in, f_out, g_out, n);
+    simd::dispatch<LogAxisRow>(&nodes_[0][0], first_bits_, last_bits_, shift_, in, f_out, g_out, n);
 }
 
 namespace {
 
-// 2^x at the lanes of x, in place (V one float or eight, I its int32 lanes): one piece of
-// code for fast_exp2 and the vector blocks of fast_exp2_row.
+// 2^x at the lanes of x, in place (V any number of float lanes, I its int32 lanes): one
+// piece of code for fast_exp2 and fast_exp2_row.
 template <typename V, typename I>
 __attribute__((always_inline)) inline void exp2_in_place(V& x) {
     x = x < -126.0f ? V{} - 126.0f : x;
@@ -166,6 +200,25 @@ __attribute__((always_inline)) inline void exp2_in_place(V& x) {
     x = p * scale;
 }
 
+struct Exp2Row {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(float* values, int n) {
+        using V = typename simd::Lanes<lanes>::F;
+        int i = 0;
+        for (; i + lanes <= n; i += lanes) {
+            V x;
+            load(x, values + i);
+            exp2_in_place<V, typename simd::Lanes<lanes>::I>(x);
+            store(values + i, x);
+        }
+        for (; i < n; ++i) {
+            Float1 lane{values[i]};
+            exp2_in_place<Float1, Int1>(lane);
+            values[i] = lane[0];
+        }
+    }
+};
+
 }  // namespace
 
 float fast_exp2(float x) {
@@ -174,17 +227,7 @@ float fast_exp2(float x) {
     return lane[0];
 }
 
-// Eight values at a time (GCC vector types; AVX2 where the processor has it).
-__attribute__((target_clones("avx2", "default"))) void fast_exp2_row(float* values, int n) {
-    int i = 0;
-    for (; i + 8 <= n; i += 8) {
-        Float8 x;
-        load(x, values + i);
-        exp2_in_place<Float8, Int8>(x);
-        store(values + i, x);
-    }
-    for (; i < n; ++i) values[i] = fast_exp2(values[i]);
-}
+void fast_exp2_row(float* values, int n) { simd::dispatch<Exp2Row>(values, n); }
 
 Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f)
     : nodes_(nodes) {
@@ -207,7 +250,7 @@ Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& h
 namespace {
 
 // Tetrahedral interpolation of `values` (4 floats per node, 3 values and a pad, x fastest) at the points of
-// in[a][0 .. lanes), lanes the width of the vector type V (one float or eight): one piece
+// in[a][0 .. lanes), lanes the width of the vector type V (one float or more): one piece
 // of code for the vector blocks and the scalar tail, so both compute the same values.
 // The cell is split along its main diagonal into six tetrahedra; the one holding the point
 // is walked from corner 000 to 111 one axis at a time, largest fraction first:
@@ -234,9 +277,17 @@ __attribute__((always_inline)) inline void tetrahedral(const float* values, int 
     const int step[3] = {4, 4 * nodes, 4 * nodes * nodes};  // node offsets along x, y, z
     // The axes by their fractions: a the largest, c the smallest (ties in axis order; the
     // tetrahedra share the faces where fractions tie, so either choice gives the same value).
-    const I x_ge_y = t[0] >= t[1], x_ge_z = t[0] >= t[2], y_ge_z = t[1] >= t[2];
-    const I off_a = x_ge_y & x_ge_z ? I{} + step[0] : (y_ge_z ? I{} + step[1] : I{} + step[2]);
-    const I off_c = ~x_ge_y & ~x_ge_z ? I{} + step[0] : (y_ge_z ? I{} + step[2] : I{} + step[1]);
+    // In integer arithmetic on the fractions' bit patterns (non-negative floats order as
+    // integers): -1 where a >= b, else 0, and a choice by such a mask. (GCC does
+    // comparisons whose results select between vectors lane by lane for AVX-512.)
+    I bits[3];
+    std::memcpy(bits, t, sizeof bits);
+    auto at_least = [](const I& a, const I& b) { return ~((a - b) >> 31); };
+    auto pick = [](const I& mask, const I& a, const I& b) { return b ^ ((a ^ b) & mask); };
+    const I x_ge_y = at_least(bits[0], bits[1]), x_ge_z = at_least(bits[0], bits[2]), y_ge_z = at_least(bits[1], bits[2]);
+    const I along_x = I{} + step[0], along_y = I{} + step[1], along_z = I{} + step[2];
+    const I off_a = pick(x_ge_y & x_ge_z, along_x, pick(y_ge_z, along_y, along_z));
+    const I off_c = pick(~x_ge_y & ~x_ge_z, along_x, pick(y_ge_z, along_z, along_y));
     const V max_xy = t[0] > t[1] ? t[0] : t[1], min_xy = t[0] < t[1] ? t[0] : t[1];
     const V t_max = max_xy > t[2] ? max_xy : t[2], t_min = min_xy < t[2] ? min_xy : t[2];
     const V below_max = max_xy < t[2] ? max_xy : t[2];
@@ -254,6 +305,26 @@ __attribute__((always_inline)) inline void tetrahedral(const float* values, int 
     }
 }
 
+struct TetrahedralRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* values, int nodes, const float* lo, const float* scale,
+                                                   const float* const* in, float* const* out, int n) {
+        using V = typename simd::Lanes<lanes>::F;
+        using I = typename simd::Lanes<lanes>::I;
+        int i = 0;
+        for (; i + lanes <= n; i += lanes) {
+            const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
+            float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
+            tetrahedral<V, I>(values, nodes, lo, scale, in_rows, out_rows);
+        }
+        for (; i < n; ++i) {
+            const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
+            float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
+            tetrahedral<Float1, Int1>(values, nodes, lo, scale, in_rows, out_rows);
+        }
+    }
+};
+
 }  // namespace
 
 void Table3D::operator()(const float* in, float* out) const {
@@ -262,24 +333,8 @@ void Table3D::operator()(const float* in, float* out) const {
     tetrahedral<Float1, Int1>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows);
 }
 
-__attribute__((target_clones("avx2", "default"))) void tetrahedral_row(const float* values, int nodes, const float* lo,
-                                                                      const float* scale, const float* const* in,
-                                                                      float* const* out, int n) {
-    int i = 0;
-    for (; i + 8 <= n; i += 8) {
-        const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
-        float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
-        tetrahedral<Float8, Int8>(values, nodes, lo, scale, in_rows, out_rows);
-    }
-    for (; i < n; ++i) {
-        const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
-        float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
-        tetrahedral<Float1, Int1>(values, nodes, lo, scale, in_rows, out_rows);
-    }
-}
-
 void Table3D::apply_row(const float* const* in, float* const* out, int n) const {
-    tetrahedral_row(&values_[0][0], nodes_, lo_.data(), scale_.data(), in, out, n);
+    simd::dispatch<TetrahedralRow>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in, out, n);
 }
 
 }  // namespace darkroom

@@ -27,7 +27,7 @@ public:
     LogAxisTable() = default;
     LogAxisTable(const Curve& f_of_log10_v, int mantissa_bits, const Function& g_of_f = {});
     float operator()(float v) const;
-    // operator() of n values, eight at a time, bit for bit the same values (out may be in).
+    // operator() of n values, in vector registers, bit for bit the same values (out may be in).
     void apply_row(const float* in, float* out, int n) const;
     // f and g of n values (g 0 when the table has none), f bit for bit as above.
     void apply_row(const float* in, float* f_out, float* g_out, int n) const;
@@ -53,7 +53,7 @@ public:
     Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f);
     void operator()(const float* in, float* out) const;
     // The table at n points given as three rows (in[a][i] is axis a of point i), into three
-    // rows: operator() at each point, eight points at a time, bit for bit the same values.
+    // rows: operator() at each point, a vector of points at a time, bit for bit the same values.
     void apply_row(const float* const* in, float* const* out, int n) const;
     int nodes() const { return nodes_; }
 
