@@ -7,21 +7,17 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/develop_rows.h"
 #include "core/parallel.h"
-#include "core/simd.h"
 #include "core/spectral.h"
 
 namespace darkroom {
 
 namespace {
 
-constexpr double kMaxInput = 1e30;
 // How far past a stock's curve the fast tiers' print tables reach (grain's excursions).
 constexpr double kTableDensityMargin = 0.3;
 constexpr double kLn10 = 2.302585092994046;
-// The scan output: Cineon-style 10-bit printing-density code values (Kodak Cineon: 0.002
-// density per code value, base+fog at code 95), written as code / 1023.
-constexpr double kScanBaseCode = 95.0, kScanDensityPerCode = 0.002, kScanFullCode = 1023.0;
 
 // Adds the time from construction to destruction to a stage (when timing).
 class StageTimer {
@@ -46,83 +42,6 @@ std::string fmt(double v, int precision = 4) {
     s << v;
     return s.str();
 }
-
-// The input sanitising and exposure below, on the lanes of a double vector D (any number,
-// core/simd.h): one piece of code for the vector blocks and the scalar tails, so every
-// machine gets the same exposures.
-
-// NaN is 0; the rest is held within +-kMaxInput.
-template <typename D>
-__attribute__((always_inline)) inline void sanitize_lanes(D& v) {
-    v = v == v ? v : D{};
-    v = v < -kMaxInput ? D{} - kMaxInput : v;
-    v = kMaxInput < v ? D{} + kMaxInput : v;
-}
-
-double sanitize(float v) {
-    simd::Double1 lane{double(v)};
-    sanitize_lanes(lane);
-    return lane[0];
-}
-
-// h[x ..] = clamp((w . rgb) * scale, 0, kMaxInput); for grey input (w null) rgb[0] * scale.
-template <typename D, typename F>
-__attribute__((always_inline)) inline void exposure_lanes(const double* const* rgb, const double* w, double scale,
-                                                          int x, float* h) {
-    D c[3];
-    for (int i = 0; i < (w ? 3 : 1); ++i) simd::load(c[i], rgb[i] + x);
-    D e = (w ? w[0] * c[0] + w[1] * c[1] + w[2] * c[2] : c[0]) * scale;
-    e = e < 0.0 ? D{} : e;  // a selection, as std::clamp: signed zeros kept
-    e = kMaxInput < e ? D{} + kMaxInput : e;
-    simd::store(h + x, __builtin_convertvector(e, F));
-}
-
-// out[x ..] = the sanitised values of channel `first` of interleaved pixels `stride` floats apart.
-template <typename D>
-__attribute__((always_inline)) inline void sanitized_lanes(const float* first, int stride, int x, double* out) {
-    D v;
-    for (int k = 0; k < int(sizeof v / sizeof(double)); ++k) v[k] = first[size_t(x + k) * stride];
-    sanitize_lanes(v);
-    simd::store(out + x, v);
-}
-
-// A row in vectors of half the float lanes' doubles, then one at a time:
-// one channel of interleaved pixels, sanitised,
-struct SanitizedChannel {
-    template <int lanes>
-    __attribute__((always_inline)) static void run(const float* first, int stride, int width, double* out) {
-        constexpr int doubles = lanes / 2;
-        int x = 0;
-        for (; x + doubles <= width; x += doubles)
-            sanitized_lanes<typename simd::Lanes<doubles>::D>(first, stride, x, out);
-        for (; x < width; ++x) sanitized_lanes<simd::Double1>(first, stride, x, out);
-    }
-};
-
-// and one layer's exposure (exposure_lanes).
-struct ExposureRow {
-    template <int lanes>
-    __attribute__((always_inline)) static void run(const double* const* rgb, const double* w, double scale, int width,
-                                                   float* h) {
-        constexpr int doubles = lanes / 2;
-        int x = 0;
-        for (; x + doubles <= width; x += doubles)
-            exposure_lanes<typename simd::Lanes<doubles>::D, typename simd::Lanes<doubles>::F>(rgb, w, scale, x, h);
-        for (; x < width; ++x) exposure_lanes<simd::Double1, simd::Float1>(rgb, w, scale, x, h);
-    }
-};
-
-void sanitized_channel(const float* first, int stride, int width, double* out) {
-    simd::dispatch<SanitizedChannel>(first, stride, width, out);
-}
-
-void exposure_row(const double* const* rgb, const double* w, double scale, int width, float* h) {
-    simd::dispatch<ExposureRow>(rgb, w, scale, width, h);
-}
-
-// The input channel that holds colour channel c (R, G, B): grey input (one channel, or grey
-// and alpha) holds all three in its first.
-int colour_channel(const ConstImageView& in, int c) { return colour_channel_count(in.channels) == 3 ? c : 0; }
 
 // The stock's grain for a layer with the user's per-channel overrides (channel = layer).
 GrainSpec layer_grain(const GrainSpec& stock, const DevelopSettings& s, size_t channel) {
@@ -392,7 +311,7 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
         if (!film.grain[i] || !paper.grain[i]) continue;
         const GrainModel& film_grain = *film.grain[i];
         const GrainModel& paper_grain = *paper.grain[i];
-        const double kappa = film_grain.pixel_sigma_at_unit_density() / film_grain.sigma_per_pixel;
+        const double kappa = film_grain.field_sigma();
         const double rho = variance_kept_by_scatter(film_grain, paper.scatter[i]);
         std::vector<double> density, extra;
         for (double stops = -16; stops <= 16; stops += 0.125) {
@@ -435,20 +354,6 @@ void leave_out_paper_grain(MaterialStages& paper, const MaterialStages& film, st
         paper.halation[i].reset();
     }
     paper.curve_tables.clear();
-}
-
-// Print densities (or, through print_table_, the negative's) -> linear Rec.709 through a
-// table of log2 XYZ, for one row.
-void xyz_table_to_rgb(const Table3D& table, const float* const* d, float* const* rgb, int width) {
-    const Matrix3& m = print_xyz_to_rgb();
-    float* const* xyz = rgb;  // XYZ first, in the result rows
-    table.apply_row(d, xyz, width);
-    for (int c = 0; c < 3; ++c) fast_exp2_row(xyz[c], width);
-    for (int x = 0; x < width; ++x) {
-        const float v[3] = {xyz[0][x], xyz[1][x], xyz[2][x]};
-        for (int c = 0; c < 3; ++c)
-            rgb[c][x] = float(m[c][0]) * v[0] + float(m[c][1]) * v[1] + float(m[c][2]) * v[2];
-    }
 }
 
 }  // namespace
@@ -583,24 +488,13 @@ std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& fi
     std::vector<Plane> exposure;
     StageTimer expose_timer(times, "expose");
     const auto& weights = film_stages_.rgb_weights;
-    std::vector<double> grey_scale;  // grey input: each layer's exposure is one scale of channel 0
-    for (const auto& w : weights) {
-        exposure.push_back(Plane::unset(film_in));
-        grey_scale.push_back((w[0] + w[1] + w[2]) * film_exposure_scale_);
-    }
-    // Per row: the input's channels sanitised once, then each layer's exposure from them.
+    for (size_t l = 0; l < weights.size(); ++l) exposure.push_back(Plane::unset(film_in));
+    const FilmExposure exposer(in, weights, monochrome_input_, film_exposure_scale_);
     parallel_for(film_in.y0, film_in.y1, threads, [&](int y0, int y1) {
-        const int width = film_in.width();
-        std::vector<double> channel[3];
-        for (auto& c : channel) c.resize(size_t(width));
-        const int source[3] = {0, colour_channel(in, 1), colour_channel(in, 2)};  // grey: R = G = B
-        const double* rgb[3] = {channel[0].data(), channel[1].data(), channel[2].data()};
+        float* rows[3];
         for (int y = y0; y < y1; ++y) {
-            for (int c = 0; c < (monochrome_input_ ? 1 : 3); ++c)
-                sanitized_channel(in.at(film_in.x0, y) + source[c], in.channels, width, channel[c].data());
-            for (size_t l = 0; l < weights.size(); ++l)
-                exposure_row(rgb, monochrome_input_ ? nullptr : weights[l].data(),
-                             monochrome_input_ ? grey_scale[l] : film_exposure_scale_, width, exposure[l].row(y));
+            for (size_t l = 0; l < weights.size(); ++l) rows[l] = exposure[l].row(y);
+            exposer.row(y, film_in.x0, film_in.width(), rows);
         }
     });
     expose_timer.stop();
@@ -682,7 +576,7 @@ std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, in
         double gamma = std::max(0.05, curve(mid_grey_log_h + 0.5) - curve(mid_grey_log_h - 0.5));
         double k = kLn10 / gamma;
         // grain_field's standard deviation per pixel (sum of the 2D kernel's squares).
-        double field_sigma = grain ? grain->pixel_sigma_at_unit_density() / grain->sigma_per_pixel : 1.0;
+        double field_sigma = grain ? grain->field_sigma() : 1.0;
         parallel_for(out.y0, out.y1, threads, [&](int y0, int y1) {
             for (int y = y0; y < y1; ++y)
                 for (int x = out.x0; x < out.x1; ++x) {
@@ -719,6 +613,10 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
         throw std::invalid_argument("the input image does not cover the window and its halo");
     if (in.channels < 1 || out.channels < 3) throw std::invalid_argument("need 1+ input channels and 3+ output channels");
 
+    if (runs_in_one_pass()) {
+        run_one_pass(in, out, out_window, threads, times);
+        return;
+    }
     std::vector<Plane> result;
     if (settings_.output == OutputMode::texture) {
         result = texture(in, out_window, threads, times);
@@ -728,28 +626,18 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
     } else {
         result = develop_film(in, out_window, threads, times);
         StageTimer timer(times, "convert");
-        for (size_t l = 0; l < result.size(); ++l) {
-            double d_min = film_stages_.stock.layers[l].density_curve.y_min();
-            for (float& v : result[l].pixels) {
-                if (settings_.output == OutputMode::negative)
-                    v = float(std::pow(10.0, -double(v)));
-                else if (settings_.output == OutputMode::scan)
-                    v = float((kScanBaseCode + (double(v) - d_min) / kScanDensityPerCode) / kScanFullCode);
-            }
-        }
+        for (size_t l = 0; l < result.size(); ++l)
+            convert_row(settings_.output, film_stages_.stock.layers[l].density_curve.y_min(), result[l].pixels.data(),
+                        int(result[l].pixels.size()));
     }
 
-    // A single-layer result is written to all three channels.
     StageTimer timer(times, "write");
-    const int alpha = colour_channel_count(in.channels);  // the channel after the colour
-    const bool copy_alpha = alpha < in.channels && out.channels >= 4;
     parallel_for(out_window.y0, out_window.y1, threads, [&](int y0, int y1) {
-        for (int y = y0; y < y1; ++y)
-            for (int x = out_window.x0; x < out_window.x1; ++x) {
-                float* px = out.at(x, y);
-                for (int c = 0; c < 3; ++c) px[c] = result[std::min<size_t>(c, result.size() - 1)].at(x, y);
-                if (copy_alpha) px[3] = in.at(x, y)[alpha];
-            }
+        const float* rows[3];
+        for (int y = y0; y < y1; ++y) {
+            for (size_t l = 0; l < result.size(); ++l) rows[l] = result[l].row(y);
+            write_row(rows, result.size(), in, out, y, out_window.x0, out_window.width());
+        }
     });
 }
 
@@ -847,6 +735,8 @@ std::vector<std::string> Plan::describe() const {
             lines.push_back("convert: texture: grain, MTF and halation applied to the scene-linear input");
             break;
     }
+    lines.push_back(runs_in_one_pass() ? "run: every stage a row at a time, the frame's planes never stored"
+                                       : "run: stage after stage over whole planes");
     for (const std::string& s : skipped_) lines.push_back("skipped " + s);
     return lines;
 }

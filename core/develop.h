@@ -74,6 +74,10 @@ struct DevelopSettings {
     // false runs them with their neutral values, so tests and the benchmark can show that
     // leaving them out changes no pixel and saves their time.
     bool skip_noop_stages = true;
+    // The fast tiers run every stage a row at a time, so that the frame's planes never meet in
+    // memory (develop_one_pass.cpp); false runs them stage after stage over whole planes, as
+    // the other tiers do: the same pixels, so that tests and the benchmark can compare them.
+    bool one_pass = true;
     uint64_t seed = 0;
     int frame = 0;
     double frame_width_mm = 0.0;  // width of the film frame; 0 = the film stock's format
@@ -161,6 +165,10 @@ private:
     std::vector<Plane> print(std::vector<Plane> negative, const Window& out, int threads,
                              StageTimes* times) const;
     std::vector<Plane> texture(const ConstImageView& in, const Window& out, int threads, StageTimes* times) const;
+    // Every stage a row at a time (develop_one_pass.cpp): whether this plan can, and the run.
+    bool runs_in_one_pass() const;
+    void run_one_pass(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
+                      StageTimes* times) const;
 
     DevelopSettings settings_;
     Window frame_;

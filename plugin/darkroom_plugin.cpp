@@ -120,7 +120,7 @@ std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, cons
         << '|' << s.exposure_ev << ',' << s.print_exposure_ev << ',' << int(s.output) << ','
         << int(s.input_units) << ',' << s.grain << ',' << s.mtf << ',' << s.halation << ',' << s.seed << ','
         << s.frame_width_mm << ',' << s.print_width_mm << ',' << quality_name(s.quality) << ','
-        << s.skip_noop_stages << ',' << frame.monochrome;
+        << s.skip_noop_stages << ',' << s.one_pass << ',' << frame.monochrome;
     for (int c = 0; c < 3; ++c)
         key << ',' << s.grain_amount[c] << ',' << s.grain_size[c] << ',' << s.grain_density_exponent[c] << ','
             << s.printer_lights[c] << ',' << s.filtration_ymc[c];

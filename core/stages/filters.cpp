@@ -119,36 +119,80 @@ void convolve_column_add(const float* const* rows, const std::vector<float>& tap
     simd::dispatch<ConvolveColumn<true>>(rows, taps.data(), int(taps.size()), width, out);
 }
 
+SeparableStream::SeparableStream(int width, const std::vector<const SeparableFilter*>& filters, int row_begin,
+                                 int row_end, Source source)
+    : width_(width), radius_(0), row_begin_(row_begin), row_end_(row_end), filters_(filters),
+      source_(std::move(source)) {
+    for (const SeparableFilter* f : filters_) radius_ = std::max(radius_, f->radius());
+    slots_ = 2 * radius_ + 1;
+    // Rows are a cache line more than the width apart: at widths of a power of two, rows
+    // exactly 2^k bytes apart share the L1 cache's sets and would evict each other.
+    stride_ = size_t(width) + 16;
+    for (const SeparableFilter* f : filters_) {
+        std::vector<std::vector<float>> vertical;
+        for (size_t t = 0; t < f->terms.size(); ++t) {
+            vertical.emplace_back();
+            for (float v : f->terms[t]) vertical.back().push_back(f->signs[t] * v);
+        }
+        vertical_.push_back(std::move(vertical));
+        ring_.emplace_back(std::max<size_t>(1, f->terms.size()) * slots_ * stride_);
+        padded_.emplace_back(size_t(width) + 2 * radius_);
+        padded_rows_.push_back(padded_.back().data());
+    }
+    column_.resize(slots_);
+}
+
+float* SeparableStream::ring_row(size_t plane, int term, int y) {
+    return &ring_[plane][(size_t(term) * slots_ + ((y % slots_) + slots_) % slots_) * stride_];
+}
+
+void SeparableStream::row(int y, float* const* result) {
+    if (!started_) {
+        next_ = std::max(y - radius_, row_begin_);
+        started_ = true;
+    }
+    for (; next_ <= std::min(y + radius_, row_end_ - 1); ++next_) {
+        source_(next_, padded_rows_.data());
+        for (size_t p = 0; p < filters_.size(); ++p) {
+            const SeparableFilter& f = *filters_[p];
+            const float* in = padded_rows_[p] + (radius_ - f.radius());  // the plane's own halo
+            if (f.terms.empty()) std::copy_n(in, width_, ring_row(p, 0, next_));
+            for (size_t t = 0; t < f.terms.size(); ++t) convolve_row(in, f.terms[t], width_, ring_row(p, int(t), next_));
+        }
+    }
+    for (size_t p = 0; p < filters_.size(); ++p) {
+        const SeparableFilter& f = *filters_[p];
+        if (f.terms.empty()) {
+            std::copy_n(ring_row(p, 0, y), width_, result[p]);
+            continue;
+        }
+        const int r = f.radius();
+        for (size_t t = 0; t < f.terms.size(); ++t) {
+            for (int k = -r; k <= r; ++k) column_[k + r] = ring_row(p, int(t), std::clamp(y + k, row_begin_, row_end_ - 1));
+            (t == 0 ? convolve_column : convolve_column_add)(column_.data(), vertical_[p][t], width_, result[p]);
+        }
+    }
+}
+
 void filter_separable(const Window& out, const SeparableFilter& filter, int row_begin, int row_end, int threads,
                       const RowSource& source, const RowTarget& target, const RowSink& sink) {
-    const int terms = int(filter.terms.size()), r = int(filter.terms[0].size() / 2), width = out.width();
-    std::vector<std::vector<float>> vertical(terms);  // the sign folded into the vertical taps
-    for (int t = 0; t < terms; ++t)
-        for (float v : filter.terms[t]) vertical[t].push_back(filter.signs[t] * v);
+    const int width = out.width();
     parallel_for(out.y0, out.y1, threads, [&](int y_begin, int y_end) {
-        // The horizontal results of the 2r + 1 rows the vertical pass reads, in a ring: each
-        // row is filtered once per thread (a 4K row of 17 taps: about 300 KB per term, within
-        // L2). Rows are a cache line more than the width apart: at widths of a power of two,
-        // rows exactly 2^k bytes apart share the L1 cache's sets and would evict each other.
-        const int slots = 2 * r + 1;
-        const size_t stride = size_t(width) + 16;
-        std::vector<float> padded(width + 2 * r), filtered(width), ring(size_t(terms) * slots * stride);
-        auto ring_row = [&](int t, int y) { return &ring[(size_t(t) * slots + ((y % slots) + slots) % slots) * stride]; };
-        std::vector<const float*> rows(slots);
-        int next = std::max(y_begin - r, row_begin);  // the next row to filter horizontally
+        SeparableStream stream(width, {&filter}, row_begin, row_end,
+                               [&](int y, float* const* padded) { source(y, padded[0]); });
+        std::vector<float> filtered(width);
         for (int y = y_begin; y < y_end; ++y) {
-            for (; next <= std::min(y + r, row_end - 1); ++next) {
-                source(next, padded.data());
-                for (int t = 0; t < terms; ++t) convolve_row(padded.data(), filter.terms[t], width, ring_row(t, next));
-            }
             float* result = target ? target(y) : filtered.data();
-            for (int t = 0; t < terms; ++t) {
-                for (int k = -r; k <= r; ++k) rows[k + r] = ring_row(t, std::clamp(y + k, row_begin, row_end - 1));
-                (t == 0 ? convolve_column : convolve_column_add)(rows.data(), vertical[t], width, result);
-            }
+            stream.row(y, &result);
             if (sink) sink(y, result);
         }
     });
+}
+
+void hold_frame_edges(float* padded, int first, int last, const Window& frame) {
+    const int inside0 = std::max(first, frame.x0), inside1 = std::min(last, frame.x1);
+    if (first < inside0) std::fill(padded, padded + (inside0 - first), padded[inside0 - first]);
+    if (inside1 < last) std::fill(padded + (inside1 - first), padded + (last - first), padded[inside1 - 1 - first]);
 }
 
 void convolve_separable(const Plane& src, Plane& dst, const std::vector<float>& taps, const Window& frame,
@@ -158,20 +202,18 @@ void convolve_separable(const Plane& src, Plane& dst, const std::vector<float>& 
 
 void convolve_separable(const Plane& src, Plane& dst, const SeparableFilter& filter, const Window& frame,
                         int threads) {
-    const int r = int(filter.terms[0].size() / 2);
+    const int r = filter.radius();
     const Window& w = dst.window;
     filter_separable(
         w, filter, frame.y0, frame.y1, threads,
         [&](int y, float* padded) {
-            // The row from x = w.x0 - r, its ends held at the frame's edge pixels.
-            auto in = [&](int x) { return src.row(y) + (x - src.window.x0); };
+            // The row from x = w.x0 - r, its ends held at the frame's edge pixels. (Those are
+            // read only where the row reaches past them: a window's source plane need not hold them.)
             const int first = w.x0 - r, last = w.x1 + r;  // padded covers [first, last)
             const int inside0 = std::max(first, frame.x0), inside1 = std::min(last, frame.x1);
-            // (The edge pixels are read only where the row reaches past them: a window's source
-            // plane need not hold them.)
-            if (first < inside0) std::fill(padded, padded + (inside0 - first), *in(frame.x0));
-            std::copy(in(inside0), in(inside1), padded + (inside0 - first));
-            if (inside1 < last) std::fill(padded + (inside1 - first), padded + (last - first), *in(frame.x1 - 1));
+            const float* in = src.row(y) + (inside0 - src.window.x0);
+            std::copy(in, in + (inside1 - inside0), padded + (inside0 - first));
+            hold_frame_edges(padded, first, last, frame);
         },
         [&](int y) { return dst.row(y); }, nullptr);
 }

@@ -24,22 +24,54 @@ void convolve_column(const float* const* rows, const std::vector<float>& taps, i
 void convolve_column_add(const float* const* rows, const std::vector<float>& taps, int width, float* out);
 
 // A sum of separable filters, sum_t sign_t (taps_t in x, then taps_t in y), all of 2r + 1
-// taps, streamed row by row so that the horizontal results stay in cache (a ring of the
-// 2r + 1 rows the vertical pass reads, each row filtered once per thread):
-//   source(y, padded) writes input row y, the width + 2r values from x = out.x0 - r;
-//   target(y), when given, is where output row y of `out` is written (else a scratch row);
-//   sink(y, filtered), when given, then receives that row.
-// The vertical pass reads rows clamped to [row_begin, row_end). Each output value is summed
-// in one fixed order (terms, then taps), whatever the threads.
-using RowSource = std::function<void(int y, float* padded)>;
-using RowTarget = std::function<float*(int y)>;
-using RowSink = std::function<void(int y, const float* filtered)>;
+// taps. No terms: the identity.
 struct SeparableFilter {
     std::vector<std::vector<float>> terms;
     std::vector<float> signs;  // +1 or -1 per term
+    int radius() const { return terms.empty() ? 0 : int(terms[0].size() / 2); }
 };
+
+// Planes filtered as they stream down the rows, each by its own SeparableFilter, for one
+// thread: output rows in increasing order, each summed from the rows its vertical pass reads
+// (clamped to [row_begin, row_end)), which are filtered horizontally once each and kept in a
+// ring of 2R + 1 (R the largest radius), so that they stay in cache. source(y, padded) writes
+// each plane's input row y, the width + 2R values from R before the first output pixel. Each output value is summed
+// in one fixed order (terms, then taps), so a row is the same whatever row a stream starts at.
+class SeparableStream {
+public:
+    using Source = std::function<void(int y, float* const* padded)>;
+    SeparableStream(int width, const std::vector<const SeparableFilter*>& filters, int row_begin, int row_end,
+                    Source source);
+    // Output row y of each plane into result[plane] (width values); y never decreases.
+    void row(int y, float* const* result);
+    int radius() const { return radius_; }
+
+private:
+    float* ring_row(size_t plane, int term, int y);
+    int width_, radius_, row_begin_, row_end_, slots_;
+    size_t stride_;
+    std::vector<const SeparableFilter*> filters_;
+    std::vector<std::vector<std::vector<float>>> vertical_;  // per plane and term, the sign folded in
+    std::vector<std::vector<float>> ring_;                   // per plane: terms (or 1 for the identity) x slots rows
+    std::vector<std::vector<float>> padded_;
+    std::vector<float*> padded_rows_;
+    std::vector<const float*> column_;
+    Source source_;
+    int next_ = 0;  // the next row to filter horizontally
+    bool started_ = false;
+};
+
+// The rows of `out` filtered as above by one SeparableStream per band of rows (threads), to
+// target(y), when given, else a scratch row; sink(y, filtered), when given, then receives it.
+using RowSource = std::function<void(int y, float* padded)>;
+using RowTarget = std::function<float*(int y)>;
+using RowSink = std::function<void(int y, const float* filtered)>;
 void filter_separable(const Window& out, const SeparableFilter& filter, int row_begin, int row_end, int threads,
                       const RowSource& source, const RowTarget& target, const RowSink& sink);
+
+// A row's values beyond the frame are its edge pixels': padded holds x = first ... last - 1,
+// written where inside the frame; this fills the rest from the edge values.
+void hold_frame_edges(float* padded, int first, int last, const Window& frame);
 
 // dst = separable convolution of src with taps (x then y), frame-clamped as above.
 void convolve_separable(const Plane& src, Plane& dst, const std::vector<float>& taps, const Window& frame, int threads);

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <mutex>
 
+#include "core/parallel.h"
 #include "core/stages/filters.h"
 
 namespace darkroom {
@@ -96,11 +98,13 @@ double aperture_rms_per_unit_noise(double s_um, double d_um) {
 
 bool GrainModel::is_noop() const { return pixel_sigma_at_unit_density() < kNoOpSigma; }
 
-double GrainModel::pixel_sigma_at_unit_density() const {
+double GrainModel::field_sigma() const {
     double k2 = 0;
     for (float k : kernel) k2 += double(k) * k;
-    return sigma_per_pixel * k2;  // separable: sum over the 2D kernel of k^2 = (sum k1^2)^2
+    return k2;
 }
+
+double GrainModel::pixel_sigma_at_unit_density() const { return sigma_per_pixel * field_sigma(); }
 
 GrainModel design_grain(const GrainSpec& spec, double d_min, double pitch_um, NoiseKey key, bool fast) {
     GrainModel g;
@@ -115,23 +119,42 @@ GrainModel design_grain(const GrainSpec& spec, double d_min, double pitch_um, No
     return g;
 }
 
+GrainNoiseStream::GrainNoiseStream(const std::vector<const GrainModel*>& grains, const Window& w) : grains_(grains) {
+    int r = 0;
+    for (const GrainModel* g : grains_) {
+        filters_.push_back(SeparableFilter{{g->kernel}, {1.0f}});
+        r = std::max(r, g->radius);
+    }
+    std::vector<const SeparableFilter*> filters;
+    for (const SeparableFilter& f : filters_) filters.push_back(&f);
+    // White noise at absolute coordinates, from R before the window's first column: noise
+    // exists at every coordinate, so the vertical pass reads real rows, never clamped ones.
+    const int x0 = w.x0 - r, n = w.width() + 2 * r;
+    stream_ = std::make_unique<SeparableStream>(w.width(), filters, w.y0 - r, w.y1 + r, [this, x0, n](int y, float* const* noise) {
+        for (size_t l = 0; l < grains_.size(); ++l) {
+            const GrainModel& g = *grains_[l];
+            if (g.fast) {
+                quantile_normal_run(quantile_normal_row(g.key, y), x0, n, noise[l]);
+            } else {
+                for (int i = 0; i < n; ++i) noise[l][i] = standard_normal(g.key, x0 + i, y);
+            }
+        }
+    });
+}
+
 namespace {
 
-// The grain's filtered noise on `w`, one row at a time to sink(y, field row): white noise at
-// absolute coordinates through the grain kernel in x and y, so any window agrees.
+// The grain's filtered noise on `w`, one row at a time to sink(y, field row), by bands of rows.
 void filter_grain_noise(const GrainModel& g, const Window& w, int threads, const RowSink& sink) {
-    const int r = g.radius;
-    // Noise exists at every coordinate: the vertical pass reads real rows, never clamped ones.
-    filter_separable(
-        w, SeparableFilter{{g.kernel}, {1.0f}}, w.y0 - r, w.y1 + r, threads,
-        [&](int y, float* noise) {
-            if (g.fast) {
-                quantile_normal_run(quantile_normal_row(g.key, y), w.x0 - r, w.width() + 2 * r, noise);
-            } else {
-                for (int i = 0; i < w.width() + 2 * r; ++i) noise[i] = standard_normal(g.key, w.x0 - r + i, y);
-            }
-        },
-        nullptr, sink);
+    parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
+        GrainNoiseStream stream({&g}, w);
+        std::vector<float> noise(size_t(w.width()));
+        float* row = noise.data();
+        for (int y = y_begin; y < y_end; ++y) {
+            stream.row(y, &row);
+            sink(y, row);
+        }
+    });
 }
 
 }  // namespace
@@ -162,14 +185,18 @@ void apply_grain(Plane& density, const GrainModel& g, int threads) {
     });
 }
 
+void develop_row_with_grain(const LogAxisTable& develop, const GrainModel& g, const float* noise, int width,
+                            float* row, float* amplitude) {
+    develop.apply_row(row, row, amplitude, width);
+    for (int x = 0; x < width; ++x) row[x] = std::max(g.d_min, row[x] + amplitude[x] * noise[x]);
+}
+
 void develop_with_grain(Plane& plane, const LogAxisTable& develop, const GrainModel& g, int threads) {
     const int width = plane.window.width();
     filter_grain_noise(g, plane.window, threads, [&](int y, const float* n) {
-        float* d = plane.row(y);
         thread_local std::vector<float> amplitude;  // per worker: the row's grain amplitudes
         amplitude.resize(size_t(width));
-        develop.apply_row(d, d, amplitude.data(), width);
-        for (int x = 0; x < width; ++x) d[x] = std::max(g.d_min, d[x] + amplitude[x] * n[x]);
+        develop_row_with_grain(develop, g, n, width, plane.row(y), amplitude.data());
     });
 }
 

@@ -15,10 +15,12 @@
 // The noise is keyed on (seed, frame, layer, absolute pixel), so any window agrees.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "core/image.h"
 #include "core/random.h"
+#include "core/stages/filters.h"
 #include "core/stages/tables.h"
 #include "core/stock.h"
 
@@ -46,11 +48,29 @@ struct GrainModel {
     bool is_noop() const;
     // The standard deviation of the filtered field per pixel at net density 1.
     double pixel_sigma_at_unit_density() const;
+    // The standard deviation per pixel of unit white noise through the kernel in x and y: the
+    // sum of the 1D kernel's squares (the 2D kernel's squares sum to its square).
+    double field_sigma() const;
     // What the unit noise is scaled by at a developed density: sigma_per_pixel (D - d_min)^exponent.
     double amplitude_at(double density) const;
 };
 
 GrainModel design_grain(const GrainSpec& spec, double d_min, double pixel_pitch_um, NoiseKey key, bool fast = false);
+
+// The filtered noise of several grains down the rows of `w`, for one thread: white noise at
+// absolute pixels (quantile_normal_run where the grain is fast, else Philox and Box-Muller)
+// through each grain's kernel in x and y, so any window and any first row agree.
+class GrainNoiseStream {
+public:
+    GrainNoiseStream(const std::vector<const GrainModel*>& grains, const Window& w);
+    // Each grain's filtered noise at row y of w (y never decreasing), w's width each.
+    void row(int y, float* const* noise) { stream_->row(y, noise); }
+
+private:
+    std::vector<const GrainModel*> grains_;
+    std::vector<SeparableFilter> filters_;
+    std::unique_ptr<SeparableStream> stream_;
+};
 
 // The filtered noise field on a window: standard normal noise at absolute pixels,
 // convolved with the grain kernel. Its standard deviation per pixel is sum(kernel^2).
@@ -66,5 +86,9 @@ void apply_grain(Plane& density, const GrainModel& grain, int threads);
 // becomes densities, D = curve(H) and its amplitude from one lookup of `develop` (built with
 // the grain's amplitude_at, tables.h), then grain as apply_grain adds it.
 void develop_with_grain(Plane& plane, const LogAxisTable& develop, const GrainModel& grain, int threads);
+// One row of it: `row` (width exposures) becomes densities, with `noise` the grain's filtered
+// noise there and `amplitude` width floats of scratch.
+void develop_row_with_grain(const LogAxisTable& develop, const GrainModel& grain, const float* noise, int width,
+                            float* row, float* amplitude);
 
 }  // namespace darkroom

@@ -6,6 +6,7 @@
 // halation raises the exposure of bright areas' surroundings and of the areas themselves).
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "core/image.h"
@@ -30,6 +31,29 @@ struct HalationKernel {
 
 // strength is the stock's, already multiplied by the user's scale.
 HalationKernel design_halation(double strength, double radius_um, double pixel_pitch_um, int decimation = 1);
+
+// The fast tiers' halation of planes whose kernels have the same decimation (> 1), prepared
+// for the window `out`: the coarse grid's blurred block means, interpolated along x.
+// read(y, x_begin, x_end, rows) writes each plane's row y (within the frame) at x in
+// [x_begin, x_end), which lies within the frame; several planes read each row once.
+class CoarseHalation {
+public:
+    using Reader = std::function<void(int y, int x_begin, int x_end, float* const* rows)>;
+    CoarseHalation(const std::vector<const HalationKernel*>& kernels, const Window& out, const Window& frame,
+                   int threads, const Reader& read);
+    // out[x] = in[x] + strength * halo at (x, y), for the columns of `out` (in and out start at
+    // its first column; y one of its rows).
+    void add(size_t plane, int y, const float* in, float* out) const;
+
+private:
+    struct Interpolated {
+        float strength;
+        int decimation;
+        Plane across;  // the blurred coarse rows interpolated to out's columns
+    };
+    Window out_;
+    std::vector<Interpolated> planes_;
+};
 
 // dst = src + strength * gauss(src) on dst.window, reading src with coordinates clamped to
 // `frame`; src.window must cover (dst.window grown by the radius) intersected with frame.

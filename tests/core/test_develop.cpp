@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "core/demo_scene.h"
 #include "core/develop.h"
@@ -291,4 +292,69 @@ TEST_CASE("bad settings are rejected with the reason", "[develop]") {
     CHECK_THROWS_WITH(Plan::compile(film, &paper, s, {0, 8}), Catch::Contains("empty"));
     s.exposure_ev = NAN;
     CHECK_THROWS_WITH(Plan::compile(film, &paper, s, {8, 8}), Catch::Contains("exposure"));
+}
+
+TEST_CASE("the fast tiers' run a row at a time gives the pixels of the stage-by-stage run", "[develop][one-pass]") {
+    // Every stage at a 4K frame's pitch (grain, MTF, halation on its coarse grid), a frame
+    // narrower than the halation's halo and odd in size, RGB, RGBA and grey input, outputs,
+    // settings that leave stages out, windows and thread counts: one pass must change nothing.
+    const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    const Stock bw = test::test_film(), bw_paper = test::test_paper();
+    const int width = 203, height = 77;
+    const Image rgb = demo_scene(width, height);
+    Image rgba(width, height, 4), grey(width, height, 1);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            for (int c = 0; c < 3; ++c) rgba.at(x, y)[c] = rgb.at(x, y)[c];
+            rgba.at(x, y)[3] = float(x % 7) / 7;
+            grey.at(x, y)[0] = rgb.at(x, y)[1];
+        }
+    int one_pass_runs = 0, runs = 0;
+    auto compare = [&](const Stock& f, const Stock* p, DevelopSettings s, const Image& scene, int threads, Window w) {
+        s.frame_width_mm = f.frame_width_mm * width / 4096;
+        s.print_width_mm = p ? p->frame_width_mm * width / 4096 : 0.0;
+        FrameGeometry frame{width, height};
+        frame.monochrome = scene.channels == 1;
+        const Plan plan = Plan::compile(f, s.output == OutputMode::print ? p : nullptr, s, frame);
+        s.one_pass = false;
+        const Plan staged = Plan::compile(f, s.output == OutputMode::print ? p : nullptr, s, frame);
+        const std::vector<std::string> lines = plan.describe();
+        one_pass_runs += std::count(lines.begin(), lines.end(), "run: every stage a row at a time, the frame's planes never stored");
+        Image a(w, 4, -1.0f), b(w, 4, -1.0f);
+        ++runs;
+        plan.run(scene.view(), a.view(), threads);
+        staged.run(scene.view(), b.view(), threads);
+        INFO(quality_name(s.quality) << " output " << int(s.output) << " channels " << scene.channels << " window "
+                                     << w.x0 << "," << w.y0 << " " << w.width() << "x" << w.height() << " threads "
+                                     << threads << " halation " << s.halation << " mtf " << s.mtf << " grain " << s.grain);
+        REQUIRE(a.pixels == b.pixels);
+    };
+    const Window whole{0, 0, width, height};
+    for (Quality q : {Quality::fast, Quality::preview})
+        for (OutputMode output : {OutputMode::print, OutputMode::negative, OutputMode::density, OutputMode::scan}) {
+            DevelopSettings s;
+            s.quality = q;
+            s.output = output;
+            s.seed = 5;
+            s.frame = 2;
+            for (const Image* scene : std::vector<const Image*>{&rgb, &rgba, &grey}) compare(film, &paper, s, *scene, 2, whole);
+            for (Window w : {Window{0, 0, 31, 20}, Window{150, 60, 203, 77}, Window{90, 30, 91, 31}})
+                compare(film, &paper, s, rgb, 3, w);
+            compare(film, &paper, s, rgb, 1, whole);
+            compare(bw, &bw_paper, s, grey, 2, whole);
+            DevelopSettings off = s;
+            off.halation = 0;
+            compare(film, &paper, off, rgb, 2, whole);
+            off.mtf = false;
+            compare(film, &paper, off, rgb, 2, whole);
+            off = s;
+            off.grain = false;
+            compare(film, &paper, off, rgb, 2, whole);
+            off = s;
+            off.skip_noop_stages = false;
+            off.grain_amount = {0, 0, 0};
+            compare(film, &paper, off, rgb, 2, whole);
+        }
+    // All but the one-layer film's prints (no tables to stream: they run stage by stage).
+    CHECK(one_pass_runs == runs - 2);
 }

@@ -1,0 +1,257 @@
+// Developing with every stage a row at a time (the fast tiers, Plan::run_one_pass): each
+// thread takes a band of output rows and pulls each row of each stage through the pipeline
+// as the next stage needs it, so that a frame's planes never meet in memory: the input is
+// read once (twice where halation needs its coarse grid first) and the output written once,
+// and the rows between stages stay in cache (the separable filters' rings of rows).
+//
+// The steps are the stage-by-stage run's (develop.cpp) on the same values, in the same order
+// per pixel, so both give the same pixels bit for bit (tested); a band's first rows repeat
+// the halo it shares with the band before.
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "core/develop.h"
+#include "core/develop_rows.h"
+#include "core/parallel.h"
+#include "core/stages/filters.h"
+
+namespace darkroom {
+
+namespace {
+
+// Per thread: the time since the last mark, added to the stage the mark names (a band's
+// stages interleave row by row, nested streams inside one another); merged into StageTimes
+// as the threads' mean, so that the stages add up to about the frame's time.
+class RowClock {
+public:
+    explicit RowClock(bool on) : on_(on), last_(Clock::now()) {}
+    void mark(const char* stage) {
+        if (!on_) return;
+        const Clock::time_point now = Clock::now();
+        times_.add(stage, std::chrono::duration<double>(now - last_).count());
+        last_ = now;
+    }
+    void merge_into(StageTimes* times, int threads, std::mutex& mutex) const {
+        if (!times) return;
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const auto& [stage, seconds] : times_.seconds) times->add(stage, seconds / threads);
+    }
+
+private:
+    using Clock = std::chrono::steady_clock;
+    bool on_;
+    Clock::time_point last_;
+    StageTimes times_;
+};
+
+SeparableFilter scatter_filter(const ScatterKernel& k) {
+    return k.is_identity() ? SeparableFilter{} : SeparableFilter{k.separable, k.separable_sign};
+}
+
+// Every layer's scatter kernel can stream: separable, or none.
+bool separable_scatter(const MaterialStages& m) {
+    for (const ScatterKernel& k : m.scatter)
+        if (!k.is_identity() && k.separable.empty()) return false;
+    return true;
+}
+
+// Develops the layers' rows in place (exposures to densities), with grain where a layer has it.
+class LayerDevelop {
+public:
+    LayerDevelop(const MaterialStages& m, const Window& w) : m_(m), amplitude_(size_t(w.width())) {
+        std::vector<const GrainModel*> grains;
+        for (const auto& g : m.grain)
+            if (g) grains.push_back(&*g);
+        if (!grains.empty()) noise_stream_ = std::make_unique<GrainNoiseStream>(grains, w);
+        noise_.assign(grains.size(), std::vector<float>(size_t(w.width())));
+        for (auto& n : noise_) noise_rows_.push_back(n.data());
+    }
+    void row(int y, float* const* rows, int width, RowClock& clock) {
+        if (noise_stream_) noise_stream_->row(y, noise_rows_.data());
+        size_t g = 0;
+        for (size_t l = 0; l < m_.curve_tables.size(); ++l) {
+            if (m_.grain[l])
+                develop_row_with_grain(m_.curve_tables[l], *m_.grain[l], noise_rows_[g++], width, rows[l],
+                                       amplitude_.data());
+            else
+                m_.curve_tables[l].apply_row(rows[l], rows[l], width);
+        }
+        clock.mark(kDevelopAndGrainStage);
+    }
+
+private:
+    const MaterialStages& m_;
+    std::unique_ptr<GrainNoiseStream> noise_stream_;
+    std::vector<std::vector<float>> noise_;
+    std::vector<float*> noise_rows_;
+    std::vector<float> amplitude_;
+};
+
+// Rows of `planes` planes of a window's width.
+struct Rows {
+    Rows(size_t planes, int width) : storage(planes, std::vector<float>(size_t(width))) {
+        for (auto& r : storage) pointers.push_back(r.data());
+    }
+    std::vector<std::vector<float>> storage;
+    std::vector<float*> pointers;
+    float* const* data() { return pointers.data(); }
+};
+
+}  // namespace
+
+bool Plan::runs_in_one_pass() const {
+    if (!settings_.one_pass || settings_.output == OutputMode::texture) return false;
+    const MaterialStages& film = film_stages_;
+    if (film.curve_tables.empty() || !separable_scatter(film)) return false;  // (the tiers that tabulate curves)
+    int decimation = 0;  // the film's halation on one coarse grid
+    for (size_t l = 0; l < film.halation.size(); ++l) {
+        if (film.boolean_grain[l]) return false;
+        if (!film.halation[l]) continue;
+        if (film.halation[l]->decimation <= 1 || (decimation && film.halation[l]->decimation != decimation)) return false;
+        decimation = film.halation[l]->decimation;
+    }
+    if (!print_) return true;
+    if (!separable_scatter(paper_stages_)) return false;
+    if (print_table_) return true;  // (the paper's grain and halation folded into the film's or left out)
+    if (!enlarger_table_ || !view_table_ || paper_stages_.curve_tables.empty()) return false;
+    // The paper's halation would need the whole print's exposure before its first row; one
+    // kept in the plan at strength 0 (skip_noop_stages false) adds exactly nothing.
+    for (size_t l = 0; l < paper_stages_.halation.size(); ++l)
+        if ((paper_stages_.halation[l] && paper_stages_.halation[l]->strength != 0) || paper_stages_.boolean_grain[l])
+            return false;
+    return true;
+}
+
+void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
+                        StageTimes* times) const {
+    const MaterialStages& film = film_stages_;
+    const size_t layers = film.stock.layers.size();
+    const Window film_window =
+        print_ ? out_window.grown(paper_stages_.halo_px()).intersected(frame_) : out_window;  // the film's densities
+    int film_radius = 0;
+    std::vector<SeparableFilter> film_filters;
+    for (const ScatterKernel& k : film.scatter) {
+        film_filters.push_back(scatter_filter(k));
+        film_radius = std::max(film_radius, film_filters.back().radius());
+    }
+    // The exposure the film's scatter reads: its rows past the frame's edges are its edge pixels'.
+    const int padded_x0 = film_window.x0 - film_radius, padded_x1 = film_window.x1 + film_radius;
+    const Window exposed = Window{padded_x0, film_window.y0 - film_radius, padded_x1, film_window.y1 + film_radius}
+                               .intersected(frame_);
+    const FilmExposure exposure(in, film.rgb_weights, monochrome_input_, film_exposure_scale_);
+
+    // Halation first, on its coarse grid, from every halated layer's exposure.
+    std::vector<const HalationKernel*> halation_kernels;
+    std::vector<int> halation_plane(layers, -1);  // each layer's plane in `halation`
+    for (size_t l = 0; l < layers; ++l)
+        if (film.halation[l]) {
+            halation_plane[l] = int(halation_kernels.size());
+            halation_kernels.push_back(&*film.halation[l]);
+        }
+    std::unique_ptr<CoarseHalation> halation;
+    if (!halation_kernels.empty()) {
+        const auto start = std::chrono::steady_clock::now();
+        halation = std::make_unique<CoarseHalation>(
+            halation_kernels, exposed, frame_, threads, [&](int y, int x_begin, int x_end, float* const* rows) {
+                thread_local std::vector<float> unhalated[3];  // the layers without halation
+                float* layer_rows[3];
+                for (size_t l = 0; l < layers; ++l) {
+                    unhalated[l].resize(size_t(x_end - x_begin));
+                    layer_rows[l] = halation_plane[l] >= 0 ? rows[halation_plane[l]] : unhalated[l].data();
+                }
+                exposure.row(y, x_begin, x_end - x_begin, layer_rows);
+            });
+        if (times) times->add("halation", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
+
+    std::mutex times_mutex;
+    const int bands = std::min(resolve_thread_count(threads), out_window.height());  // as parallel_for splits
+    parallel_for(out_window.y0, out_window.y1, threads, [&](int band_begin, int band_end) {
+        RowClock clock(times != nullptr);
+        // Film: exposure and halation -> scatter -> develop and grain, on film_window's columns.
+        std::vector<const SeparableFilter*> filters;
+        for (const SeparableFilter& f : film_filters) filters.push_back(&f);
+        SeparableStream film_scatter(film_window.width(), filters, frame_.y0, frame_.y1, [&](int y, float* const* padded) {
+            float* inside[3];
+            for (size_t l = 0; l < layers; ++l) inside[l] = padded[l] + (exposed.x0 - padded_x0);
+            exposure.row(y, exposed.x0, exposed.width(), inside);
+            clock.mark("expose");
+            for (size_t l = 0; l < layers; ++l) {
+                if (halation_plane[l] >= 0) halation->add(size_t(halation_plane[l]), y, inside[l], inside[l]);
+                hold_frame_edges(padded[l], padded_x0, padded_x1, frame_);
+            }
+            clock.mark("halation");
+        });
+        LayerDevelop film_develop(film, film_window);
+        Rows density(layers, film_window.width());
+        auto film_density_row = [&](int y) {  // film_window's row y, into `density`
+            film_scatter.row(y, density.data());
+            clock.mark("scatter");
+            film_develop.row(y, density.data(), film_window.width(), clock);
+        };
+
+        Rows result(3, out_window.width());
+        if (!print_) {
+            for (int y = band_begin; y < band_end; ++y) {
+                film_density_row(y);
+                for (size_t l = 0; l < layers; ++l)
+                    convert_row(settings_.output, film.stock.layers[l].density_curve.y_min(), density.data()[l],
+                                film_window.width());
+                clock.mark("convert");
+                write_row(density.data(), layers, in, out, y, out_window.x0, out_window.width());
+                clock.mark("write");
+            }
+            clock.merge_into(times, bands, times_mutex);
+            return;
+        }
+
+        // Paper: the enlarger's exposure (or, printing through one table, the negative's
+        // densities) -> the paper's scatter, on out_window's columns with the paper's halo.
+        const MaterialStages& paper = paper_stages_;
+        std::vector<SeparableFilter> paper_scatter_filters;
+        std::vector<const SeparableFilter*> paper_filters_used;
+        for (const ScatterKernel& k : paper.scatter) paper_scatter_filters.push_back(scatter_filter(k));
+        for (const SeparableFilter& f : paper_scatter_filters) paper_filters_used.push_back(&f);
+        int paper_radius = 0;
+        for (const SeparableFilter& f : paper_scatter_filters) paper_radius = std::max(paper_radius, f.radius());
+        const int paper_x0 = out_window.x0 - paper_radius, paper_x1 = out_window.x1 + paper_radius;
+        SeparableStream paper_scatter(out_window.width(), paper_filters_used, frame_.y0, frame_.y1,
+                                      [&](int y, float* const* padded) {
+                                          film_density_row(y);
+                                          float* inside[3];
+                                          for (int j = 0; j < 3; ++j) inside[j] = padded[j] + (film_window.x0 - paper_x0);
+                                          if (print_table_) {
+                                              for (int j = 0; j < 3; ++j)
+                                                  std::copy_n(density.data()[j], film_window.width(), inside[j]);
+                                          } else {
+                                              enlarger_table_->apply_row(density.data(), inside, film_window.width());
+                                              for (int j = 0; j < 3; ++j) fast_exp2_row(inside[j], film_window.width());
+                                              clock.mark("enlarger");
+                                          }
+                                          for (int j = 0; j < 3; ++j) hold_frame_edges(padded[j], paper_x0, paper_x1, frame_);
+                                      });
+        std::unique_ptr<LayerDevelop> paper_develop;
+        if (!print_table_) paper_develop = std::make_unique<LayerDevelop>(paper, out_window);
+        Rows spread(3, out_window.width());
+        for (int y = band_begin; y < band_end; ++y) {
+            paper_scatter.row(y, spread.data());
+            clock.mark("scatter");
+            if (print_table_) {
+                xyz_table_to_rgb(*print_table_, spread.data(), result.data(), out_window.width());
+                clock.mark("print table");
+            } else {
+                paper_develop->row(y, spread.data(), out_window.width(), clock);
+                xyz_table_to_rgb(*view_table_, spread.data(), result.data(), out_window.width());
+                clock.mark("view");
+            }
+            write_row(result.data(), 3, in, out, y, out_window.x0, out_window.width());
+            clock.mark("write");
+        }
+        clock.merge_into(times, bands, times_mutex);
+    });
+}
+
+}  // namespace darkroom

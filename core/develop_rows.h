@@ -1,0 +1,58 @@
+// Row steps that Plan's two ways of running share: stage after stage over whole planes
+// (develop.cpp) and every stage a row at a time (develop_one_pass.cpp). Internal to core.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include "core/develop.h"
+#include "core/image.h"
+#include "core/stages/tables.h"
+
+namespace darkroom {
+
+// Input values beyond this magnitude (and +-Inf) are held at it; NaN counts as 0.
+constexpr double kMaxInput = 1e30;
+
+// The input channel that holds colour channel c (R, G, B): grey input (one channel, or grey
+// and alpha) holds all three in its first.
+int colour_channel(const ConstImageView& in, int c);
+
+// An input value as the film sees it: NaN is 0, the rest held within +-kMaxInput.
+double sanitize(float v);
+
+// Each film layer's exposure from rows of the input: the row's colour channels sanitised
+// once (in double, in the calling thread's scratch), then each layer's weighted sum times
+// `scale`, held within [0, kMaxInput]. Grey input (grey_input: its first channel alone is
+// read) weighs it by the sum of a layer's weights.
+class FilmExposure {
+public:
+    FilmExposure(const ConstImageView& in, const std::vector<std::array<double, 3>>& weights, bool grey_input,
+                 double scale);
+    // Each layer's exposure at x0 ... x0 + width - 1 of row y into exposure[layer].
+    void row(int y, int x0, int width, float* const* exposure) const;
+    size_t layers() const { return weights_.size(); }
+
+private:
+    const ConstImageView& in_;
+    const std::vector<std::array<double, 3>>& weights_;
+    bool grey_input_;
+    double scale_;
+    std::vector<double> grey_scale_;  // per layer, for grey input
+};
+
+// A row of developed densities as `output` writes them: the negative's transmittance 10^-D,
+// the scan's code values (d_min the layer's base + fog), or (density, print) unchanged.
+void convert_row(OutputMode output, double d_min, float* row, int width);
+
+// Print densities (or, through the one print table, the negative's) -> linear Rec.709
+// through a table of log2 XYZ, for one row.
+void xyz_table_to_rgb(const Table3D& table, const float* const* d, float* const* rgb, int width);
+
+// Row y of the result into channels 0-2 of `out` from x0 on (a single plane serves all
+// three), and the input's alpha (the channel after its colour) where both have one.
+void write_row(const float* const* result, size_t planes, const ConstImageView& in, const ImageView& out, int y, int x0,
+               int width);
+
+}  // namespace darkroom
