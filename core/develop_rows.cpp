@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
+#include <utility>
 
 #include "core/stages/print.h"
 #include "core/simd.h"
@@ -18,65 +20,100 @@ namespace {
 // density per code value, base+fog at code 95), written as code / 1023.
 constexpr double kScanBaseCode = 95.0, kScanDensityPerCode = 0.002, kScanFullCode = 1023.0;
 
-// The input sanitising and exposure below, on the lanes of a double vector D (any number,
-// core/simd.h): one piece of code for the vector blocks and the scalar tails, so every
+// The input's sanitising and exposure below work on the lanes of a vector of any width
+// (core/simd.h), one piece of code for the vector blocks and the scalar tails, so every
 // machine gets the same exposures.
 
-// NaN is 0; the rest is held within +-kMaxInput.
-template <typename D>
-__attribute__((always_inline)) inline void sanitize_lanes(D& v) {
-    v = v == v ? v : D{};
-    v = v < -kMaxInput ? D{} - kMaxInput : v;
-    v = kMaxInput < v ? D{} + kMaxInput : v;
+// NaN is 0; the rest is held within +-kMaxInput (floats or doubles).
+template <typename V>
+__attribute__((always_inline)) inline void sanitize_lanes(V& v) {
+    using T = std::remove_reference_t<decltype(v[0])>;
+    constexpr T max = T(kMaxInput);
+    v = v == v ? v : V{};
+    v = v < -max ? V{} - max : v;
+    v = max < v ? V{} + max : v;
 }
 
-// h[x ..] = clamp((w . rgb) * scale, 0, kMaxInput); for grey input (w null) rgb[0] * scale.
-template <typename D, typename F>
-__attribute__((always_inline)) inline void exposure_lanes(const double* const* rgb, const double* w, double scale,
-                                                          int x, float* h) {
-    D c[3];
-    for (int i = 0; i < (w ? 3 : 1); ++i) simd::load(c[i], rgb[i] + x);
-    D e = (w ? w[0] * c[0] + w[1] * c[1] + w[2] * c[2] : c[0]) * scale;
-    e = e < 0.0 ? D{} : e;  // a selection, as std::clamp: signed zeros kept
-    e = kMaxInput < e ? D{} + kMaxInput : e;
-    simd::store(h + x, __builtin_convertvector(e, F));
+// Lane j of channel `channel` of `vectors` vectors of interleaved pixels: where its float
+// lies (vector, index), and the two shuffles that gather it (core/simd.h's vectors of
+// `lanes`): for three vectors the first two's, then the third's; for four, the first
+// pair's and the second pair's, then both.
+constexpr int source_of(int j, int channel, int vectors) { return j * vectors + channel; }
+constexpr int first_pick(int j, int channel, int vectors, int lanes) {
+    const int s = source_of(j, channel, vectors);
+    return s < 2 * lanes ? s : (vectors == 4 ? s - 2 * lanes : 0);
+}
+constexpr int second_pick(int j, int channel, int vectors, int lanes) {
+    const int s = source_of(j, channel, vectors);
+    if (vectors == 4) return s < 2 * lanes ? j : lanes + j;
+    return s < 2 * lanes ? j : lanes + s - 2 * lanes;
 }
 
-// out[x ..] = the sanitised values of channel `first` of interleaved pixels `stride` floats apart.
-template <typename D>
-__attribute__((always_inline)) inline void sanitized_lanes(const float* first, int stride, int x, double* out) {
-    D v;
-    for (int k = 0; k < int(sizeof v / sizeof(double)); ++k) v[k] = first[size_t(x + k) * stride];
-    sanitize_lanes(v);
-    simd::store(out + x, v);
+template <int channel, int vectors, typename V, size_t... J>
+__attribute__((always_inline)) inline V deinterleaved(const V* v, std::index_sequence<J...>) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    const V low = __builtin_shufflevector(v[0], v[1], first_pick(J, channel, vectors, lanes)...);
+    const V high = vectors == 4 ? __builtin_shufflevector(v[2], v[3], first_pick(J, channel, vectors, lanes)...) : v[2];
+    return __builtin_shufflevector(low, high, second_pick(J, channel, vectors, lanes)...);
 }
 
-// A row in vectors of half the float lanes' doubles, then one at a time:
-// one channel of interleaved pixels, sanitised,
-struct SanitizedChannel {
-    template <int lanes>
-    __attribute__((always_inline)) static void run(const float* first, int stride, int width, double* out) {
-        constexpr int doubles = lanes / 2;
-        int x = 0;
-        for (; x + doubles <= width; x += doubles)
-            sanitized_lanes<typename simd::Lanes<doubles>::D>(first, stride, x, out);
-        for (; x < width; ++x) sanitized_lanes<simd::Double1>(first, stride, x, out);
+// The first `colours` (1 or 3) colour channels of the lanes' pixels from px on, `stride`
+// floats apart (a grey image, grey_image, holds all three in its first): vector loads and
+// shuffles for RGB and RGBA pixels, else a load a lane.
+template <typename V>
+__attribute__((always_inline)) inline void channels_at(const float* px, int stride, bool grey_image, int colours,
+                                                       V* c) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    if constexpr (lanes >= 4) {
+        if (colours == 3 && !grey_image && (stride == 3 || stride == 4)) {
+            V v[4];
+            for (int k = 0; k < stride; ++k) simd::load(v[k], px + k * lanes);
+            const auto j = std::make_index_sequence<lanes>();
+            if (stride == 3) {
+                c[0] = deinterleaved<0, 3>(v, j), c[1] = deinterleaved<1, 3>(v, j), c[2] = deinterleaved<2, 3>(v, j);
+            } else {
+                c[0] = deinterleaved<0, 4>(v, j), c[1] = deinterleaved<1, 4>(v, j), c[2] = deinterleaved<2, 4>(v, j);
+            }
+            return;
+        }
     }
-};
+    for (int i = 0; i < colours; ++i)
+        for (int k = 0; k < lanes; ++k) c[i][k] = px[size_t(k) * stride + (grey_image ? 0 : i)];
+}
 
-// and one layer's exposure (exposure_lanes).
+// Each layer's exposure at the lanes' pixels: the colours sanitised, then
+// clamp((w . rgb) * scale, 0, kMaxInput), or for grey input (colours 1) clamp(grey * grey_scale).
+template <typename V>
+__attribute__((always_inline)) inline void exposure_lanes(const float* px, int stride, bool grey_image, int colours,
+                                                          const float* weights, const float* grey_scale, int layers,
+                                                          float scale, int x, float* const* exposure) {
+    constexpr float max = float(kMaxInput);
+    V c[3];
+    channels_at(px + size_t(x) * stride, stride, grey_image, colours, c);
+    for (int i = 0; i < colours; ++i) sanitize_lanes(c[i]);
+    for (int l = 0; l < layers; ++l) {
+        const float* w = weights + 3 * l;
+        V e = colours == 1 ? c[0] * grey_scale[l] : (w[0] * c[0] + w[1] * c[1] + w[2] * c[2]) * scale;
+        e = e < 0.0f ? V{} : e;  // a selection, as std::clamp: signed zeros kept
+        e = max < e ? V{} + max : e;
+        simd::store(exposure[l] + x, e);
+    }
+}
+
 struct ExposureRow {
     template <int lanes>
-    __attribute__((always_inline)) static void run(const double* const* rgb, const double* w, double scale, int width,
-                                                   float* h) {
-        constexpr int doubles = lanes / 2;
+    __attribute__((always_inline)) static void run(const float* px, int stride, bool grey_image, int colours,
+                                                   const float* weights, const float* grey_scale, int layers,
+                                                   float scale, int width, float* const* exposure) {
         int x = 0;
-        for (; x + doubles <= width; x += doubles)
-            exposure_lanes<typename simd::Lanes<doubles>::D, typename simd::Lanes<doubles>::F>(rgb, w, scale, x, h);
-        for (; x < width; ++x) exposure_lanes<simd::Double1, simd::Float1>(rgb, w, scale, x, h);
+        for (; x + lanes <= width; x += lanes)
+            exposure_lanes<typename simd::Lanes<lanes>::F>(px, stride, grey_image, colours, weights, grey_scale,
+                                                           layers, scale, x, exposure);
+        for (; x < width; ++x)
+            exposure_lanes<simd::Float1>(px, stride, grey_image, colours, weights, grey_scale, layers, scale, x,
+                                         exposure);
     }
 };
-
 
 }  // namespace
 
@@ -90,21 +127,16 @@ double sanitize(float v) {
 
 FilmExposure::FilmExposure(const ConstImageView& in, const std::vector<std::array<double, 3>>& weights,
                            bool grey_input, double scale)
-    : in_(in), weights_(weights), grey_input_(grey_input), scale_(scale) {
-    for (const auto& w : weights) grey_scale_.push_back((w[0] + w[1] + w[2]) * scale);
+    : in_(in), layers_(int(weights.size())), colours_(grey_input ? 1 : 3), scale_(float(scale)) {
+    for (const auto& w : weights) {
+        for (double v : w) weights_.push_back(float(v));
+        grey_scale_.push_back(float((w[0] + w[1] + w[2]) * scale));
+    }
 }
 
 void FilmExposure::row(int y, int x0, int width, float* const* exposure) const {
-    const int source[3] = {0, colour_channel(in_, 1), colour_channel(in_, 2)};  // grey: R = G = B
-    thread_local std::vector<double> channel[3];  // the row's sanitised colour channels
-    for (auto& c : channel)
-        if (c.size() < size_t(width)) c.resize(size_t(width));
-    const double* rgb[3] = {channel[0].data(), channel[1].data(), channel[2].data()};
-    for (int c = 0; c < (grey_input_ ? 1 : 3); ++c)
-        simd::dispatch<SanitizedChannel>(in_.at(x0, y) + source[c], in_.channels, width, channel[c].data());
-    for (size_t l = 0; l < weights_.size(); ++l)
-        simd::dispatch<ExposureRow>(rgb, grey_input_ ? nullptr : weights_[l].data(),
-                                    grey_input_ ? grey_scale_[l] : scale_, width, exposure[l]);
+    simd::dispatch<ExposureRow>(in_.at(x0, y), int(in_.pixel_stride), colour_channel_count(in_.channels) == 1,
+                                colours_, weights_.data(), grey_scale_.data(), layers_, scale_, width, exposure);
 }
 
 void convert_row(OutputMode output, double d_min, float* row, int width) {

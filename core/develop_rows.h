@@ -22,24 +22,23 @@ int colour_channel(const ConstImageView& in, int c);
 // An input value as the film sees it: NaN is 0, the rest held within +-kMaxInput.
 double sanitize(float v);
 
-// Each film layer's exposure from rows of the input: the row's colour channels sanitised
-// once (in double, in the calling thread's scratch), then each layer's weighted sum times
-// `scale`, held within [0, kMaxInput]. Grey input (grey_input: its first channel alone is
-// read) weighs it by the sum of a layer's weights.
+// Each film layer's exposure from rows of the input: the row's colour channels sanitised,
+// then each layer's weighted sum times `scale`, held within [0, kMaxInput], in float. Grey
+// input (grey_input: its first channel alone is read) weighs it by the sum of a layer's
+// weights.
 class FilmExposure {
 public:
     FilmExposure(const ConstImageView& in, const std::vector<std::array<double, 3>>& weights, bool grey_input,
                  double scale);
     // Each layer's exposure at x0 ... x0 + width - 1 of row y into exposure[layer].
     void row(int y, int x0, int width, float* const* exposure) const;
-    size_t layers() const { return weights_.size(); }
 
 private:
     const ConstImageView& in_;
-    const std::vector<std::array<double, 3>>& weights_;
-    bool grey_input_;
-    double scale_;
-    std::vector<double> grey_scale_;  // per layer, for grey input
+    int layers_, colours_;
+    float scale_;
+    std::vector<float> weights_;     // 3 per layer
+    std::vector<float> grey_scale_;  // per layer, for grey input
 };
 
 // A row of developed densities as `output` writes them: the negative's transmittance 10^-D,
