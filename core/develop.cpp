@@ -525,8 +525,7 @@ std::vector<Plane> Plan::print(std::vector<Plane> negative, const Window& out, i
     if (enlarger_table_) {
         paper_exposure = per_row(negative, negative[0].window, 3, threads, [&](const float* const* d, float* const* h,
                                                                                int width) {
-            enlarger_table_->apply_row(d, h, width);  // log2 paper exposures
-            for (int j = 0; j < 3; ++j) fast_exp2_row(h[j], width);
+            enlarger_table_->apply_row_exp2(d, h, width);  // from log2 paper exposures
         });
     } else {
         paper_exposure =

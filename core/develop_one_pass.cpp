@@ -61,7 +61,7 @@ bool separable_scatter(const MaterialStages& m) {
 // Develops the layers' rows in place (exposures to densities), with grain where a layer has it.
 class LayerDevelop {
 public:
-    LayerDevelop(const MaterialStages& m, const Window& w) : m_(m), amplitude_(size_t(w.width())) {
+    LayerDevelop(const MaterialStages& m, const Window& w) : m_(m) {
         std::vector<const GrainModel*> grains;
         for (const auto& g : m.grain)
             if (g) grains.push_back(&*g);
@@ -74,8 +74,7 @@ public:
         size_t g = 0;
         for (size_t l = 0; l < m_.curve_tables.size(); ++l) {
             if (m_.grain[l])
-                develop_row_with_grain(m_.curve_tables[l], *m_.grain[l], noise_rows_[g++], width, rows[l],
-                                       amplitude_.data());
+                develop_row_with_grain(m_.curve_tables[l], *m_.grain[l], noise_rows_[g++], width, rows[l]);
             else
                 m_.curve_tables[l].apply_row(rows[l], rows[l], width);
         }
@@ -87,7 +86,6 @@ private:
     std::unique_ptr<GrainNoiseStream> noise_stream_;
     std::vector<std::vector<float>> noise_;
     std::vector<float*> noise_rows_;
-    std::vector<float> amplitude_;
 };
 
 // Rows of `planes` planes of a window's width.
@@ -227,8 +225,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
                                               for (int j = 0; j < 3; ++j)
                                                   std::copy_n(density.data()[j], film_window.width(), inside[j]);
                                           } else {
-                                              enlarger_table_->apply_row(density.data(), inside, film_window.width());
-                                              for (int j = 0; j < 3; ++j) fast_exp2_row(inside[j], film_window.width());
+                                              enlarger_table_->apply_row_exp2(density.data(), inside, film_window.width());
                                               clock.mark("enlarger");
                                           }
                                           for (int j = 0; j < 3; ++j) hold_frame_edges(padded[j], paper_x0, paper_x1, frame_);

@@ -34,28 +34,45 @@ __attribute__((always_inline)) inline void sanitize_lanes(V& v) {
     v = max < v ? V{} + max : v;
 }
 
-// Lane j of channel `channel` of `vectors` vectors of interleaved pixels: where its float
-// lies (vector, index), and the two shuffles that gather it (core/simd.h's vectors of
-// `lanes`): for three vectors the first two's, then the third's; for four, the first
-// pair's and the second pair's, then both.
-constexpr int source_of(int j, int channel, int vectors) { return j * vectors + channel; }
-constexpr int first_pick(int j, int channel, int vectors, int lanes) {
-    const int s = source_of(j, channel, vectors);
-    return s < 2 * lanes ? s : (vectors == 4 ? s - 2 * lanes : 0);
-}
-constexpr int second_pick(int j, int channel, int vectors, int lanes) {
-    const int s = source_of(j, channel, vectors);
-    if (vectors == 4) return s < 2 * lanes ? j : lanes + j;
-    return s < 2 * lanes ? j : lanes + s - 2 * lanes;
+// Pixels' channels taken apart and put together in vector registers: each result is two
+// shuffles of `vectors` (3 or 4) vectors of `lanes` floats, lane j first from v[0] and v[1]
+// (low) or, for four, from v[2] and v[3] (high), then from those two (last) or, for three,
+// from the first shuffle and v[2].
+template <typename Picks, typename V, size_t... J>
+__attribute__((always_inline)) inline V shuffled(const V* v, std::index_sequence<J...>) {
+    const V low = __builtin_shufflevector(v[0], v[1], Picks::low(J)...);
+    const V high = Picks::vectors == 4 ? __builtin_shufflevector(v[2], v[3], Picks::high(J)...) : v[2];
+    return __builtin_shufflevector(low, high, Picks::last(J)...);
 }
 
-template <int channel, int vectors, typename V, size_t... J>
-__attribute__((always_inline)) inline V deinterleaved(const V* v, std::index_sequence<J...>) {
-    constexpr int lanes = sizeof(V) / sizeof(float);
-    const V low = __builtin_shufflevector(v[0], v[1], first_pick(J, channel, vectors, lanes)...);
-    const V high = vectors == 4 ? __builtin_shufflevector(v[2], v[3], first_pick(J, channel, vectors, lanes)...) : v[2];
-    return __builtin_shufflevector(low, high, second_pick(J, channel, vectors, lanes)...);
-}
+// Channel `channel` of pixels interleaved in `vectors` vectors (RGB: 3, RGBA: 4): lane j is
+// float s = j vectors + channel of them.
+template <int channel, int vectors_, int lanes>
+struct Deinterleave {
+    static constexpr int vectors = vectors_;
+    static constexpr int source(int j) { return j * vectors + channel; }
+    static constexpr int low(int j) { return source(j) < 2 * lanes ? source(j) : 0; }
+    static constexpr int high(int j) { return source(j) >= 2 * lanes ? source(j) - 2 * lanes : 0; }
+    static constexpr int last(int j) {
+        if (vectors == 4) return source(j) < 2 * lanes ? j : lanes + j;
+        return source(j) < 2 * lanes ? j : lanes + source(j) - 2 * lanes;
+    }
+};
+
+// Vector k of `vectors` channel vectors interleaved: lane i is channel (k lanes + i) mod
+// vectors of pixel (k lanes + i) / vectors.
+template <int k, int vectors_, int lanes>
+struct Interleave {
+    static constexpr int vectors = vectors_;
+    static constexpr int channel(int i) { return (k * lanes + i) % vectors; }
+    static constexpr int pixel(int i) { return (k * lanes + i) / vectors; }
+    static constexpr int low(int i) { return channel(i) < 2 ? channel(i) * lanes + pixel(i) : 0; }
+    static constexpr int high(int i) { return channel(i) >= 2 ? (channel(i) - 2) * lanes + pixel(i) : 0; }
+    static constexpr int last(int i) {
+        if (vectors == 4) return channel(i) < 2 ? i : lanes + i;
+        return channel(i) < 2 ? i : lanes + pixel(i);
+    }
+};
 
 // The first `colours` (1 or 3) colour channels of the lanes' pixels from px on, `stride`
 // floats apart (a grey image, grey_image, holds all three in its first): vector loads and
@@ -70,9 +87,11 @@ __attribute__((always_inline)) inline void channels_at(const float* px, int stri
             for (int k = 0; k < stride; ++k) simd::load(v[k], px + k * lanes);
             const auto j = std::make_index_sequence<lanes>();
             if (stride == 3) {
-                c[0] = deinterleaved<0, 3>(v, j), c[1] = deinterleaved<1, 3>(v, j), c[2] = deinterleaved<2, 3>(v, j);
+                c[0] = shuffled<Deinterleave<0, 3, lanes>>(v, j), c[1] = shuffled<Deinterleave<1, 3, lanes>>(v, j),
+                c[2] = shuffled<Deinterleave<2, 3, lanes>>(v, j);
             } else {
-                c[0] = deinterleaved<0, 4>(v, j), c[1] = deinterleaved<1, 4>(v, j), c[2] = deinterleaved<2, 4>(v, j);
+                c[0] = shuffled<Deinterleave<0, 4, lanes>>(v, j), c[1] = shuffled<Deinterleave<1, 4, lanes>>(v, j),
+                c[2] = shuffled<Deinterleave<2, 4, lanes>>(v, j);
             }
             return;
         }
@@ -99,6 +118,51 @@ __attribute__((always_inline)) inline void exposure_lanes(const float* px, int s
         simd::store(exposure[l] + x, e);
     }
 }
+
+// Pixels x ... of the result's three rows into RGB (out_stride 3) or RGB and alpha (4, the
+// alpha from the input's channel `alpha`, its pixels in_stride apart) in vector registers;
+// other layouts a value at a time: the same values.
+template <typename V>
+__attribute__((always_inline)) inline void write_lanes(const float* const* result, const float* in_px, int in_stride,
+                                                       int alpha, float* out_px, int out_stride, int x) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    V c[4];
+    for (int i = 0; i < 3; ++i) simd::load(c[i], result[i] + x);
+    if (in_px)
+        for (int k = 0; k < lanes; ++k) c[3][k] = in_px[size_t(x + k) * in_stride + alpha];
+    float* out = out_px + size_t(x) * out_stride;
+    if constexpr (lanes >= 4) {
+        const auto i = std::make_index_sequence<lanes>();
+        if (out_stride == 3 && !in_px) {
+            simd::store(out, shuffled<Interleave<0, 3, lanes>>(c, i));
+            simd::store(out + lanes, shuffled<Interleave<1, 3, lanes>>(c, i));
+            simd::store(out + 2 * lanes, shuffled<Interleave<2, 3, lanes>>(c, i));
+            return;
+        }
+        if (out_stride == 4 && in_px) {
+            simd::store(out, shuffled<Interleave<0, 4, lanes>>(c, i));
+            simd::store(out + lanes, shuffled<Interleave<1, 4, lanes>>(c, i));
+            simd::store(out + 2 * lanes, shuffled<Interleave<2, 4, lanes>>(c, i));
+            simd::store(out + 3 * lanes, shuffled<Interleave<3, 4, lanes>>(c, i));
+            return;
+        }
+    }
+    for (int k = 0; k < lanes; ++k) {
+        for (int i = 0; i < 3; ++i) out[size_t(k) * out_stride + i] = c[i][k];
+        if (in_px) out[size_t(k) * out_stride + 3] = c[3][k];
+    }
+}
+
+struct WriteRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* const* result, const float* in_px, int in_stride,
+                                                   int alpha, float* out_px, int out_stride, int width) {
+        int x = 0;
+        for (; x + lanes <= width; x += lanes)
+            write_lanes<typename simd::Lanes<lanes>::F>(result, in_px, in_stride, alpha, out_px, out_stride, x);
+        for (; x < width; ++x) write_lanes<simd::Float1>(result, in_px, in_stride, alpha, out_px, out_stride, x);
+    }
+};
 
 struct ExposureRow {
     template <int lanes>
@@ -149,26 +213,23 @@ void convert_row(OutputMode output, double d_min, float* row, int width) {
 }
 
 void xyz_table_to_rgb(const Table3D& table, const float* const* d, float* const* rgb, int width) {
-    const Matrix3& m = print_xyz_to_rgb();
-    float* const* xyz = rgb;  // XYZ first, in the result rows
-    table.apply_row(d, xyz, width);
-    for (int c = 0; c < 3; ++c) fast_exp2_row(xyz[c], width);
-    for (int x = 0; x < width; ++x) {
-        const float v[3] = {xyz[0][x], xyz[1][x], xyz[2][x]};
-        for (int c = 0; c < 3; ++c)
-            rgb[c][x] = float(m[c][0]) * v[0] + float(m[c][1]) * v[1] + float(m[c][2]) * v[2];
-    }
+    static const std::array<float, 9> matrix = [] {
+        const Matrix3& m = print_xyz_to_rgb();
+        std::array<float, 9> f;
+        for (int i = 0; i < 9; ++i) f[size_t(i)] = float(m[i / 3][i % 3]);
+        return f;
+    }();
+    table.apply_row_exp2(d, rgb, width, matrix.data());
 }
 
 void write_row(const float* const* result, size_t planes, const ConstImageView& in, const ImageView& out, int y, int x0,
                int width) {
     const int alpha = colour_channel_count(in.channels);  // the channel after the colour
     const bool copy_alpha = alpha < in.channels && out.channels >= 4;
-    for (int i = 0; i < width; ++i) {
-        float* px = out.at(x0 + i, y);
-        for (int c = 0; c < 3; ++c) px[c] = result[std::min<size_t>(c, planes - 1)][i];
-        if (copy_alpha) px[3] = in.at(x0 + i, y)[alpha];
-    }
+    const float* rows[3];
+    for (size_t c = 0; c < 3; ++c) rows[c] = result[std::min(c, planes - 1)];
+    simd::dispatch<WriteRow>(rows, copy_alpha ? in.at(x0, y) : nullptr, int(in.pixel_stride), alpha, out.at(x0, y),
+                             int(out.pixel_stride), width);
 }
 
 }  // namespace darkroom

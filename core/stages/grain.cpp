@@ -186,17 +186,13 @@ void apply_grain(Plane& density, const GrainModel& g, int threads) {
 }
 
 void develop_row_with_grain(const LogAxisTable& develop, const GrainModel& g, const float* noise, int width,
-                            float* row, float* amplitude) {
-    develop.apply_row(row, row, amplitude, width);
-    for (int x = 0; x < width; ++x) row[x] = std::max(g.d_min, row[x] + amplitude[x] * noise[x]);
+                            float* row) {
+    develop.apply_row_with_noise(row, noise, g.d_min, row, width);
 }
 
 void develop_with_grain(Plane& plane, const LogAxisTable& develop, const GrainModel& g, int threads) {
-    const int width = plane.window.width();
     filter_grain_noise(g, plane.window, threads, [&](int y, const float* n) {
-        thread_local std::vector<float> amplitude;  // per worker: the row's grain amplitudes
-        amplitude.resize(size_t(width));
-        develop_row_with_grain(develop, g, n, width, plane.row(y), amplitude.data());
+        develop_row_with_grain(develop, g, n, plane.window.width(), plane.row(y));
     });
 }
 

@@ -87,8 +87,8 @@ void apply_grain(Plane& density, const GrainModel& grain, int threads);
 // the grain's amplitude_at, tables.h), then grain as apply_grain adds it.
 void develop_with_grain(Plane& plane, const LogAxisTable& develop, const GrainModel& grain, int threads);
 // One row of it: `row` (width exposures) becomes densities, with `noise` the grain's filtered
-// noise there and `amplitude` width floats of scratch.
+// noise there.
 void develop_row_with_grain(const LogAxisTable& develop, const GrainModel& grain, const float* noise, int width,
-                            float* row, float* amplitude);
+                            float* row);
 
 }  // namespace darkroom

@@ -143,6 +143,40 @@ __attribute__((always_inline)) inline void log_axis_lookup(const float* nodes, u
     if (g) *g = node[1] + t * (node[3] - node[1]);
 }
 
+// max(floor, f + g noise) at the lanes of v, in place: a density with its grain.
+template <typename V, typename U>
+__attribute__((always_inline)) inline void log_axis_with_noise(const float* nodes, uint32_t first_bits,
+                                                               uint32_t last_bits, int shift, const float* noise,
+                                                               float floor, V& v) {
+    V g, n;
+    log_axis_lookup<V, U>(nodes, first_bits, last_bits, shift, v, &g);
+    load(n, noise);
+    v = v + g * n;
+    v = floor < v ? v : V{} + floor;  // as std::max(floor, v): NaN gives floor
+}
+
+struct LogAxisNoiseRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* nodes, uint32_t first_bits, uint32_t last_bits,
+                                                   int shift, const float* in, const float* noise, float floor,
+                                                   float* out, int n) {
+        using V = typename simd::Lanes<lanes>::F;
+        int i = 0;
+        for (; i + lanes <= n; i += lanes) {
+            V v;
+            load(v, in + i);
+            log_axis_with_noise<V, typename simd::Lanes<lanes>::U>(nodes, first_bits, last_bits, shift, noise + i,
+                                                                   floor, v);
+            store(out + i, v);
+        }
+        for (; i < n; ++i) {
+            Float1 lane{in[i]};
+            log_axis_with_noise<Float1, Uint1>(nodes, first_bits, last_bits, shift, noise + i, floor, lane);
+            out[i] = lane[0];
+        }
+    }
+};
+
 // A row of lookups (g_out may be null: f only), in vectors of `lanes`, then one at a time.
 struct LogAxisRow {
     template <int lanes>
@@ -183,10 +217,14 @@ void LogAxisTable::apply_row(const float* in, float* f_out, float* g_out, int n)
     simd::dispatch<LogAxisRow>(&nodes_[0][0], first_bits_, last_bits_, shift_, in, f_out, g_out, n);
 }
 
+void LogAxisTable::apply_row_with_noise(const float* in, const float* noise, float floor, float* out, int n) const {
+    simd::dispatch<LogAxisNoiseRow>(&nodes_[0][0], first_bits_, last_bits_, shift_, in, noise, floor, out, n);
+}
+
 namespace {
 
 // 2^x at the lanes of x, in place (V any number of float lanes, I its int32 lanes): one
-// piece of code for fast_exp2 and fast_exp2_row.
+// piece of code for fast_exp2 and the 3D tables' rows.
 template <typename V, typename I>
 __attribute__((always_inline)) inline void exp2_in_place(V& x) {
     x = x < -126.0f ? V{} - 126.0f : x;
@@ -200,25 +238,6 @@ __attribute__((always_inline)) inline void exp2_in_place(V& x) {
     x = p * scale;
 }
 
-struct Exp2Row {
-    template <int lanes>
-    __attribute__((always_inline)) static void run(float* values, int n) {
-        using V = typename simd::Lanes<lanes>::F;
-        int i = 0;
-        for (; i + lanes <= n; i += lanes) {
-            V x;
-            load(x, values + i);
-            exp2_in_place<V, typename simd::Lanes<lanes>::I>(x);
-            store(values + i, x);
-        }
-        for (; i < n; ++i) {
-            Float1 lane{values[i]};
-            exp2_in_place<Float1, Int1>(lane);
-            values[i] = lane[0];
-        }
-    }
-};
-
 }  // namespace
 
 float fast_exp2(float x) {
@@ -227,7 +246,6 @@ float fast_exp2(float x) {
     return lane[0];
 }
 
-void fast_exp2_row(float* values, int n) { simd::dispatch<Exp2Row>(values, n); }
 
 Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f)
     : nodes_(nodes) {
@@ -258,9 +276,12 @@ namespace {
 // (Kasson, Nin, Plouffe & Hafner, "Performing color space conversions with three-dimensional
 // linear interpolation", J. Electronic Imaging 4(3), 1995). Exact for linear functions,
 // continuous across cells, and four corner loads per channel where trilinear needs eight.
+// Then, when asked, each value v is 2^v (exp2_in_place) and the three are multiplied by
+// `matrix` (row-major 3x3).
 template <typename V, typename I>
 __attribute__((always_inline)) inline void tetrahedral(const float* values, int nodes, const float* lo,
-                                                       const float* scale, const float* const* in, float* const* out) {
+                                                       const float* scale, bool exp2, const float* matrix,
+                                                       const float* const* in, float* const* out) {
     I index[3];
     V t[3];
     for (int a = 0; a < 3; ++a) {
@@ -299,28 +320,32 @@ __attribute__((always_inline)) inline void tetrahedral(const float* values, int 
     node_values<3>(values, base + (diagonal - off_c), v_ab);
     node_values<3>(values, base + diagonal, v111);
     const V w000 = 1.0f - t_max, w_a = t_max - t_mid, w_ab = t_mid - t_min;
-    for (int c = 0; c < 3; ++c) {
-        const V result = w000 * v000[c] + w_a * v_a[c] + w_ab * v_ab[c] + t_min * v111[c];
-        store(out[c], result);
-    }
+    V result[3];
+    for (int c = 0; c < 3; ++c) result[c] = w000 * v000[c] + w_a * v_a[c] + w_ab * v_ab[c] + t_min * v111[c];
+    if (exp2)
+        for (V& r : result) exp2_in_place<V, I>(r);
+    for (int c = 0; c < 3; ++c)
+        store(out[c], matrix ? matrix[3 * c] * result[0] + matrix[3 * c + 1] * result[1] + matrix[3 * c + 2] * result[2]
+                             : result[c]);
 }
 
 struct TetrahedralRow {
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* values, int nodes, const float* lo, const float* scale,
-                                                   const float* const* in, float* const* out, int n) {
+                                                   bool exp2, const float* matrix, const float* const* in,
+                                                   float* const* out, int n) {
         using V = typename simd::Lanes<lanes>::F;
         using I = typename simd::Lanes<lanes>::I;
         int i = 0;
         for (; i + lanes <= n; i += lanes) {
             const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
             float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
-            tetrahedral<V, I>(values, nodes, lo, scale, in_rows, out_rows);
+            tetrahedral<V, I>(values, nodes, lo, scale, exp2, matrix, in_rows, out_rows);
         }
         for (; i < n; ++i) {
             const float* in_rows[3] = {in[0] + i, in[1] + i, in[2] + i};
             float* out_rows[3] = {out[0] + i, out[1] + i, out[2] + i};
-            tetrahedral<Float1, Int1>(values, nodes, lo, scale, in_rows, out_rows);
+            tetrahedral<Float1, Int1>(values, nodes, lo, scale, exp2, matrix, in_rows, out_rows);
         }
     }
 };
@@ -330,11 +355,16 @@ struct TetrahedralRow {
 void Table3D::operator()(const float* in, float* out) const {
     const float* in_rows[3] = {&in[0], &in[1], &in[2]};
     float* out_rows[3] = {&out[0], &out[1], &out[2]};
-    tetrahedral<Float1, Int1>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows);
+    tetrahedral<Float1, Int1>(&values_[0][0], nodes_, lo_.data(), scale_.data(), false, nullptr, in_rows, out_rows);
 }
 
 void Table3D::apply_row(const float* const* in, float* const* out, int n) const {
-    simd::dispatch<TetrahedralRow>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in, out, n);
+    simd::dispatch<TetrahedralRow>(&values_[0][0], nodes_, lo_.data(), scale_.data(), false, (const float*)nullptr,
+                                   in, out, n);
+}
+
+void Table3D::apply_row_exp2(const float* const* in, float* const* out, int n, const float* matrix) const {
+    simd::dispatch<TetrahedralRow>(&values_[0][0], nodes_, lo_.data(), scale_.data(), true, matrix, in, out, n);
 }
 
 }  // namespace darkroom

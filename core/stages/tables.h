@@ -31,6 +31,9 @@ public:
     void apply_row(const float* in, float* out, int n) const;
     // f and g of n values (g 0 when the table has none), f bit for bit as above.
     void apply_row(const float* in, float* f_out, float* g_out, int n) const;
+    // max(floor, f + g noise) of n values, f and g as above: a developed density with its
+    // grain, g its amplitude (out may be in).
+    void apply_row_with_noise(const float* in, const float* noise, float floor, float* out, int n) const;
 
 private:
     std::vector<std::array<float, 4>> nodes_;  // (f_i, g_i, f_i+1, g_i+1)
@@ -41,8 +44,6 @@ private:
 // 2^x in float from the exponent and a polynomial in the fraction (relative error below
 // 3e-7, a few float roundings, for |x| < 126); the fast tiers' exp10(x) = exp2(x log2 10).
 float fast_exp2(float x);
-// fast_exp2 of each of n values in place, in vector registers: bit for bit the same values.
-void fast_exp2_row(float* values, int n);
 
 // A function of three variables on a uniform grid (nodes^3 over [lo, hi] per axis),
 // interpolated tetrahedrally; inputs outside the grid are clamped to its faces.
@@ -55,6 +56,9 @@ public:
     // The table at n points given as three rows (in[a][i] is axis a of point i), into three
     // rows: operator() at each point, a vector of points at a time, bit for bit the same values.
     void apply_row(const float* const* in, float* const* out, int n) const;
+    // The same, each point's values v then written as 2^v (fast_exp2), times `matrix` (3x3,
+    // row-major) when given: a table of log2 values read as linear ones.
+    void apply_row_exp2(const float* const* in, float* const* out, int n, const float* matrix = nullptr) const;
     int nodes() const { return nodes_; }
 
 private:

@@ -70,17 +70,6 @@ TEST_CASE("fast_exp2 is 2^x within 3e-7", "[quality][tables]") {
     CHECK(worst < 3e-7);
 }
 
-TEST_CASE("fast_exp2_row gives fast_exp2 of each value, bit for bit", "[quality][tables]") {
-    std::vector<float> values;
-    for (double x = -130.0; x <= 130.0; x += 0.0371) values.push_back(float(x));
-    values.insert(values.end(), {-0.5f, 0.5f, -0.0f, 126.0f, -126.0f, 1e30f, -1e30f});
-    for (int n : {int(values.size()), 7, 1}) {  // vector lanes and the scalar tail
-        std::vector<float> row(values.begin(), values.begin() + n);
-        fast_exp2_row(row.data(), n);
-        for (int i = 0; i < n; ++i) REQUIRE(row[i] == fast_exp2(values[i]));
-    }
-}
-
 // Tetrahedral interpolation by its six cases (Kasson et al. 1995, table 1): in the cell's
 // unit cube, with fractions x >= y >= z, f = f000 + x (f100 - f000) + y (f110 - f100) +
 // z (f111 - f110), and likewise for each other order of the fractions.
@@ -156,6 +145,31 @@ TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions 
         float one[3];
         table(point, one);
         for (int c = 0; c < 3; ++c) REQUIRE(results[c][i] == one[c]);
+    }
+    // Read as log2 values: 2^v of each (values from -200 to 400 on this table's third
+    // channel, past exp2's clamps at +-126), then times a matrix, in the same float operations.
+    const Table3D wide({-2, -2, -2}, {4, 4, 4}, 9, [](const double* v, double* out) {
+        out[0] = v[0] - v[1];
+        out[1] = 0.5 * v[2];
+        out[2] = 100 * v[0];
+    });
+    table = wide;
+    table.apply_row(in_rows, out_rows, n);
+    const float matrix[9] = {0.5f, -0.25f, 2.0f, 1.5f, 0.75f, -1.0f, 0.125f, 3.0f, 0.0f};
+    std::vector<float> linear[3], mixed[3];
+    for (int c = 0; c < 3; ++c) linear[c].resize(n), mixed[c].resize(n);
+    float* linear_rows[3] = {linear[0].data(), linear[1].data(), linear[2].data()};
+    float* mixed_rows[3] = {mixed[0].data(), mixed[1].data(), mixed[2].data()};
+    table.apply_row_exp2(in_rows, linear_rows, n);
+    table.apply_row_exp2(in_rows, mixed_rows, n, matrix);
+    for (int i = 0; i < n; ++i) {
+        float v[3];
+        for (int c = 0; c < 3; ++c) {
+            v[c] = fast_exp2(results[c][i]);
+            REQUIRE(linear[c][i] == v[c]);
+        }
+        for (int c = 0; c < 3; ++c)
+            REQUIRE(mixed[c][i] == matrix[3 * c] * v[0] + matrix[3 * c + 1] * v[1] + matrix[3 * c + 2] * v[2]);
     }
 }
 
