@@ -172,7 +172,9 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         // Film: exposure and halation -> scatter -> develop and grain, on film_window's columns.
         std::vector<const SeparableFilter*> filters;
         for (const SeparableFilter& f : film_filters) filters.push_back(&f);
-        SeparableStream film_scatter(film_window.width(), filters, frame_.y0, frame_.y1, [&](int y, float* const* padded) {
+        SeparableStream film_scatter(film_window.width(), filters, frame_.y0, frame_.y1, film_window.y1,
+                                     [&](int y, float* const* padded) {
+            clock.mark("scatter");  // (the filtering of the rows read before)
             float* inside[3];
             for (size_t l = 0; l < layers; ++l) inside[l] = padded[l] + (exposed.x0 - padded_x0);
             exposure.row(y, exposed.x0, exposed.width(), inside);
@@ -216,8 +218,9 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         int paper_radius = 0;
         for (const SeparableFilter& f : paper_scatter_filters) paper_radius = std::max(paper_radius, f.radius());
         const int paper_x0 = out_window.x0 - paper_radius, paper_x1 = out_window.x1 + paper_radius;
-        SeparableStream paper_scatter(out_window.width(), paper_filters_used, frame_.y0, frame_.y1,
+        SeparableStream paper_scatter(out_window.width(), paper_filters_used, frame_.y0, frame_.y1, band_end,
                                       [&](int y, float* const* padded) {
+                                          clock.mark("scatter");  // (the filtering of the rows read before)
                                           film_density_row(y);
                                           float* inside[3];
                                           for (int j = 0; j < 3; ++j) inside[j] = padded[j] + (film_window.x0 - paper_x0);

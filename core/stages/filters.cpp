@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <limits>
 
 #include "core/parallel.h"
 #include "core/simd.h"
@@ -43,65 +44,74 @@ constexpr int kVecs = 8;
 // clears out first). Symmetric taps (taps[k] == taps[n-1-k], as every filter here has) are
 // folded: the two inputs a tap shares are added before the one multiply, which saves a
 // quarter of the arithmetic.
-template <int lanes, int vecs, bool accumulate, typename RowOf>
+template <int lanes, int vecs, int outputs, bool accumulate, typename RowOf>
 __attribute__((always_inline)) inline int tap_blocks(const float* tap, int n, int pairs, int x, int width,
-                                                     float* __restrict out, RowOf row_of) {
+                                                     float* const* __restrict out, RowOf row_of) {
     using Vec = typename simd::Lanes<lanes>::F;
     constexpr int block = lanes * vecs;
     for (; x + block <= width; x += block) {
-        Vec sum[vecs];
-        for (int v = 0; v < vecs; ++v)
-            if (accumulate)
-                load(sum[v], out + x + v * lanes);
-            else
-                sum[v] = Vec{};
+        Vec sum[outputs][vecs];
+        for (int o = 0; o < outputs; ++o)
+            for (int v = 0; v < vecs; ++v)
+                if (accumulate)
+                    load(sum[o][v], out[o] + x + v * lanes);
+                else
+                    sum[o][v] = Vec{};
         for (int k = 0; k < pairs; ++k) {
             const Vec t = Vec{} + tap[k];
-            const float *row = row_of(k) + x, *mirror = row_of(n - 1 - k) + x;
-            for (int v = 0; v < vecs; ++v) {
-                Vec in, in_mirror;
-                load(in, row + v * lanes);
-                load(in_mirror, mirror + v * lanes);
-                sum[v] += t * (in + in_mirror);
+            for (int o = 0; o < outputs; ++o) {
+                const float *row = row_of(k + o) + x, *mirror = row_of(n - 1 - k + o) + x;
+                for (int v = 0; v < vecs; ++v) {
+                    Vec in, in_mirror;
+                    load(in, row + v * lanes);
+                    load(in_mirror, mirror + v * lanes);
+                    sum[o][v] += t * (in + in_mirror);
+                }
             }
         }
         for (int k = pairs; k < n - pairs; ++k) {
             const Vec t = Vec{} + tap[k];
-            const float* row = row_of(k) + x;
-            for (int v = 0; v < vecs; ++v) {
-                Vec in;
-                load(in, row + v * lanes);
-                sum[v] += t * in;
+            for (int o = 0; o < outputs; ++o) {
+                const float* row = row_of(k + o) + x;
+                for (int v = 0; v < vecs; ++v) {
+                    Vec in;
+                    load(in, row + v * lanes);
+                    sum[o][v] += t * in;
+                }
             }
         }
-        for (int v = 0; v < vecs; ++v) store(out + x + v * lanes, sum[v]);
+        for (int o = 0; o < outputs; ++o)
+            for (int v = 0; v < vecs; ++v) store(out[o] + x + v * lanes, sum[o][v]);
     }
     return x;
 }
 
-template <int lanes, bool accumulate, typename RowOf>
-__attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int width, float* __restrict out,
+// out[o][x] (+)= sum_k taps[k] row_of(k + o)[x] for each of `outputs` outputs (1, or 2: a
+// column pass's two consecutive rows, which share all but one of their input rows, so that
+// each is read from memory once for both).
+template <int lanes, int outputs, bool accumulate, typename RowOf>
+__attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int width, float* const* __restrict out,
                                                     RowOf row_of) {
     const bool symmetric = std::equal(tap, tap + n / 2, std::reverse_iterator<const float*>(tap + n));
     const int pairs = symmetric ? n / 2 : 0;  // taps k and n-1-k for k < pairs; then k in [pairs, n - pairs)
-    int x = tap_blocks<lanes, kVecs, accumulate>(tap, n, pairs, 0, width, out, row_of);
-    x = tap_blocks<lanes, 1, accumulate>(tap, n, pairs, x, width, out, row_of);
-    tap_blocks<1, 1, accumulate>(tap, n, pairs, x, width, out, row_of);
+    int x = tap_blocks<lanes, kVecs / outputs, outputs, accumulate>(tap, n, pairs, 0, width, out, row_of);
+    x = tap_blocks<lanes, 1, outputs, accumulate>(tap, n, pairs, x, width, out, row_of);
+    tap_blocks<1, 1, outputs, accumulate>(tap, n, pairs, x, width, out, row_of);
 }
 
 struct ConvolveRow {
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* in, const float* taps, int n, int width, float* out) {
-        tap_sums<lanes, false>(taps, n, width, out, [in](int k) { return in + k; });
+        tap_sums<lanes, 1, false>(taps, n, width, &out, [in](int k) { return in + k; });
     }
 };
 
-template <bool accumulate>
+template <int outputs, bool accumulate>
 struct ConvolveColumn {
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* const* rows, const float* taps, int n, int width,
-                                                   float* out) {
-        tap_sums<lanes, accumulate>(taps, n, width, out, [rows](int k) { return rows[k]; });
+                                                   float* const* out) {
+        tap_sums<lanes, outputs, accumulate>(taps, n, width, out, [rows](int k) { return rows[k]; });
     }
 };
 
@@ -112,19 +122,27 @@ void convolve_row(const float* in, const std::vector<float>& taps, int width, fl
 }
 
 void convolve_column(const float* const* rows, const std::vector<float>& taps, int width, float* out) {
-    simd::dispatch<ConvolveColumn<false>>(rows, taps.data(), int(taps.size()), width, out);
+    simd::dispatch<ConvolveColumn<1, false>>(rows, taps.data(), int(taps.size()), width, &out);
 }
 
 void convolve_column_add(const float* const* rows, const std::vector<float>& taps, int width, float* out) {
-    simd::dispatch<ConvolveColumn<true>>(rows, taps.data(), int(taps.size()), width, out);
+    simd::dispatch<ConvolveColumn<1, true>>(rows, taps.data(), int(taps.size()), width, &out);
+}
+
+void convolve_columns(const float* const* rows, const std::vector<float>& taps, int width, float* const* out,
+                      bool add) {
+    if (add)
+        simd::dispatch<ConvolveColumn<2, true>>(rows, taps.data(), int(taps.size()), width, out);
+    else
+        simd::dispatch<ConvolveColumn<2, false>>(rows, taps.data(), int(taps.size()), width, out);
 }
 
 SeparableStream::SeparableStream(int width, const std::vector<const SeparableFilter*>& filters, int row_begin,
-                                 int row_end, Source source)
-    : width_(width), radius_(0), row_begin_(row_begin), row_end_(row_end), filters_(filters),
-      source_(std::move(source)) {
+                                 int row_end, int rows_end, Source source)
+    : width_(width), radius_(0), row_begin_(row_begin), row_end_(row_end), rows_end_(rows_end), filters_(filters),
+      pending_row_(std::numeric_limits<int>::min()), source_(std::move(source)) {
     for (const SeparableFilter* f : filters_) radius_ = std::max(radius_, f->radius());
-    slots_ = 2 * radius_ + 1;
+    slots_ = 2 * radius_ + 2;
     // Rows are a cache line more than the width apart: at widths of a power of two, rows
     // exactly 2^k bytes apart share the L1 cache's sets and would evict each other.
     stride_ = size_t(width) + 16;
@@ -138,6 +156,7 @@ SeparableStream::SeparableStream(int width, const std::vector<const SeparableFil
         ring_.emplace_back(std::max<size_t>(1, f->terms.size()) * slots_ * stride_);
         padded_.emplace_back(size_t(width) + 2 * radius_);
         padded_rows_.push_back(padded_.back().data());
+        pending_.emplace_back(size_t(width));
     }
     column_.resize(slots_);
 }
@@ -147,11 +166,17 @@ float* SeparableStream::ring_row(size_t plane, int term, int y) {
 }
 
 void SeparableStream::row(int y, float* const* result) {
+    if (y == pending_row_) {
+        for (size_t p = 0; p < filters_.size(); ++p) std::copy_n(pending_[p].data(), width_, result[p]);
+        pending_row_ = std::numeric_limits<int>::min();
+        return;
+    }
     if (!started_) {
         next_ = std::max(y - radius_, row_begin_);
         started_ = true;
     }
-    for (; next_ <= std::min(y + radius_, row_end_ - 1); ++next_) {
+    const int rows = y + 1 < rows_end_ ? 2 : 1;  // this row, and the next with it where it is asked for
+    for (; next_ <= std::min(y + rows - 1 + radius_, row_end_ - 1); ++next_) {
         source_(next_, padded_rows_.data());
         for (size_t p = 0; p < filters_.size(); ++p) {
             const SeparableFilter& f = *filters_[p];
@@ -162,23 +187,29 @@ void SeparableStream::row(int y, float* const* result) {
     }
     for (size_t p = 0; p < filters_.size(); ++p) {
         const SeparableFilter& f = *filters_[p];
+        float* out[2] = {result[p], pending_[p].data()};
         if (f.terms.empty()) {
-            std::copy_n(ring_row(p, 0, y), width_, result[p]);
+            for (int o = 0; o < rows; ++o) std::copy_n(ring_row(p, 0, y + o), width_, out[o]);
             continue;
         }
         const int r = f.radius();
         for (size_t t = 0; t < f.terms.size(); ++t) {
-            for (int k = -r; k <= r; ++k) column_[k + r] = ring_row(p, int(t), std::clamp(y + k, row_begin_, row_end_ - 1));
-            (t == 0 ? convolve_column : convolve_column_add)(column_.data(), vertical_[p][t], width_, result[p]);
+            for (int k = -r; k <= r + rows - 1; ++k)
+                column_[k + r] = ring_row(p, int(t), std::clamp(y + k, row_begin_, row_end_ - 1));
+            if (rows == 2)
+                convolve_columns(column_.data(), vertical_[p][t], width_, out, t > 0);
+            else
+                (t == 0 ? convolve_column : convolve_column_add)(column_.data(), vertical_[p][t], width_, out[0]);
         }
     }
+    if (rows == 2) pending_row_ = y + 1;
 }
 
 void filter_separable(const Window& out, const SeparableFilter& filter, int row_begin, int row_end, int threads,
                       const RowSource& source, const RowTarget& target, const RowSink& sink) {
     const int width = out.width();
     parallel_for(out.y0, out.y1, threads, [&](int y_begin, int y_end) {
-        SeparableStream stream(width, {&filter}, row_begin, row_end,
+        SeparableStream stream(width, {&filter}, row_begin, row_end, y_end,
                                [&](int y, float* const* padded) { source(y, padded[0]); });
         std::vector<float> filtered(width);
         for (int y = y_begin; y < y_end; ++y) {

@@ -22,6 +22,10 @@ void convolve_row(const float* in, const std::vector<float>& taps, int width, fl
 // One row of a vertical pass: out[x] = sum_k taps[k] rows[k][x], or added to out.
 void convolve_column(const float* const* rows, const std::vector<float>& taps, int width, float* out);
 void convolve_column_add(const float* const* rows, const std::vector<float>& taps, int width, float* out);
+// Two consecutive rows of a vertical pass at once: out[o][x] (+)= sum_k taps[k] rows[k + o][x]
+// for o = 0, 1 (rows holds taps + 1 rows), each value as convolve_column sums it.
+void convolve_columns(const float* const* rows, const std::vector<float>& taps, int width, float* const* out,
+                      bool add);
 
 // A sum of separable filters, sum_t sign_t (taps_t in x, then taps_t in y), all of 2r + 1
 // taps. No terms: the identity.
@@ -34,21 +38,23 @@ struct SeparableFilter {
 // Planes filtered as they stream down the rows, each by its own SeparableFilter, for one
 // thread: output rows in increasing order, each summed from the rows its vertical pass reads
 // (clamped to [row_begin, row_end)), which are filtered horizontally once each and kept in a
-// ring of 2R + 1 (R the largest radius), so that they stay in cache. source(y, padded) writes
-// each plane's input row y, the width + 2R values from R before the first output pixel. Each output value is summed
-// in one fixed order (terms, then taps), so a row is the same whatever row a stream starts at.
+// ring of 2R + 2 (R the largest radius), so that they stay in cache; two consecutive output
+// rows are summed together (convolve_columns) where both are below rows_end, the end of the
+// rows the stream is asked for. source(y, padded) writes each plane's input row y, the
+// width + 2R values from R before the first output pixel. Each output value is summed in one
+// fixed order (terms, then taps), so a row is the same whatever row a stream starts at.
 class SeparableStream {
 public:
     using Source = std::function<void(int y, float* const* padded)>;
     SeparableStream(int width, const std::vector<const SeparableFilter*>& filters, int row_begin, int row_end,
-                    Source source);
+                    int rows_end, Source source);
     // Output row y of each plane into result[plane] (width values); y never decreases.
     void row(int y, float* const* result);
     int radius() const { return radius_; }
 
 private:
     float* ring_row(size_t plane, int term, int y);
-    int width_, radius_, row_begin_, row_end_, slots_;
+    int width_, radius_, row_begin_, row_end_, rows_end_, slots_;
     size_t stride_;
     std::vector<const SeparableFilter*> filters_;
     std::vector<std::vector<std::vector<float>>> vertical_;  // per plane and term, the sign folded in
@@ -56,6 +62,8 @@ private:
     std::vector<std::vector<float>> padded_;
     std::vector<float*> padded_rows_;
     std::vector<const float*> column_;
+    std::vector<std::vector<float>> pending_;  // per plane, output row pending_row_ (the pair's second)
+    int pending_row_;
     Source source_;
     int next_ = 0;  // the next row to filter horizontally
     bool started_ = false;

@@ -130,7 +130,7 @@ GrainNoiseStream::GrainNoiseStream(const std::vector<const GrainModel*>& grains,
     // White noise at absolute coordinates, from R before the window's first column: noise
     // exists at every coordinate, so the vertical pass reads real rows, never clamped ones.
     const int x0 = w.x0 - r, n = w.width() + 2 * r;
-    stream_ = std::make_unique<SeparableStream>(w.width(), filters, w.y0 - r, w.y1 + r, [this, x0, n](int y, float* const* noise) {
+    stream_ = std::make_unique<SeparableStream>(w.width(), filters, w.y0 - r, w.y1 + r, w.y1, [this, x0, n](int y, float* const* noise) {
         for (size_t l = 0; l < grains_.size(); ++l) {
             const GrainModel& g = *grains_[l];
             if (g.fast) {
