@@ -127,8 +127,8 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
                         StageTimes* times) const {
     const MaterialStages& film = film_stages_;
     const size_t layers = film.stock.layers.size();
-    const Window film_window =
-        print_ ? out_window.grown(paper_stages_.halo_px()).intersected(frame_) : out_window;  // the film's densities
+    const int paper_halo = print_ ? paper_stages_.halo_px() : 0;
+    const Window film_window = out_window.grown(paper_halo).intersected(frame_);  // the film's densities
     int film_radius = 0;
     std::vector<SeparableFilter> film_filters;
     for (const ScatterKernel& k : film.scatter) {
@@ -137,53 +137,42 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
     }
     // The exposure the film's scatter reads: its rows past the frame's edges are its edge pixels'.
     const int padded_x0 = film_window.x0 - film_radius, padded_x1 = film_window.x1 + film_radius;
-    const Window exposed = Window{padded_x0, film_window.y0 - film_radius, padded_x1, film_window.y1 + film_radius}
-                               .intersected(frame_);
     const FilmExposure exposure(in, film.rgb_weights, monochrome_input_, film_exposure_scale_);
-
-    // Halation first, on its coarse grid, from every halated layer's exposure.
-    std::vector<const HalationKernel*> halation_kernels;
-    std::vector<int> halation_plane(layers, -1);  // each layer's plane in `halation`
-    for (size_t l = 0; l < layers; ++l)
-        if (film.halation[l]) {
-            halation_plane[l] = int(halation_kernels.size());
-            halation_kernels.push_back(&*film.halation[l]);
-        }
-    std::unique_ptr<CoarseHalation> halation;
-    if (!halation_kernels.empty()) {
-        const auto start = std::chrono::steady_clock::now();
-        halation = std::make_unique<CoarseHalation>(
-            halation_kernels, exposed, frame_, threads, [&](int y, int x_begin, int x_end, float* const* rows) {
-                thread_local std::vector<float> unhalated[3];  // the layers without halation
-                float* layer_rows[3];
-                for (size_t l = 0; l < layers; ++l) {
-                    unhalated[l].resize(size_t(x_end - x_begin));
-                    layer_rows[l] = halation_plane[l] >= 0 ? rows[halation_plane[l]] : unhalated[l].data();
-                }
-                exposure.row(y, x_begin, x_end - x_begin, layer_rows);
-            });
-        if (times) times->add("halation", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    }
+    std::vector<const HalationKernel*> halation_kernels;  // per layer, null where it has none
+    for (const auto& h : film.halation) halation_kernels.push_back(h ? &*h : nullptr);
+    const bool halated = std::any_of(film.halation.begin(), film.halation.end(), [](const auto& h) { return bool(h); });
 
     std::mutex times_mutex;
     const int bands = std::min(resolve_thread_count(threads), out_window.height());  // as parallel_for splits
     parallel_for(out_window.y0, out_window.y1, threads, [&](int band_begin, int band_end) {
         RowClock clock(times != nullptr);
-        // Film: exposure and halation -> scatter -> develop and grain, on film_window's columns.
+        // Film: exposure and halation -> scatter -> develop and grain, on film_window's columns,
+        // for the rows the band's print reads.
+        const Window film_rows{film_window.x0, std::max(film_window.y0, band_begin - paper_halo), film_window.x1,
+                               std::min(film_window.y1, band_end + paper_halo)};
+        const Window exposed = film_rows.grown(film_radius).intersected(frame_);
+        std::unique_ptr<CoarseHalationStream> halation;
+        if (halated)
+            halation = std::make_unique<CoarseHalationStream>(
+                halation_kernels, exposed, frame_, [&](int y, int x_begin, int x_end, float* const* rows) {
+                    exposure.row(y, x_begin, x_end - x_begin, rows);
+                    clock.mark("expose");
+                });
         std::vector<const SeparableFilter*> filters;
         for (const SeparableFilter& f : film_filters) filters.push_back(&f);
-        SeparableStream film_scatter(film_window.width(), filters, frame_.y0, frame_.y1, film_window.y1,
+        SeparableStream film_scatter(film_window.width(), filters, frame_.y0, frame_.y1, film_rows.y1,
                                      [&](int y, float* const* padded) {
             clock.mark("scatter");  // (the filtering of the rows read before)
             float* inside[3];
             for (size_t l = 0; l < layers; ++l) inside[l] = padded[l] + (exposed.x0 - padded_x0);
-            exposure.row(y, exposed.x0, exposed.width(), inside);
-            clock.mark("expose");
-            for (size_t l = 0; l < layers; ++l) {
-                if (halation_plane[l] >= 0) halation->add(size_t(halation_plane[l]), y, inside[l], inside[l]);
-                hold_frame_edges(padded[l], padded_x0, padded_x1, frame_);
+            if (halation) {
+                halation->row(y, inside);
+                clock.mark("halation");
+            } else {
+                exposure.row(y, exposed.x0, exposed.width(), inside);
+                clock.mark("expose");
             }
-            clock.mark("halation");
+            for (size_t l = 0; l < layers; ++l) hold_frame_edges(padded[l], padded_x0, padded_x1, frame_);
         });
         LayerDevelop film_develop(film, film_window);
         Rows density(layers, film_window.width());

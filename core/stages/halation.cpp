@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -71,108 +73,136 @@ std::pair<int, int> coarse_range(int lo, int hi, int d) {
 
 }  // namespace
 
-CoarseHalation::CoarseHalation(const std::vector<const HalationKernel*>& kernels, const Window& out,
-                               const Window& frame, int threads, const Reader& read)
-    : out_(out) {
-    const int d = kernels[0]->decimation;
-    struct Part {
-        Window means_window, blurred_window;
-        int inside0, inside1;  // the columns of the frame its block means read
-    };
-    std::vector<Part> parts;
-    Window reads{frame.x1, frame.y1, frame.x0, frame.y0};  // the union of what the parts read
-    for (const HalationKernel* k : kernels) {
-        if (k->decimation != d) throw std::invalid_argument("coarse halation: the planes' decimations differ");
-        auto [cx0, cx1] = coarse_range(out.x0, out.x1, d);
-        auto [cy0, cy1] = coarse_range(out.y0, out.y1, d);
-        Part part;
-        part.blurred_window = {cx0, cy0, cx1, cy1};
-        part.means_window = part.blurred_window.grown(int(k->taps.size() / 2));
-        part.inside0 = std::clamp(part.means_window.x0 * d, frame.x0, frame.x1);
-        part.inside1 = std::clamp(part.means_window.x1 * d, frame.x0, frame.x1);
-        reads = {std::min(reads.x0, part.inside0), std::min(reads.y0, part.means_window.y0),
-                 std::max(reads.x1, part.inside1), std::max(reads.y1, part.means_window.y1)};
-        parts.push_back(part);
+CoarseHalationStream::CoarseHalationStream(const std::vector<const HalationKernel*>& kernels, const Window& out,
+                                           const Window& frame, Source source)
+    : out_(out), frame_(frame), source_(std::move(source)), planes_(kernels.size()) {
+    int r = 0;  // the largest coarse Gaussian's radius
+    for (size_t p = 0; p < kernels.size(); ++p) {
+        if (!kernels[p]) continue;
+        if (d_ && kernels[p]->decimation != d_) throw std::invalid_argument("coarse halation: the planes' decimations differ");
+        d_ = kernels[p]->decimation;
+        r = std::max(r, int(kernels[p]->taps.size() / 2));
+        planes_[p].strength = float(kernels[p]->strength);
+        planes_[p].filter = SeparableFilter{{kernels[p]->taps}, {1.0f}};
+        halated_.push_back(p);
     }
-    // Block means of the image extended past the frame by its edge pixels, as the Gaussian on
-    // the pixels reads it (blocks past the frame too, so that the coarse Gaussian clamps
-    // nothing of its own): each block's rows summed column by column (whole rows, in vector
-    // registers), then its columns. Every plane's rows come from one read of each fine row.
-    std::vector<Plane> means;
-    for (const Part& part : parts) means.emplace_back(part.means_window);
-    parallel_for(reads.y0, reads.y1, threads, [&](int by_begin, int by_end) {
-        const size_t planes = parts.size();
-        std::vector<std::vector<float>> column_sums(planes), row(planes);
-        std::vector<float*> rows(planes);
-        for (size_t p = 0; p < planes; ++p) {
-            column_sums[p].resize(size_t(parts[p].means_window.width()) * d);
-            row[p].resize(size_t(reads.x1 - reads.x0));
-            rows[p] = row[p].data();
-        }
-        for (int by = by_begin; by < by_end; ++by) {
-            for (int k = 0; k < d; ++k) {
-                read(std::clamp(by * d + k, frame.y0, frame.y1 - 1), reads.x0, reads.x1, rows.data());
-                for (size_t p = 0; p < planes; ++p) {
-                    const Part& part = parts[p];
-                    if (by < part.means_window.y0 || by >= part.means_window.y1) continue;
-                    const float* in = rows[p] + (part.inside0 - reads.x0);
-                    float* sums = column_sums[p].data() + (part.inside0 - part.means_window.x0 * d);
-                    if (k == 0)
-                        std::copy(in, in + (part.inside1 - part.inside0), sums);
-                    else
-                        simd::dispatch<AddRow>(sums, in, part.inside1 - part.inside0);
-                }
-            }
-            for (size_t p = 0; p < planes; ++p) {
-                const Part& part = parts[p];
-                if (by < part.means_window.y0 || by >= part.means_window.y1) continue;
-                // The columns past the frame's edges are its edge columns.
-                std::vector<float>& sums = column_sums[p];
-                const int px_begin = part.means_window.x0 * d;
-                std::fill(sums.begin(), sums.begin() + (part.inside0 - px_begin), sums[part.inside0 - px_begin]);
-                std::fill(sums.begin() + (part.inside1 - px_begin), sums.end(), sums[part.inside1 - 1 - px_begin]);
-                for (int bx = part.means_window.x0; bx < part.means_window.x1; ++bx) {
-                    float sum = 0;
-                    for (int x = bx * d; x < bx * d + d; ++x) sum += sums[size_t(x - px_begin)];
-                    means[p].at(bx, by) = sum / float(d * d);
-                }
-            }
-        }
-    });
-    // Bilinear interpolation at each fine pixel's centre: first along x, once per coarse row
-    // (the columns' blocks and weights are the same on every row), here; then along y
-    // between the two rows a fine row falls between, in add().
-    const int width = out.width();
-    std::vector<int> column0(width), column1(width);
-    std::vector<float> tx(width);
-    for (size_t p = 0; p < parts.size(); ++p) {
-        const Window& bw = parts[p].blurred_window;
-        for (int x = out.x0; x < out.x1; ++x) {
-            const int i = floor_div(2 * x + 1 - d, 2 * d), c = x - out.x0;
-            tx[c] = float(2 * x + 1 - d - 2 * d * i) / float(2 * d);
-            column0[c] = i - bw.x0;
-            column1[c] = i + 1 - bw.x0;
-        }
-        Plane blurred(bw);
-        convolve_separable(means[p], blurred, kernels[p]->taps, parts[p].means_window, threads);
-        Plane across = Plane::unset(Window{out.x0, bw.y0, out.x1, bw.y1});
-        parallel_for(bw.y0, bw.y1, threads, [&](int y_begin, int y_end) {
-            for (int j = y_begin; j < y_end; ++j) {
-                const float* row = blurred.row(j);
-                float* o = across.row(j);
-                for (int c = 0; c < width; ++c) o[c] = row[column0[c]] + tx[c] * (row[column1[c]] - row[column0[c]]);
-            }
-        });
-        planes_.push_back({float(kernels[p]->strength), d, std::move(across)});
+    if (halated_.empty()) throw std::invalid_argument("coarse halation: no plane has halation");
+    auto [cx0, cx1] = coarse_range(out.x0, out.x1, d_);
+    auto [cy0, cy1] = coarse_range(out.y0, out.y1, d_);
+    blurred_window_ = {cx0, cy0, cx1, cy1};
+    means_window_ = blurred_window_.grown(r);
+    inside0_ = std::clamp(means_window_.x0 * d_, frame.x0, frame.x1);
+    inside1_ = std::clamp(means_window_.x1 * d_, frame.x0, frame.x1);
+    read_x0_ = std::min(std::max(out.x0, frame.x0), inside0_), read_x1_ = std::max(std::min(out.x1, frame.x1), inside1_);
+    // The columns' blocks and weights of the interpolation along x (the same on every row).
+    for (int x = out.x0; x < out.x1; ++x) {
+        const int i = floor_div(2 * x + 1 - d_, 2 * d_);
+        tx_.push_back(float(2 * x + 1 - d_ - 2 * d_ * i) / float(2 * d_));
+        column0_.push_back(i - blurred_window_.x0);
+    }
+    std::vector<const SeparableFilter*> filters;
+    for (size_t p : halated_) {
+        PlaneHalo& plane = planes_[p];
+        filters.push_back(&plane.filter);
+        plane.column_sums.resize(size_t(means_window_.width()) * d_);
+        plane.blurred.resize(size_t(blurred_window_.width()));
+        for (auto& row : plane.across) row.resize(size_t(out.width()));
+    }
+    blurred_rows_.resize(halated_.size());
+    // Every plane's coarse rows from one stream, so that each fine row is read once for all.
+    blur_ = std::make_unique<SeparableStream>(blurred_window_.width(), filters, means_window_.y0, means_window_.y1,
+                                              blurred_window_.y1,
+                                              [this](int by, float* const* means) { block_means(by, means); });
+    // Output row y lies above coarse row j + 1 <= y / d + 1, whose blur (with the next, as the
+    // stream sums rows in pairs) reads block rows to j + 2 + r, each d fine rows.
+    slots_ = d_ * (r + 5) + 2;
+    ring_.assign(planes_.size(), std::vector<float>(size_t(slots_) * size_t(read_x1_ - read_x0_)));
+    ring_rows_.resize(planes_.size());
+}
+
+float* CoarseHalationStream::ring_row(size_t plane, int y) {
+    if (y < next_ - slots_ || y >= next_) throw std::logic_error("coarse halation: a row outside the stream's ring");
+    return &ring_[plane][size_t(((y % slots_) + slots_) % slots_) * size_t(read_x1_ - read_x0_)];
+}
+
+// Reads fine rows up to y (within the frame) into the ring.
+void CoarseHalationStream::read_to(int y) {
+    if (!started_) {
+        next_ = std::clamp(y, frame_.y0, frame_.y1 - 1);
+        started_ = true;
+    }
+    for (; next_ <= y; ++next_) {
+        for (size_t p = 0; p < planes_.size(); ++p)
+            ring_rows_[p] = &ring_[p][size_t(((next_ % slots_) + slots_) % slots_) * size_t(read_x1_ - read_x0_)];
+        source_(next_, read_x0_, read_x1_, ring_rows_.data());
     }
 }
 
-void CoarseHalation::add(size_t plane, int y, const float* in, float* out) const {
-    const Interpolated& p = planes_[plane];
-    const int d = p.decimation;
-    const int j = floor_div(2 * y + 1 - d, 2 * d);
-    const float ty = float(2 * y + 1 - d - 2 * d * j) / float(2 * d);
-    simd::dispatch<AddHaloRow>(in, p.across.row(j), p.across.row(j + 1), ty, p.strength, out_.width(), out);
+// Block means of the image extended past the frame by its edge pixels, as the Gaussian on
+// the pixels reads it (blocks past the frame too, so that the coarse Gaussian clamps nothing
+// of its own): the block row's d rows summed column by column (whole rows, in vector
+// registers), then each block's d columns; for every halated plane, means[i] its row.
+void CoarseHalationStream::block_means(int by, float* const* means) {
+    const int d = d_, px_begin = means_window_.x0 * d, n = inside1_ - inside0_;
+    for (int k = 0; k < d; ++k) {
+        const int y = std::clamp(by * d + k, frame_.y0, frame_.y1 - 1);
+        read_to(y);
+        for (size_t p : halated_) {
+            const float* in = ring_row(p, y) + (inside0_ - read_x0_);
+            float* sums = planes_[p].column_sums.data() + (inside0_ - px_begin);
+            if (k == 0)
+                std::copy(in, in + n, sums);
+            else
+                simd::dispatch<AddRow>(sums, in, n);
+        }
+    }
+    for (size_t i = 0; i < halated_.size(); ++i) {
+        // The columns past the frame's edges are its edge columns.
+        std::vector<float>& sums = planes_[halated_[i]].column_sums;
+        std::fill(sums.begin(), sums.begin() + (inside0_ - px_begin), sums[inside0_ - px_begin]);
+        std::fill(sums.begin() + (inside1_ - px_begin), sums.end(), sums[inside1_ - 1 - px_begin]);
+        for (int bx = means_window_.x0; bx < means_window_.x1; ++bx) {
+            float sum = 0;
+            for (int x = bx * d; x < bx * d + d; ++x) sum += sums[size_t(x - px_begin)];
+            means[i][bx - means_window_.x0] = sum / float(d * d);
+        }
+    }
+}
+
+// Coarse row j of every plane's blurred means, interpolated along x to out's columns (the
+// last two rows are kept).
+void CoarseHalationStream::interpolate(int j) {
+    if (across_row_[j & 1] == j) return;
+    for (size_t i = 0; i < halated_.size(); ++i) blurred_rows_[i] = planes_[halated_[i]].blurred.data();
+    blur_->row(j, blurred_rows_.data());
+    for (size_t p : halated_) {
+        const float* blurred = planes_[p].blurred.data();
+        std::vector<float>& row = planes_[p].across[j & 1];
+        for (size_t i = 0; i < row.size(); ++i) {
+            const float* b = blurred + column0_[i];
+            row[i] = b[0] + tx_[i] * (b[1] - b[0]);
+        }
+    }
+    across_row_[j & 1] = j;
+}
+
+void CoarseHalationStream::row(int y, float* const* result) {
+    // The coarse rows first: they read the fine rows below this one.
+    const int j = floor_div(2 * y + 1 - d_, 2 * d_);
+    interpolate(j);
+    interpolate(j + 1);
+    read_to(y);
+    for (size_t p = 0; p < planes_.size(); ++p) {
+        const float* in = ring_row(p, y) + (out_.x0 - read_x0_);
+        const PlaneHalo& plane = planes_[p];
+        if (plane.column_sums.empty()) {
+            std::copy_n(in, out_.width(), result[p]);
+            continue;
+        }
+        const float ty = float(2 * y + 1 - d_ - 2 * d_ * j) / float(2 * d_);
+        simd::dispatch<AddHaloRow>(in, plane.across[j & 1].data(), plane.across[(j + 1) & 1].data(), ty,
+                                   plane.strength, out_.width(), result[p]);
+    }
 }
 
 HalationKernel design_halation(double strength, double radius_um, double pixel_pitch_um, int decimation) {
@@ -195,13 +225,17 @@ HalationKernel design_halation(double strength, double radius_um, double pixel_p
 
 void apply_halation(const Plane& src, Plane& dst, const HalationKernel& kernel, const Window& frame, int threads) {
     const Window& w = dst.window;
-    auto src_row = [&](int y) { return src.row(y) + (w.x0 - src.window.x0); };
     if (kernel.decimation > 1) {
-        const CoarseHalation halo({&kernel}, w, frame, threads, [&](int y, int x_begin, int x_end, float* const* rows) {
-            std::copy(src.row(y) + (x_begin - src.window.x0), src.row(y) + (x_end - src.window.x0), rows[0]);
-        });
         parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
-            for (int y = y_begin; y < y_end; ++y) halo.add(0, y, src_row(y), dst.row(y));
+            CoarseHalationStream halo({&kernel}, Window{w.x0, y_begin, w.x1, y_end}, frame,
+                                      [&](int y, int x_begin, int x_end, float* const* rows) {
+                                          const float* in = src.row(y) - src.window.x0;
+                                          std::copy(in + x_begin, in + x_end, rows[0]);
+                                      });
+            for (int y = y_begin; y < y_end; ++y) {
+                float* row = dst.row(y);
+                halo.row(y, &row);
+            }
         });
         return;
     }
@@ -209,7 +243,7 @@ void apply_halation(const Plane& src, Plane& dst, const HalationKernel& kernel, 
     const float strength = float(kernel.strength);
     parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
         for (int y = y_begin; y < y_end; ++y) {
-            const float* in = src_row(y);
+            const float* in = src.row(y) + (w.x0 - src.window.x0);
             float* out = dst.row(y);
             for (int x = 0; x < w.width(); ++x) out[x] = in[x] + strength * out[x];
         }

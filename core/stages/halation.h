@@ -6,10 +6,13 @@
 // halation raises the exposure of bright areas' surroundings and of the areas themselves).
 #pragma once
 
+#include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "core/image.h"
+#include "core/stages/filters.h"
 #include "core/stock.h"
 
 namespace darkroom {
@@ -32,27 +35,51 @@ struct HalationKernel {
 // strength is the stock's, already multiplied by the user's scale.
 HalationKernel design_halation(double strength, double radius_um, double pixel_pitch_um, int decimation = 1);
 
-// The fast tiers' halation of planes whose kernels have the same decimation (> 1), prepared
-// for the window `out`: the coarse grid's blurred block means, interpolated along x.
-// read(y, x_begin, x_end, rows) writes each plane's row y (within the frame) at x in
-// [x_begin, x_end), which lies within the frame; several planes read each row once.
-class CoarseHalation {
+// The fast tiers' halation (decimation > 1), streamed down the rows of `out` for one thread:
+// row y of each plane with its halo added, y increasing. The planes' rows come from
+// source(y, x_begin, x_end, rows), which writes each plane's row y (within the frame) at x in
+// [x_begin, x_end) (the columns the block means read, which lie within the frame, and out's);
+// they are read once each, in order, as far ahead as the halo reaches (kept in a ring), and
+// the coarse grid's block means, blurred rows (a SeparableStream) and their interpolation
+// along x are built as they arrive. A plane whose kernel is null passes through.
+class CoarseHalationStream {
 public:
-    using Reader = std::function<void(int y, int x_begin, int x_end, float* const* rows)>;
-    CoarseHalation(const std::vector<const HalationKernel*>& kernels, const Window& out, const Window& frame,
-                   int threads, const Reader& read);
-    // out[x] = in[x] + strength * halo at (x, y), for the columns of `out` (in and out start at
-    // its first column; y one of its rows).
-    void add(size_t plane, int y, const float* in, float* out) const;
+    using Source = std::function<void(int y, int x_begin, int x_end, float* const* rows)>;
+    CoarseHalationStream(const std::vector<const HalationKernel*>& kernels, const Window& out, const Window& frame,
+                         Source source);
+    CoarseHalationStream(const CoarseHalationStream&) = delete;  // (its coarse streams hold `this`)
+    CoarseHalationStream& operator=(const CoarseHalationStream&) = delete;
+    void row(int y, float* const* result);
 
 private:
-    struct Interpolated {
-        float strength;
-        int decimation;
-        Plane across;  // the blurred coarse rows interpolated to out's columns
+    struct PlaneHalo {
+        float strength = 0;
+        SeparableFilter filter;
+        std::vector<float> column_sums, blurred;  // none: no halation
+        std::vector<float> across[2];             // coarse rows j (by j's parity) interpolated to out's columns
     };
-    Window out_;
-    std::vector<Interpolated> planes_;
+    float* ring_row(size_t plane, int y);
+    void read_to(int y);
+    void block_means(int by, float* const* means);
+    void interpolate(int j);
+
+    Window out_, frame_;
+    Source source_;
+    std::vector<PlaneHalo> planes_;
+    std::vector<size_t> halated_;  // the planes with halation
+    int d_ = 0;                    // their decimation
+    Window means_window_, blurred_window_;
+    int inside0_ = 0, inside1_ = 0;  // the frame's columns the block means read
+    std::vector<float> tx_;
+    std::vector<int> column0_;
+    std::unique_ptr<SeparableStream> blur_;
+    std::vector<float*> blurred_rows_;
+    int across_row_[2] = {INT32_MIN, INT32_MIN};
+    int read_x0_ = 0, read_x1_ = 0, slots_ = 0;
+    std::vector<std::vector<float>> ring_;  // per plane, the fine rows read
+    std::vector<float*> ring_rows_;
+    int next_ = 0;  // the next fine row to read
+    bool started_ = false;
 };
 
 // dst = src + strength * gauss(src) on dst.window, reading src with coordinates clamped to
