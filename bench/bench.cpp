@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/demo_scene.h"
+#include "core/simd.h"
 #include "core/parallel.h"
 #include "core/plate/grain_analysis.h"
 
@@ -207,6 +208,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
 
     BenchReport r;
     r.machine = describe_machine();
+    r.isa = simd::isa_name(simd::isa());
     r.threads = resolve_thread_count(o.threads);
     r.width = o.width, r.height = o.height;
     r.film = film.id, r.paper = paper.id;
@@ -322,7 +324,8 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
 
         if (q == Quality::fast) {
             const TierResult& fast = r.tiers.back();
-            Image out_neutral(o.width, o.height, 3);
+            Image fast_pixels(o.width, o.height, 3), out_neutral(o.width, o.height, 3);
+            plan.run(scene.view(), fast_pixels.view(), o.threads);
             struct Off {
                 const char* stage;
                 void (*turn_off)(DevelopSettings&);
@@ -340,6 +343,21 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
                 r.disabled.push_back({off.stage, timed.seconds, timed.stages,
                                       stage_seconds_when_on(fast.stages, timed.stages, off.stage),
                                       fast.seconds - timed.seconds, neutral.seconds, out.pixels == out_neutral.pixels});
+            }
+            say("fast stage after stage");
+            DevelopSettings staged = s;
+            staged.one_pass = false;
+            Timed timed = time_frame(Plan::compile(film, &paper, staged, frame), scene, out_neutral, o.runs, o.threads);
+            r.fast_run_variants.push_back({"stage after stage", timed.seconds, fast_pixels.pixels == out_neutral.pixels});
+            const simd::Isa widest = simd::isa();
+            for (simd::Isa isa : {simd::Isa::avx2, simd::Isa::baseline}) {
+                if (int(isa) >= int(widest)) continue;
+                say(std::string("fast on ") + simd::isa_name(isa));
+                simd::set_isa(isa);
+                timed = time_frame(plan, scene, out_neutral, o.runs, o.threads);
+                simd::set_isa(widest);
+                r.fast_run_variants.push_back({std::string(simd::isa_name(isa)) + " vectors", timed.seconds,
+                                               fast_pixels.pixels == out_neutral.pixels});
             }
             r.target.evaluated = true;
             r.target.copy_ratio = copy_ratio(fast.seconds, r.copy_seconds);

@@ -22,7 +22,8 @@
 //   reference's (core/plate/grain_compare.h). The reference is also compared with itself
 //   under another seed: that is the measurement's noise floor.
 // Disabled stages: the fast tier again with grain, MTF and halation off in turn, each left
-// out of the plan and, for comparison, kept in it at its neutral value.
+// out of the plan and, for comparison, kept in it at its neutral value. Then the fast tier
+// stage after stage and at each narrower instruction set the processor runs.
 #pragma once
 
 #include <functional>
@@ -95,6 +96,15 @@ struct DisabledStage {
     bool identical_pixels = false;
 };
 
+// The fast tier's frame run another way: stage after stage over whole planes
+// (DevelopSettings::one_pass = false), or at narrower vectors (core/simd.h): what one pass and
+// wide vectors save; the pixels must be the fast tier's own.
+struct RunVariant {
+    std::string way;
+    double seconds = 0;
+    bool identical_pixels = false;
+};
+
 struct TargetCheck {
     bool evaluated = false;    // the fast tier was benchmarked
     double max_copy_ratio = 10, max_mean_de2000 = 0.5;
@@ -120,6 +130,8 @@ struct BenchReport {
     GrainMatchTolerance grain_tolerance;
     std::vector<TierResult> tiers;  // reference first
     std::vector<DisabledStage> disabled;
+    std::string isa;                  // the instruction set the tiers ran on (core/simd.h)
+    std::vector<RunVariant> fast_run_variants;
     TargetCheck target;
 };
 

@@ -53,7 +53,7 @@ nlohmann::json report_json(const bench::BenchReport& r) {
     nlohmann::json windows = nlohmann::json::array();
     for (const Window& w : r.sample_windows) windows.push_back({w.x0, w.y0, w.width(), w.height()});
     nlohmann::json doc = {
-        {"machine", {{"cpu", r.machine.cpu}, {"cores", r.machine.cores}, {"threads", r.threads}}},
+        {"machine", {{"cpu", r.machine.cpu}, {"cores", r.machine.cores}, {"threads", r.threads}, {"isa", r.isa}}},
         {"frame", {{"width", r.width}, {"height", r.height}, {"scene", "demo"}, {"pixel_pitch_um", r.pixel_pitch_um}}},
         {"film", r.film},
         {"paper", r.paper},
@@ -105,6 +105,12 @@ nlohmann::json report_json(const bench::BenchReport& r) {
                                           {"neutral_stage_kept_seconds", d.neutral_seconds},
                                           {"identical_pixels_to_neutral_stage_kept", d.identical_pixels},
                                           {"stages", stages_json(d.stages, r.copy_seconds)}});
+    doc["fast_run_variants"] = nlohmann::json::array();
+    for (const auto& v : r.fast_run_variants)
+        doc["fast_run_variants"].push_back({{"way", v.way},
+                                            {"seconds", v.seconds},
+                                            {"copy_ratio", bench::copy_ratio(v.seconds, r.copy_seconds)},
+                                            {"identical_pixels", v.identical_pixels}});
     doc["target"] = {{"evaluated", r.target.evaluated},
                      {"tier", "fast"},
                      {"max_copy_ratio", r.target.max_copy_ratio},
@@ -140,7 +146,8 @@ void print_report(const bench::BenchReport& r) {
     std::printf("darkroom bench: %s printed on %s, the %dx%d demo scene at %.3g um on film (a 4096 px wide frame's "
                 "pitch), grain, MTF and halation on\n",
                 r.film.c_str(), r.paper.c_str(), r.width, r.height, r.pixel_pitch_um);
-    std::printf("machine: %s, %d cores, %d threads used\n", r.machine.cpu.c_str(), r.machine.cores, r.threads);
+    std::printf("machine: %s, %d cores, %d threads used, %s vectors\n", r.machine.cpu.c_str(), r.machine.cores,
+                r.threads, r.isa.c_str());
     std::printf("copy pass (float RGB, same threads, parallel over rows): %.2f ms, fastest of %d. Develop times: fastest "
                 "of %d runs after 1 warm-up, in ms and x the copy pass\n\n",
                 copy_s * 1e3, r.copy_runs, r.runs);
@@ -217,6 +224,14 @@ void print_report(const bench::BenchReport& r) {
         }
         std::printf("(kept at neutral: the stage left in the plan with its neutral value, so that leaving it out is "
                     "seen to save its time and change no pixel)\n");
+    }
+    if (!r.fast_run_variants.empty()) {
+        std::printf("\nfast tier run other ways (whole frame):\n");
+        print_row("way", {"develop", "same pixels"});
+        for (const auto& v : r.fast_run_variants)
+            print_row("  " + v.way, {ms_cell(v.seconds, copy_s), v.identical_pixels ? "yes" : "NO"});
+        std::printf("(stage after stage: each stage over whole planes, as the other tiers run; vectors: the "
+                    "kernels compiled for a narrower instruction set)\n");
     }
     if (!r.target.evaluated)
         std::printf("\ntarget (issue 8): not evaluated, the fast tier was not run\n");

@@ -28,8 +28,9 @@ namespace {
 class RowClock {
 public:
     explicit RowClock(bool on) : on_(on), last_(Clock::now()) {}
+    // (stage null: the time goes to the next named stage.)
     void mark(const char* stage) {
-        if (!on_) return;
+        if (!on_ || !stage) return;
         const Clock::time_point now = Clock::now();
         times_.add(stage, std::chrono::duration<double>(now - last_).count());
         last_ = now;
@@ -49,6 +50,14 @@ private:
 
 SeparableFilter scatter_filter(const ScatterKernel& k) {
     return k.is_identity() ? SeparableFilter{} : SeparableFilter{k.separable, k.separable_sign};
+}
+
+// The stage a material's scatter is timed as: none where no layer has one (its stream then
+// only passes the rows through).
+const char* scatter_stage(const std::vector<SeparableFilter>& filters) {
+    for (const SeparableFilter& f : filters)
+        if (!f.terms.empty()) return "scatter";
+    return nullptr;
 }
 
 // Every layer's scatter kernel can stream: separable, or none.
@@ -142,6 +151,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
     for (const auto& h : film.halation) halation_kernels.push_back(h ? &*h : nullptr);
     const bool halated = std::any_of(film.halation.begin(), film.halation.end(), [](const auto& h) { return bool(h); });
 
+    const char* film_scatter_stage = scatter_stage(film_filters);
     std::mutex times_mutex;
     const int bands = std::min(resolve_thread_count(threads), out_window.height());  // as parallel_for splits
     parallel_for(out_window.y0, out_window.y1, threads, [&](int band_begin, int band_end) {
@@ -162,7 +172,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         for (const SeparableFilter& f : film_filters) filters.push_back(&f);
         SeparableStream film_scatter(film_window.width(), filters, frame_.y0, frame_.y1, film_rows.y1,
                                      [&](int y, float* const* padded) {
-            clock.mark("scatter");  // (the filtering of the rows read before)
+            clock.mark(film_scatter_stage);  // (the filtering of the rows read before)
             float* inside[3];
             for (size_t l = 0; l < layers; ++l) inside[l] = padded[l] + (exposed.x0 - padded_x0);
             if (halation) {
@@ -178,7 +188,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         Rows density(layers, film_window.width());
         auto film_density_row = [&](int y) {  // film_window's row y, into `density`
             film_scatter.row(y, density.data());
-            clock.mark("scatter");
+            clock.mark(film_scatter_stage);
             film_develop.row(y, density.data(), film_window.width(), clock);
         };
 
@@ -204,12 +214,13 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         std::vector<const SeparableFilter*> paper_filters_used;
         for (const ScatterKernel& k : paper.scatter) paper_scatter_filters.push_back(scatter_filter(k));
         for (const SeparableFilter& f : paper_scatter_filters) paper_filters_used.push_back(&f);
+        const char* paper_scatter_stage = scatter_stage(paper_scatter_filters);
         int paper_radius = 0;
         for (const SeparableFilter& f : paper_scatter_filters) paper_radius = std::max(paper_radius, f.radius());
         const int paper_x0 = out_window.x0 - paper_radius, paper_x1 = out_window.x1 + paper_radius;
         SeparableStream paper_scatter(out_window.width(), paper_filters_used, frame_.y0, frame_.y1, band_end,
                                       [&](int y, float* const* padded) {
-                                          clock.mark("scatter");  // (the filtering of the rows read before)
+                                          clock.mark(paper_scatter_stage);  // (the filtering of the rows read before)
                                           film_density_row(y);
                                           float* inside[3];
                                           for (int j = 0; j < 3; ++j) inside[j] = padded[j] + (film_window.x0 - paper_x0);
@@ -227,7 +238,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         Rows spread(3, out_window.width());
         for (int y = band_begin; y < band_end; ++y) {
             paper_scatter.row(y, spread.data());
-            clock.mark("scatter");
+            clock.mark(paper_scatter_stage);
             if (print_table_) {
                 xyz_table_to_rgb(*print_table_, spread.data(), result.data(), out_window.width());
                 clock.mark("print table");

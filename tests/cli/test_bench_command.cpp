@@ -10,7 +10,7 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
     Result r = shell("(" + std::string(DARKROOM_EXE) + " bench --size 64x36 --json --runs 1 --threads 2 2>/dev/null)");
     REQUIRE(r.exit_code == 0);
     nlohmann::json doc = nlohmann::json::parse(r.output);
-    for (const char* key : {"cpu", "cores", "threads"}) CHECK(doc["machine"].contains(key));
+    for (const char* key : {"cpu", "cores", "threads", "isa"}) CHECK(doc["machine"].contains(key));
     CHECK(doc["machine"]["threads"] == 2);
     CHECK(doc["frame"]["width"] == 64);
     CHECK(doc["frame"]["height"] == 36);
@@ -47,6 +47,13 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
             CHECK(d.contains(key));
     // Leaving a stage out changes no pixel.
     for (const auto& d : doc["disabled_stages"]) CHECK(d["identical_pixels_to_neutral_stage_kept"] == true);
+    // Stage after stage and at each narrower instruction set: the same pixels.
+    REQUIRE(doc["fast_run_variants"].size() >= 1);
+    CHECK(doc["fast_run_variants"][0]["way"] == "stage after stage");
+    for (const auto& v : doc["fast_run_variants"]) {
+        CHECK(v["seconds"].get<double>() > 0);
+        CHECK(v["identical_pixels"] == true);
+    }
     for (const char* key : {"evaluated", "copy_ratio", "mean_de2000", "grain_within_tolerance", "pass"})
         CHECK(doc["target"].contains(key));
     CHECK(doc["target"]["evaluated"] == true);
