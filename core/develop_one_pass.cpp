@@ -1,8 +1,8 @@
 // Developing with every stage a row at a time (the fast tiers, Plan::run_one_pass): each
 // thread takes a band of output rows and pulls each row of each stage through the pipeline
 // as the next stage needs it, so that a frame's planes never meet in memory: the input is
-// read once (twice where halation needs its coarse grid first) and the output written once,
-// and the rows between stages stay in cache (the separable filters' rings of rows).
+// read once and the output written once, and the rows between stages stay in cache (the
+// rings of rows of the separable filters, the grain's noise and halation's coarse grid).
 //
 // The steps are the stage-by-stage run's (develop.cpp) on the same values, in the same order
 // per pixel, so both give the same pixels bit for bit (tested); a band's first rows repeat
@@ -48,17 +48,24 @@ private:
     StageTimes times_;
 };
 
-SeparableFilter scatter_filter(const ScatterKernel& k) {
-    return k.is_identity() ? SeparableFilter{} : SeparableFilter{k.separable, k.separable_sign};
-}
-
-// The stage a material's scatter is timed as: none where no layer has one (its stream then
-// only passes the rows through).
-const char* scatter_stage(const std::vector<SeparableFilter>& filters) {
-    for (const SeparableFilter& f : filters)
-        if (!f.terms.empty()) return "scatter";
-    return nullptr;
-}
+// A material's scatter kernels as its stream's filters (none where a layer has none), their
+// largest radius, and the stage they are timed as: none where no layer has one (the stream
+// then only passes the rows through).
+struct ScatterFilters {
+    explicit ScatterFilters(const MaterialStages& m) {
+        for (const ScatterKernel& k : m.scatter) {
+            filters.push_back(k.is_identity() ? SeparableFilter{} : SeparableFilter{k.separable, k.separable_sign});
+            radius = std::max(radius, filters.back().radius());
+            if (!k.is_identity()) stage = "scatter";
+        }
+        for (const SeparableFilter& f : filters) pointers.push_back(&f);
+    }
+    ScatterFilters(const ScatterFilters&) = delete;  // (pointers point into filters)
+    std::vector<SeparableFilter> filters;
+    std::vector<const SeparableFilter*> pointers;
+    int radius = 0;
+    const char* stage = nullptr;
+};
 
 // Every layer's scatter kernel can stream: separable, or none.
 bool separable_scatter(const MaterialStages& m) {
@@ -138,12 +145,8 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
     const size_t layers = film.stock.layers.size();
     const int paper_halo = print_ ? paper_stages_.halo_px() : 0;
     const Window film_window = out_window.grown(paper_halo).intersected(frame_);  // the film's densities
-    int film_radius = 0;
-    std::vector<SeparableFilter> film_filters;
-    for (const ScatterKernel& k : film.scatter) {
-        film_filters.push_back(scatter_filter(k));
-        film_radius = std::max(film_radius, film_filters.back().radius());
-    }
+    const ScatterFilters film_scatter_filters(film);
+    const int film_radius = film_scatter_filters.radius;
     // The exposure the film's scatter reads: its rows past the frame's edges are its edge pixels'.
     const int padded_x0 = film_window.x0 - film_radius, padded_x1 = film_window.x1 + film_radius;
     const FilmExposure exposure(in, film.rgb_weights, monochrome_input_, film_exposure_scale_);
@@ -151,7 +154,8 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
     for (const auto& h : film.halation) halation_kernels.push_back(h ? &*h : nullptr);
     const bool halated = std::any_of(film.halation.begin(), film.halation.end(), [](const auto& h) { return bool(h); });
 
-    const char* film_scatter_stage = scatter_stage(film_filters);
+    std::unique_ptr<ScatterFilters> paper_scatter_filters;
+    if (print_) paper_scatter_filters = std::make_unique<ScatterFilters>(paper_stages_);
     std::mutex times_mutex;
     const int bands = std::min(resolve_thread_count(threads), out_window.height());  // as parallel_for splits
     parallel_for(out_window.y0, out_window.y1, threads, [&](int band_begin, int band_end) {
@@ -168,11 +172,9 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
                     exposure.row(y, x_begin, x_end - x_begin, rows);
                     clock.mark("expose");
                 });
-        std::vector<const SeparableFilter*> filters;
-        for (const SeparableFilter& f : film_filters) filters.push_back(&f);
-        SeparableStream film_scatter(film_window.width(), filters, frame_.y0, frame_.y1, film_rows.y1,
-                                     [&](int y, float* const* padded) {
-            clock.mark(film_scatter_stage);  // (the filtering of the rows read before)
+        SeparableStream film_scatter(film_window.width(), film_scatter_filters.pointers, frame_.y0, frame_.y1,
+                                     film_rows.y1, [&](int y, float* const* padded) {
+            clock.mark(film_scatter_filters.stage);  // (the filtering of the rows read before)
             float* inside[3];
             for (size_t l = 0; l < layers; ++l) inside[l] = padded[l] + (exposed.x0 - padded_x0);
             if (halation) {
@@ -188,11 +190,9 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         Rows density(layers, film_window.width());
         auto film_density_row = [&](int y) {  // film_window's row y, into `density`
             film_scatter.row(y, density.data());
-            clock.mark(film_scatter_stage);
+            clock.mark(film_scatter_filters.stage);
             film_develop.row(y, density.data(), film_window.width(), clock);
         };
-
-        Rows result(3, out_window.width());
         if (!print_) {
             for (int y = band_begin; y < band_end; ++y) {
                 film_density_row(y);
@@ -209,18 +209,11 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
 
         // Paper: the enlarger's exposure (or, printing through one table, the negative's
         // densities) -> the paper's scatter, on out_window's columns with the paper's halo.
-        const MaterialStages& paper = paper_stages_;
-        std::vector<SeparableFilter> paper_scatter_filters;
-        std::vector<const SeparableFilter*> paper_filters_used;
-        for (const ScatterKernel& k : paper.scatter) paper_scatter_filters.push_back(scatter_filter(k));
-        for (const SeparableFilter& f : paper_scatter_filters) paper_filters_used.push_back(&f);
-        const char* paper_scatter_stage = scatter_stage(paper_scatter_filters);
-        int paper_radius = 0;
-        for (const SeparableFilter& f : paper_scatter_filters) paper_radius = std::max(paper_radius, f.radius());
-        const int paper_x0 = out_window.x0 - paper_radius, paper_x1 = out_window.x1 + paper_radius;
-        SeparableStream paper_scatter(out_window.width(), paper_filters_used, frame_.y0, frame_.y1, band_end,
+        const ScatterFilters& paper = *paper_scatter_filters;
+        const int paper_x0 = out_window.x0 - paper.radius, paper_x1 = out_window.x1 + paper.radius;
+        SeparableStream paper_scatter(out_window.width(), paper.pointers, frame_.y0, frame_.y1, band_end,
                                       [&](int y, float* const* padded) {
-                                          clock.mark(paper_scatter_stage);  // (the filtering of the rows read before)
+                                          clock.mark(paper.stage);  // (the filtering of the rows read before)
                                           film_density_row(y);
                                           float* inside[3];
                                           for (int j = 0; j < 3; ++j) inside[j] = padded[j] + (film_window.x0 - paper_x0);
@@ -234,11 +227,11 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
                                           for (int j = 0; j < 3; ++j) hold_frame_edges(padded[j], paper_x0, paper_x1, frame_);
                                       });
         std::unique_ptr<LayerDevelop> paper_develop;
-        if (!print_table_) paper_develop = std::make_unique<LayerDevelop>(paper, out_window);
-        Rows spread(3, out_window.width());
+        if (!print_table_) paper_develop = std::make_unique<LayerDevelop>(paper_stages_, out_window);
+        Rows spread(3, out_window.width()), result(3, out_window.width());
         for (int y = band_begin; y < band_end; ++y) {
             paper_scatter.row(y, spread.data());
-            clock.mark(paper_scatter_stage);
+            clock.mark(paper.stage);
             if (print_table_) {
                 xyz_table_to_rgb(*print_table_, spread.data(), result.data(), out_window.width());
                 clock.mark("print table");

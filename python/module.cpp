@@ -106,7 +106,8 @@ PYBIND11_MODULE(darkroom, m) {
           "max(3, channels)) float32. look: a look file; frame: the frame number (each frame has its own grain); "
           "other keywords: the program's look flags with '_' for '-', overriding the look file.");
     m.def("release_memory", &darkroom::release_plane_memory,
-          "Frees the working memory develop keeps for the next image (up to 2 GB, about 0.35 GB after a 4K frame); "
+          "Frees the working planes develop keeps for the next image (up to 2 GB; about 0.3 GB after a 4K frame "
+          "developed stage by stage: the high and reference tiers and the texture output); "
           "returns the bytes freed.");
     m.def("look", &look_settings, py::kw_only(), py::arg("look") = "",
           "The look (a dict, as a look file holds it) that these keywords and look file give.");

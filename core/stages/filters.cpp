@@ -153,7 +153,8 @@ SeparableStream::SeparableStream(int width, const std::vector<const SeparableFil
             for (float v : f->terms[t]) vertical.back().push_back(f->signs[t] * v);
         }
         vertical_.push_back(std::move(vertical));
-        ring_.emplace_back(std::max<size_t>(1, f->terms.size()) * slots_ * stride_);
+        ring_.emplace_back();
+        ring_.back().resize(std::max<size_t>(1, f->terms.size()) * slots_ * stride_);
         padded_.emplace_back(size_t(width) + 2 * radius_);
         padded_rows_.push_back(padded_.back().data());
         pending_.emplace_back(size_t(width));

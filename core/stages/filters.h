@@ -58,7 +58,9 @@ private:
     size_t stride_;
     std::vector<const SeparableFilter*> filters_;
     std::vector<std::vector<std::vector<float>>> vertical_;  // per plane and term, the sign folded in
-    std::vector<std::vector<float>> ring_;                   // per plane: terms (or 1 for the identity) x slots rows
+    // Per plane: terms (or 1 for the identity) x slots rows, each written before it is read
+    // (so left unset, from recycled memory: core/image.h).
+    std::vector<std::vector<float, UnsetAllocator<float>>> ring_;
     std::vector<std::vector<float>> padded_;
     std::vector<float*> padded_rows_;
     std::vector<const float*> column_;

@@ -116,7 +116,8 @@ CoarseHalationStream::CoarseHalationStream(const std::vector<const HalationKerne
     // Output row y lies above coarse row j + 1 <= y / d + 1, whose blur (with the next, as the
     // stream sums rows in pairs) reads block rows to j + 2 + r, each d fine rows.
     slots_ = d_ * (r + 5) + 2;
-    ring_.assign(planes_.size(), std::vector<float>(size_t(slots_) * size_t(read_x1_ - read_x0_)));
+    ring_.resize(planes_.size());
+    for (auto& ring : ring_) ring.resize(size_t(slots_) * size_t(read_x1_ - read_x0_));
     ring_rows_.resize(planes_.size());
 }
 

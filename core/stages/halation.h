@@ -76,7 +76,7 @@ private:
     std::vector<float*> blurred_rows_;
     int across_row_[2] = {INT32_MIN, INT32_MIN};
     int read_x0_ = 0, read_x1_ = 0, slots_ = 0;
-    std::vector<std::vector<float>> ring_;  // per plane, the fine rows read
+    std::vector<std::vector<float, UnsetAllocator<float>>> ring_;  // per plane, the fine rows read (unset till then)
     std::vector<float*> ring_rows_;
     int next_ = 0;  // the next fine row to read
     bool started_ = false;
