@@ -48,21 +48,17 @@ private:
     StageTimes times_;
 };
 
-// A material's scatter kernels as its stream's filters (none where a layer has none), their
-// largest radius, and the stage they are timed as: none where no layer has one (the stream
-// then only passes the rows through).
+// A material's scatter kernels as its stream's filters, their largest radius, and the stage
+// they are timed as: none where no layer has one (the stream then only passes the rows through).
 struct ScatterFilters {
     explicit ScatterFilters(const MaterialStages& m) {
         for (const ScatterKernel& k : m.scatter) {
-            filters.push_back(k.is_identity() ? SeparableFilter{} : SeparableFilter{k.separable, k.separable_sign});
+            filters.push_back(k.separable_filter());
             radius = std::max(radius, filters.back().radius());
             if (!k.is_identity()) stage = "scatter";
         }
-        for (const SeparableFilter& f : filters) pointers.push_back(&f);
     }
-    ScatterFilters(const ScatterFilters&) = delete;  // (pointers point into filters)
     std::vector<SeparableFilter> filters;
-    std::vector<const SeparableFilter*> pointers;
     int radius = 0;
     const char* stage = nullptr;
 };
@@ -154,8 +150,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
     for (const auto& h : film.halation) halation_kernels.push_back(h ? &*h : nullptr);
     const bool halated = std::any_of(film.halation.begin(), film.halation.end(), [](const auto& h) { return bool(h); });
 
-    std::unique_ptr<ScatterFilters> paper_scatter_filters;
-    if (print_) paper_scatter_filters = std::make_unique<ScatterFilters>(paper_stages_);
+    const ScatterFilters paper_scatter_filters(paper_stages_);  // (none when the output is no print)
     std::mutex times_mutex;
     const int bands = std::min(resolve_thread_count(threads), out_window.height());  // as parallel_for splits
     parallel_for(out_window.y0, out_window.y1, threads, [&](int band_begin, int band_end) {
@@ -172,7 +167,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
                     exposure.row(y, x_begin, x_end - x_begin, rows);
                     clock.mark("expose");
                 });
-        SeparableStream film_scatter(film_window.width(), film_scatter_filters.pointers, frame_.y0, frame_.y1,
+        SeparableStream film_scatter(film_window.width(), film_scatter_filters.filters, frame_.y0, frame_.y1,
                                      film_rows.y1, [&](int y, float* const* padded) {
             clock.mark(film_scatter_filters.stage);  // (the filtering of the rows read before)
             float* inside[3];
@@ -209,9 +204,9 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
 
         // Paper: the enlarger's exposure (or, printing through one table, the negative's
         // densities) -> the paper's scatter, on out_window's columns with the paper's halo.
-        const ScatterFilters& paper = *paper_scatter_filters;
+        const ScatterFilters& paper = paper_scatter_filters;
         const int paper_x0 = out_window.x0 - paper.radius, paper_x1 = out_window.x1 + paper.radius;
-        SeparableStream paper_scatter(out_window.width(), paper.pointers, frame_.y0, frame_.y1, band_end,
+        SeparableStream paper_scatter(out_window.width(), paper.filters, frame_.y0, frame_.y1, band_end,
                                       [&](int y, float* const* padded) {
                                           clock.mark(paper.stage);  // (the filtering of the rows read before)
                                           film_density_row(y);

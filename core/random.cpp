@@ -59,8 +59,7 @@ struct QuantileNormalRun {
             h ^= row_hash;
             mix32_in_place(h);
             uint32_t index[lanes];
-            simd::store(index, h >> 16);
-            asm("" : "+m"(index));
+            simd::store_for_lanes(index, h >> 16);
             for (int k = 0; k < lanes; ++k) out[i + k] = table[index[k]];
         }
         for (; i < n; ++i) out[i] = table[mix32(row_hash ^ mix32(uint32_t(x0 + i))) >> 16];

@@ -14,6 +14,7 @@
 // kernels take pointers and scalars, and their helpers take references and are inlined.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace darkroom::simd {
@@ -27,10 +28,7 @@ struct Lanes {
     typedef double D __attribute__((vector_size(8 * lanes)));
 };
 using Float8 = Lanes<8>::F;
-using Int8 = Lanes<8>::I;
-using Uint8 = Lanes<8>::U;
 using Float4 = Lanes<4>::F;
-using Double4 = Lanes<4>::D;
 // One lane: the scalar tails run the same lane-generic code as the vector blocks.
 using Float1 = Lanes<1>::F;
 using Int1 = Lanes<1>::I;
@@ -50,6 +48,16 @@ template <typename T, typename V>
 __attribute__((always_inline)) inline void store(T* p, const V& v) {
     typedef V Unaligned __attribute__((aligned(alignof(T)), may_alias));
     *reinterpret_cast<Unaligned*>(p) = v;
+}
+
+// The lanes of v stored to `lanes` (an array of its element type) to be read one at a time:
+// a scalar load of each is cheaper than extracting it from the register, which the compiler
+// would otherwise do (the empty asm says the stored values may have changed, so they are
+// loaded back).
+template <typename T, size_t n, typename V>
+__attribute__((always_inline)) inline void store_for_lanes(T (&lanes)[n], const V& v) {
+    store(lanes, v);
+    asm("" : "+m"(lanes));
 }
 
 // The instruction sets the kernels are compiled for, narrowest first.

@@ -137,24 +137,24 @@ void convolve_columns(const float* const* rows, const std::vector<float>& taps, 
         simd::dispatch<ConvolveColumn<2, false>>(rows, taps.data(), int(taps.size()), width, out);
 }
 
-SeparableStream::SeparableStream(int width, const std::vector<const SeparableFilter*>& filters, int row_begin,
-                                 int row_end, int rows_end, Source source)
-    : width_(width), radius_(0), row_begin_(row_begin), row_end_(row_end), rows_end_(rows_end), filters_(filters),
-      pending_row_(std::numeric_limits<int>::min()), source_(std::move(source)) {
-    for (const SeparableFilter* f : filters_) radius_ = std::max(radius_, f->radius());
+SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters, int row_begin, int row_end,
+                                 int rows_end, Source source)
+    : width_(width), radius_(0), row_begin_(row_begin), row_end_(row_end), rows_end_(rows_end),
+      filters_(std::move(filters)), pending_row_(std::numeric_limits<int>::min()), source_(std::move(source)) {
+    for (const SeparableFilter& f : filters_) radius_ = std::max(radius_, f.radius());
     slots_ = 2 * radius_ + 2;
     // Rows are a cache line more than the width apart: at widths of a power of two, rows
     // exactly 2^k bytes apart share the L1 cache's sets and would evict each other.
     stride_ = size_t(width) + 16;
-    for (const SeparableFilter* f : filters_) {
+    for (const SeparableFilter& f : filters_) {
         std::vector<std::vector<float>> vertical;
-        for (size_t t = 0; t < f->terms.size(); ++t) {
+        for (size_t t = 0; t < f.terms.size(); ++t) {
             vertical.emplace_back();
-            for (float v : f->terms[t]) vertical.back().push_back(f->signs[t] * v);
+            for (float v : f.terms[t]) vertical.back().push_back(f.signs[t] * v);
         }
         vertical_.push_back(std::move(vertical));
         ring_.emplace_back();
-        ring_.back().resize(std::max<size_t>(1, f->terms.size()) * slots_ * stride_);
+        ring_.back().resize(std::max<size_t>(1, f.terms.size()) * slots_ * stride_);
         padded_.emplace_back(size_t(width) + 2 * radius_);
         padded_rows_.push_back(padded_.back().data());
         pending_.emplace_back(size_t(width));
@@ -180,14 +180,14 @@ void SeparableStream::row(int y, float* const* result) {
     for (; next_ <= std::min(y + rows - 1 + radius_, row_end_ - 1); ++next_) {
         source_(next_, padded_rows_.data());
         for (size_t p = 0; p < filters_.size(); ++p) {
-            const SeparableFilter& f = *filters_[p];
+            const SeparableFilter& f = filters_[p];
             const float* in = padded_rows_[p] + (radius_ - f.radius());  // the plane's own halo
             if (f.terms.empty()) std::copy_n(in, width_, ring_row(p, 0, next_));
             for (size_t t = 0; t < f.terms.size(); ++t) convolve_row(in, f.terms[t], width_, ring_row(p, int(t), next_));
         }
     }
     for (size_t p = 0; p < filters_.size(); ++p) {
-        const SeparableFilter& f = *filters_[p];
+        const SeparableFilter& f = filters_[p];
         float* out[2] = {result[p], pending_[p].data()};
         if (f.terms.empty()) {
             for (int o = 0; o < rows; ++o) std::copy_n(ring_row(p, 0, y + o), width_, out[o]);
@@ -210,7 +210,7 @@ void filter_separable(const Window& out, const SeparableFilter& filter, int row_
                       const RowSource& source, const RowTarget& target, const RowSink& sink) {
     const int width = out.width();
     parallel_for(out.y0, out.y1, threads, [&](int y_begin, int y_end) {
-        SeparableStream stream(width, {&filter}, row_begin, row_end, y_end,
+        SeparableStream stream(width, {filter}, row_begin, row_end, y_end,
                                [&](int y, float* const* padded) { source(y, padded[0]); });
         std::vector<float> filtered(width);
         for (int y = y_begin; y < y_end; ++y) {

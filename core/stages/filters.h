@@ -46,17 +46,16 @@ struct SeparableFilter {
 class SeparableStream {
 public:
     using Source = std::function<void(int y, float* const* padded)>;
-    SeparableStream(int width, const std::vector<const SeparableFilter*>& filters, int row_begin, int row_end,
-                    int rows_end, Source source);
+    SeparableStream(int width, std::vector<SeparableFilter> filters, int row_begin, int row_end, int rows_end,
+                    Source source);
     // Output row y of each plane into result[plane] (width values); y never decreases.
     void row(int y, float* const* result);
-    int radius() const { return radius_; }
 
 private:
     float* ring_row(size_t plane, int term, int y);
     int width_, radius_, row_begin_, row_end_, rows_end_, slots_;
     size_t stride_;
-    std::vector<const SeparableFilter*> filters_;
+    std::vector<SeparableFilter> filters_;
     std::vector<std::vector<std::vector<float>>> vertical_;  // per plane and term, the sign folded in
     // Per plane: terms (or 1 for the identity) x slots rows, each written before it is read
     // (so left unset, from recycled memory: core/image.h).

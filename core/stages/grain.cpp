@@ -119,20 +119,20 @@ GrainModel design_grain(const GrainSpec& spec, double d_min, double pitch_um, No
     return g;
 }
 
-GrainNoiseStream::GrainNoiseStream(const std::vector<const GrainModel*>& grains, const Window& w) : grains_(grains) {
+GrainNoiseStream::GrainNoiseStream(const std::vector<const GrainModel*>& grains, const Window& w) {
     int r = 0;
-    for (const GrainModel* g : grains_) {
-        filters_.push_back(SeparableFilter{{g->kernel}, {1.0f}});
+    std::vector<SeparableFilter> filters;
+    for (const GrainModel* g : grains) {
+        filters.push_back(SeparableFilter{{g->kernel}, {1.0f}});
         r = std::max(r, g->radius);
     }
-    std::vector<const SeparableFilter*> filters;
-    for (const SeparableFilter& f : filters_) filters.push_back(&f);
     // White noise at absolute coordinates, from R before the window's first column: noise
     // exists at every coordinate, so the vertical pass reads real rows, never clamped ones.
     const int x0 = w.x0 - r, n = w.width() + 2 * r;
-    stream_ = std::make_unique<SeparableStream>(w.width(), filters, w.y0 - r, w.y1 + r, w.y1, [this, x0, n](int y, float* const* noise) {
-        for (size_t l = 0; l < grains_.size(); ++l) {
-            const GrainModel& g = *grains_[l];
+    stream_ = std::make_unique<SeparableStream>(w.width(), std::move(filters), w.y0 - r, w.y1 + r, w.y1,
+                                                [grains, x0, n](int y, float* const* noise) {
+        for (size_t l = 0; l < grains.size(); ++l) {
+            const GrainModel& g = *grains[l];
             if (g.fast) {
                 quantile_normal_run(quantile_normal_row(g.key, y), x0, n, noise[l]);
             } else {

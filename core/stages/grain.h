@@ -67,8 +67,6 @@ public:
     void row(int y, float* const* noise) { stream_->row(y, noise); }
 
 private:
-    std::vector<const GrainModel*> grains_;
-    std::vector<SeparableFilter> filters_;
     std::unique_ptr<SeparableStream> stream_;
 };
 

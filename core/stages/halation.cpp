@@ -83,7 +83,6 @@ CoarseHalationStream::CoarseHalationStream(const std::vector<const HalationKerne
         d_ = kernels[p]->decimation;
         r = std::max(r, int(kernels[p]->taps.size() / 2));
         planes_[p].strength = float(kernels[p]->strength);
-        planes_[p].filter = SeparableFilter{{kernels[p]->taps}, {1.0f}};
         halated_.push_back(p);
     }
     if (halated_.empty()) throw std::invalid_argument("coarse halation: no plane has halation");
@@ -100,17 +99,17 @@ CoarseHalationStream::CoarseHalationStream(const std::vector<const HalationKerne
         tx_.push_back(float(2 * x + 1 - d_ - 2 * d_ * i) / float(2 * d_));
         column0_.push_back(i - blurred_window_.x0);
     }
-    std::vector<const SeparableFilter*> filters;
+    std::vector<SeparableFilter> filters;
     for (size_t p : halated_) {
         PlaneHalo& plane = planes_[p];
-        filters.push_back(&plane.filter);
+        filters.push_back(SeparableFilter{{kernels[p]->taps}, {1.0f}});
         plane.column_sums.resize(size_t(means_window_.width()) * d_);
         plane.blurred.resize(size_t(blurred_window_.width()));
         for (auto& row : plane.across) row.resize(size_t(out.width()));
     }
     blurred_rows_.resize(halated_.size());
     // Every plane's coarse rows from one stream, so that each fine row is read once for all.
-    blur_ = std::make_unique<SeparableStream>(blurred_window_.width(), filters, means_window_.y0, means_window_.y1,
+    blur_ = std::make_unique<SeparableStream>(blurred_window_.width(), std::move(filters), means_window_.y0, means_window_.y1,
                                               blurred_window_.y1,
                                               [this](int by, float* const* means) { block_means(by, means); });
     // Output row y lies above coarse row j + 1 <= y / d + 1, whose blur (with the next, as the
@@ -193,6 +192,7 @@ void CoarseHalationStream::row(int y, float* const* result) {
     interpolate(j);
     interpolate(j + 1);
     read_to(y);
+    const float ty = float(2 * y + 1 - d_ - 2 * d_ * j) / float(2 * d_);  // the fine row's place between them
     for (size_t p = 0; p < planes_.size(); ++p) {
         const float* in = ring_row(p, y) + (out_.x0 - read_x0_);
         const PlaneHalo& plane = planes_[p];
@@ -200,7 +200,6 @@ void CoarseHalationStream::row(int y, float* const* result) {
             std::copy_n(in, out_.width(), result[p]);
             continue;
         }
-        const float ty = float(2 * y + 1 - d_ - 2 * d_ * j) / float(2 * d_);
         simd::dispatch<AddHaloRow>(in, plane.across[j & 1].data(), plane.across[(j + 1) & 1].data(), ty,
                                    plane.strength, out_.width(), result[p]);
     }

@@ -54,7 +54,6 @@ public:
 private:
     struct PlaneHalo {
         float strength = 0;
-        SeparableFilter filter;
         std::vector<float> column_sums, blurred;  // none: no halation
         std::vector<float> across[2];             // coarse rows j (by j's parity) interpolated to out's columns
     };

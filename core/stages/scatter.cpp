@@ -299,7 +299,7 @@ void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Wi
     const int r = kernel.radius, side = 2 * r + 1;
     const Window& w = dst.window;
     if (!kernel.separable.empty()) {
-        convolve_separable(src, dst, SeparableFilter{kernel.separable, kernel.separable_sign}, frame, threads);
+        convolve_separable(src, dst, kernel.separable_filter(), frame, threads);
         return;
     }
     parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {

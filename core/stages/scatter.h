@@ -11,6 +11,7 @@
 
 #include "core/curve.h"
 #include "core/image.h"
+#include "core/stages/filters.h"
 
 namespace darkroom {
 
@@ -27,6 +28,9 @@ struct ScatterKernel {
     std::vector<std::vector<float>> separable;  // e_k scaled by sqrt|weight_k|
     std::vector<float> separable_sign;          // sign of weight_k
     bool is_identity() const { return radius == 0; }
+    // The separable terms as a filter: none (it passes its rows through) for the identity, and
+    // for a kernel summed directly, which has no terms to run.
+    SeparableFilter separable_filter() const { return {separable, separable_sign}; }
 };
 constexpr double kSeparableTolerance = 1e-6;
 

@@ -96,12 +96,8 @@ template <int components, typename V, typename I>
 __attribute__((always_inline)) inline void node_values(const float* values, const I& offset, V* v) {
     constexpr int lanes = sizeof(V) / sizeof(float);
     if constexpr (lanes == 8 || lanes == 16) {
-        // The offsets go through memory: a scalar load of each is cheaper than extracting it
-        // from the register, which the compiler would otherwise do (the empty asm says the
-        // stored values may have changed, so they must be loaded back).
         int32_t at[lanes];
-        store(at, offset);
-        asm("" : "+m"(at));
+        simd::store_for_lanes(at, offset);
         simd::Float4 n[lanes];
         for (int k = 0; k < lanes; ++k) load(n[k], values + at[k]);
         V p[4], t[4];
