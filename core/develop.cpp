@@ -694,7 +694,7 @@ std::vector<std::string> Plan::describe() const {
             if (m.grain[i])
                 lines.push_back("  grain (" + l.name + "): " + fmt(m.grain[i]->pixel_sigma_at_unit_density()) +
                                 " D per pixel at net density 1, filter radius " + std::to_string(m.grain[i]->radius) +
-                                " px" + (m.grain[i]->fast ? ", hashed quantile noise" : ""));
+                                " px" + (m.grain[i]->fast ? ", hashed noise" : ""));
             if (m.boolean_grain[i])
                 lines.push_back("  grain (" + l.name + "): silver disks (Boolean model), radius " +
                                 fmt(m.boolean_grain[i]->radius_at(1.0), 3) + " um at net density 1, " +

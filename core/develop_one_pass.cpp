@@ -78,15 +78,13 @@ public:
         for (const auto& g : m.grain)
             if (g) grains.push_back(&*g);
         if (!grains.empty()) noise_stream_ = std::make_unique<GrainNoiseStream>(grains, w);
-        noise_.assign(grains.size(), std::vector<float>(size_t(w.width())));
-        for (auto& n : noise_) noise_rows_.push_back(n.data());
     }
     void row(int y, float* const* rows, int width, RowClock& clock) {
-        if (noise_stream_) noise_stream_->row(y, noise_rows_.data());
+        const float* const* noise = noise_stream_ ? noise_stream_->row(y) : nullptr;
         size_t g = 0;
         for (size_t l = 0; l < m_.curve_tables.size(); ++l) {
             if (m_.grain[l])
-                develop_row_with_grain(m_.curve_tables[l], *m_.grain[l], noise_rows_[g++], width, rows[l]);
+                develop_row_with_grain(m_.curve_tables[l], *m_.grain[l], noise[g++], width, rows[l]);
             else
                 m_.curve_tables[l].apply_row(rows[l], rows[l], width);
         }
@@ -96,8 +94,6 @@ public:
 private:
     const MaterialStages& m_;
     std::unique_ptr<GrainNoiseStream> noise_stream_;
-    std::vector<std::vector<float>> noise_;
-    std::vector<float*> noise_rows_;
 };
 
 // Rows of `planes` planes of a window's width.
@@ -182,20 +178,20 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
             for (size_t l = 0; l < layers; ++l) hold_frame_edges(padded[l], padded_x0, padded_x1, frame_);
         });
         LayerDevelop film_develop(film, film_window);
-        Rows density(layers, film_window.width());
-        auto film_density_row = [&](int y) {  // film_window's row y, into `density`
-            film_scatter.row(y, density.data());
+        auto film_density_row = [&](int y) {  // film_window's row y of each layer, in the scatter's rows
+            float* const* density = film_scatter.row(y);
             clock.mark(film_scatter_filters.stage);
-            film_develop.row(y, density.data(), film_window.width(), clock);
+            film_develop.row(y, density, film_window.width(), clock);
+            return density;
         };
         if (!print_) {
             for (int y = band_begin; y < band_end; ++y) {
-                film_density_row(y);
+                float* const* density = film_density_row(y);
                 for (size_t l = 0; l < layers; ++l)
-                    convert_row(settings_.output, film.stock.layers[l].density_curve.y_min(), density.data()[l],
+                    convert_row(settings_.output, film.stock.layers[l].density_curve.y_min(), density[l],
                                 film_window.width());
                 clock.mark("convert");
-                write_row(density.data(), layers, in, out, y, out_window.x0, out_window.width());
+                write_row(density, layers, in, out, y, out_window.x0, out_window.width());
                 clock.mark("write");
             }
             clock.merge_into(times, bands, times_mutex);
@@ -209,30 +205,30 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         SeparableStream paper_scatter(out_window.width(), paper.filters, frame_.y0, frame_.y1, band_end,
                                       [&](int y, float* const* padded) {
                                           clock.mark(paper.stage);  // (the filtering of the rows read before)
-                                          film_density_row(y);
+                                          float* const* density = film_density_row(y);
                                           float* inside[3];
                                           for (int j = 0; j < 3; ++j) inside[j] = padded[j] + (film_window.x0 - paper_x0);
                                           if (print_table_) {
                                               for (int j = 0; j < 3; ++j)
-                                                  std::copy_n(density.data()[j], film_window.width(), inside[j]);
+                                                  std::copy_n(density[j], film_window.width(), inside[j]);
                                           } else {
-                                              enlarger_table_->apply_row_exp2(density.data(), inside, film_window.width());
+                                              enlarger_table_->apply_row_exp2(density, inside, film_window.width());
                                               clock.mark("enlarger");
                                           }
                                           for (int j = 0; j < 3; ++j) hold_frame_edges(padded[j], paper_x0, paper_x1, frame_);
                                       });
         std::unique_ptr<LayerDevelop> paper_develop;
         if (!print_table_) paper_develop = std::make_unique<LayerDevelop>(paper_stages_, out_window);
-        Rows spread(3, out_window.width()), result(3, out_window.width());
+        Rows result(3, out_window.width());
         for (int y = band_begin; y < band_end; ++y) {
-            paper_scatter.row(y, spread.data());
+            float* const* spread = paper_scatter.row(y);
             clock.mark(paper.stage);
             if (print_table_) {
-                xyz_table_to_rgb(*print_table_, spread.data(), result.data(), out_window.width());
+                xyz_table_to_rgb(*print_table_, spread, result.data(), out_window.width());
                 clock.mark("print table");
             } else {
-                paper_develop->row(y, spread.data(), out_window.width(), clock);
-                xyz_table_to_rgb(*view_table_, spread.data(), result.data(), out_window.width());
+                paper_develop->row(y, spread, out_window.width(), clock);
+                xyz_table_to_rgb(*view_table_, spread, result.data(), out_window.width());
                 clock.mark("view");
             }
             write_row(result.data(), 3, in, out, y, out_window.x0, out_window.width());

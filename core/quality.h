@@ -9,7 +9,7 @@
 //              within 1e-6 of the largest); grain as filtered Gaussian noise
 //   fast       printing and viewing through 3D tables on layer densities, the PSF tapered
 //              to a compact kernel, halation on a 4x coarser grid, tabulated H&D curves,
-//              grain noise from a hashed quantile table
+//              grain from hashed noise (sums of uniform bytes: core/random.h)
 //   preview    as fast with smaller kernels, and the print as one 3D table from the
 //              negative's densities to the print's colour, the paper's MTF applied to the
 //              negative's densities and its grain folded into the film's
@@ -29,7 +29,7 @@ enum class Quality { reference, high, fast, preview };
 enum class GrainMethod {
     boolean_model,   // silver disks (stages/grain_boolean.h)
     filtered_noise,  // Gaussian noise (Philox, Box-Muller) filtered to the grain's spectrum
-    hashed_noise,    // the same spectrum from hashed quantiles and a tabulated amplitude
+    hashed_noise,    // the same spectrum from hashed byte sums and a tabulated amplitude
 };
 
 struct QualityTier {

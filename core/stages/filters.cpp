@@ -157,7 +157,10 @@ SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters
         ring_.back().resize(std::max<size_t>(1, f.terms.size()) * slots_ * stride_);
         padded_.emplace_back(size_t(width) + 2 * radius_);
         padded_rows_.push_back(padded_.back().data());
-        pending_.emplace_back(size_t(width));
+        for (int o = 0; o < 2; ++o) {
+            output_[o].emplace_back(size_t(width));
+            out_rows_[o].push_back(output_[o].back().data());
+        }
     }
     column_.resize(slots_);
 }
@@ -166,11 +169,10 @@ float* SeparableStream::ring_row(size_t plane, int term, int y) {
     return &ring_[plane][(size_t(term) * slots_ + ((y % slots_) + slots_) % slots_) * stride_];
 }
 
-void SeparableStream::row(int y, float* const* result) {
+float* const* SeparableStream::row(int y) {
     if (y == pending_row_) {
-        for (size_t p = 0; p < filters_.size(); ++p) std::copy_n(pending_[p].data(), width_, result[p]);
         pending_row_ = std::numeric_limits<int>::min();
-        return;
+        return out_rows_[1].data();
     }
     if (!started_) {
         next_ = std::max(y - radius_, row_begin_);
@@ -188,11 +190,12 @@ void SeparableStream::row(int y, float* const* result) {
     }
     for (size_t p = 0; p < filters_.size(); ++p) {
         const SeparableFilter& f = filters_[p];
-        float* out[2] = {result[p], pending_[p].data()};
-        if (f.terms.empty()) {
-            for (int o = 0; o < rows; ++o) std::copy_n(ring_row(p, 0, y + o), width_, out[o]);
+        if (f.terms.empty()) {  // (its ring rows outlive the pair: the ring holds 2R + 2)
+            for (int o = 0; o < rows; ++o) out_rows_[o][p] = ring_row(p, 0, y + o);
             continue;
         }
+        float* out[2] = {output_[0][p].data(), output_[1][p].data()};
+        out_rows_[0][p] = out[0], out_rows_[1][p] = out[1];
         const int r = f.radius();
         for (size_t t = 0; t < f.terms.size(); ++t) {
             for (int k = -r; k <= r + rows - 1; ++k)
@@ -204,6 +207,7 @@ void SeparableStream::row(int y, float* const* result) {
         }
     }
     if (rows == 2) pending_row_ = y + 1;
+    return out_rows_[0].data();
 }
 
 void filter_separable(const Window& out, const SeparableFilter& filter, int row_begin, int row_end, int threads,
@@ -212,11 +216,14 @@ void filter_separable(const Window& out, const SeparableFilter& filter, int row_
     parallel_for(out.y0, out.y1, threads, [&](int y_begin, int y_end) {
         SeparableStream stream(width, {filter}, row_begin, row_end, y_end,
                                [&](int y, float* const* padded) { source(y, padded[0]); });
-        std::vector<float> filtered(width);
         for (int y = y_begin; y < y_end; ++y) {
-            float* result = target ? target(y) : filtered.data();
-            stream.row(y, &result);
-            if (sink) sink(y, result);
+            const float* filtered = stream.row(y)[0];
+            if (target) {
+                float* kept = target(y);
+                std::copy_n(filtered, width, kept);
+                filtered = kept;
+            }
+            if (sink) sink(y, filtered);
         }
     });
 }

@@ -48,8 +48,11 @@ public:
     using Source = std::function<void(int y, float* const* padded)>;
     SeparableStream(int width, std::vector<SeparableFilter> filters, int row_begin, int row_end, int rows_end,
                     Source source);
-    // Output row y of each plane into result[plane] (width values); y never decreases.
-    void row(int y, float* const* result);
+    SeparableStream(const SeparableStream&) = delete;  // (out_rows_ point into its own storage)
+    SeparableStream& operator=(const SeparableStream&) = delete;
+    // Output row y of each plane (width values each; y never decreases), in the stream's own
+    // rows: valid until the next call, and the caller's to change (the stream reads them no more).
+    float* const* row(int y);
 
 private:
     float* ring_row(size_t plane, int term, int y);
@@ -63,8 +66,11 @@ private:
     std::vector<std::vector<float>> padded_;
     std::vector<float*> padded_rows_;
     std::vector<const float*> column_;
-    std::vector<std::vector<float>> pending_;  // per plane, output row pending_row_ (the pair's second)
-    int pending_row_;
+    // Per plane, the pair of output rows summed together; out_rows_[o] points at each plane's
+    // row o of the pair (or, for the identity, its ring row).
+    std::vector<std::vector<float>> output_[2];
+    std::vector<float*> out_rows_[2];
+    int pending_row_;  // the pair's second row, to be returned next
     Source source_;
     int next_ = 0;  // the next row to filter horizontally
     bool started_ = false;

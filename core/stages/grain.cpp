@@ -134,7 +134,7 @@ GrainNoiseStream::GrainNoiseStream(const std::vector<const GrainModel*>& grains,
         for (size_t l = 0; l < grains.size(); ++l) {
             const GrainModel& g = *grains[l];
             if (g.fast) {
-                quantile_normal_run(quantile_normal_row(g.key, y), x0, n, noise[l]);
+                hashed_noise_run(hashed_noise_row(g.key, y), x0, n, noise[l]);
             } else {
                 for (int i = 0; i < n; ++i) noise[l][i] = standard_normal(g.key, x0 + i, y);
             }
@@ -148,12 +148,7 @@ namespace {
 void filter_grain_noise(const GrainModel& g, const Window& w, int threads, const RowSink& sink) {
     parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
         GrainNoiseStream stream({&g}, w);
-        std::vector<float> noise(size_t(w.width()));
-        float* row = noise.data();
-        for (int y = y_begin; y < y_end; ++y) {
-            stream.row(y, &row);
-            sink(y, row);
-        }
+        for (int y = y_begin; y < y_end; ++y) sink(y, stream.row(y)[0]);
     });
 }
 

@@ -38,7 +38,7 @@ struct GrainModel {
     float d_min = 0;               // net density is measured from here (as stored in planes)
     double density_exponent = 1.0 / 3.0;
     NoiseKey key;
-    // The fast tiers: noise from quantile_normal_run (core/random.h) instead of Philox and
+    // The fast tiers: noise from hashed_noise_run (core/random.h) instead of Philox and
     // Box-Muller (and the amplitude from the H&D table: develop_with_grain).
     bool fast = false;
 
@@ -58,13 +58,14 @@ struct GrainModel {
 GrainModel design_grain(const GrainSpec& spec, double d_min, double pixel_pitch_um, NoiseKey key, bool fast = false);
 
 // The filtered noise of several grains down the rows of `w`, for one thread: white noise at
-// absolute pixels (quantile_normal_run where the grain is fast, else Philox and Box-Muller)
+// absolute pixels (hashed_noise_run where the grain is fast, else Philox and Box-Muller)
 // through each grain's kernel in x and y, so any window and any first row agree.
 class GrainNoiseStream {
 public:
     GrainNoiseStream(const std::vector<const GrainModel*>& grains, const Window& w);
-    // Each grain's filtered noise at row y of w (y never decreasing), w's width each.
-    void row(int y, float* const* noise) { stream_->row(y, noise); }
+    // Each grain's filtered noise at row y of w (y never decreasing), w's width each, valid
+    // until the next call.
+    const float* const* row(int y) { return stream_->row(y); }
 
 private:
     std::unique_ptr<SeparableStream> stream_;

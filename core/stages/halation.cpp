@@ -104,10 +104,8 @@ CoarseHalationStream::CoarseHalationStream(const std::vector<const HalationKerne
         PlaneHalo& plane = planes_[p];
         filters.push_back(SeparableFilter{{kernels[p]->taps}, {1.0f}});
         plane.column_sums.resize(size_t(means_window_.width()) * d_);
-        plane.blurred.resize(size_t(blurred_window_.width()));
         for (auto& row : plane.across) row.resize(size_t(out.width()));
     }
-    blurred_rows_.resize(halated_.size());
     // Every plane's coarse rows from one stream, so that each fine row is read once for all.
     blur_ = std::make_unique<SeparableStream>(blurred_window_.width(), std::move(filters), means_window_.y0, means_window_.y1,
                                               blurred_window_.y1,
@@ -173,13 +171,11 @@ void CoarseHalationStream::block_means(int by, float* const* means) {
 // last two rows are kept).
 void CoarseHalationStream::interpolate(int j) {
     if (across_row_[j & 1] == j) return;
-    for (size_t i = 0; i < halated_.size(); ++i) blurred_rows_[i] = planes_[halated_[i]].blurred.data();
-    blur_->row(j, blurred_rows_.data());
-    for (size_t p : halated_) {
-        const float* blurred = planes_[p].blurred.data();
-        std::vector<float>& row = planes_[p].across[j & 1];
+    const float* const* blurred_rows = blur_->row(j);
+    for (size_t h = 0; h < halated_.size(); ++h) {
+        std::vector<float>& row = planes_[halated_[h]].across[j & 1];
         for (size_t i = 0; i < row.size(); ++i) {
-            const float* b = blurred + column0_[i];
+            const float* b = blurred_rows[h] + column0_[i];
             row[i] = b[0] + tx_[i] * (b[1] - b[0]);
         }
     }

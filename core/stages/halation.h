@@ -54,7 +54,7 @@ public:
 private:
     struct PlaneHalo {
         float strength = 0;
-        std::vector<float> column_sums, blurred;  // none: no halation
+        std::vector<float> column_sums;  // none: no halation
         std::vector<float> across[2];             // coarse rows j (by j's parity) interpolated to out's columns
     };
     float* ring_row(size_t plane, int y);
@@ -72,7 +72,6 @@ private:
     std::vector<float> tx_;
     std::vector<int> column0_;
     std::unique_ptr<SeparableStream> blur_;
-    std::vector<float*> blurred_rows_;
     int across_row_[2] = {INT32_MIN, INT32_MIN};
     int read_x0_ = 0, read_x1_ = 0, slots_ = 0;
     std::vector<std::vector<float, UnsetAllocator<float>>> ring_;  // per plane, the fine rows read (unset till then)
