@@ -82,6 +82,35 @@ std::vector<float> pixel_averaged_grain_kernel(double s_px) {
     return taps;
 }
 
+// The autocorrelation of a kernel at lags 0 ... its length - 1, over its value at lag 0.
+std::vector<double> normalised_autocorrelation(const std::vector<float>& k) {
+    std::vector<double> a(k.size(), 0.0);
+    for (size_t lag = 0; lag < k.size(); ++lag)
+        for (size_t j = 0; j + lag < k.size(); ++j) a[lag] += double(k[j]) * k[j + lag];
+    for (size_t lag = k.size(); lag-- > 0;) a[lag] /= a[0];
+    return a;
+}
+
+// The kernel with its outer pairs of taps dropped (and the rest rescaled to unit sum) while
+// the field's correlation at every lag stays within `tolerance` of the full kernel's.
+std::vector<float> trimmed_grain_kernel(const std::vector<float>& full, double tolerance) {
+    const std::vector<double> target = normalised_autocorrelation(full);
+    std::vector<float> kept = full;
+    while (kept.size() > 1) {
+        std::vector<float> shorter(kept.begin() + 1, kept.end() - 1);
+        double sum = 0;
+        for (float v : shorter) sum += v;
+        for (float& v : shorter) v = float(v / sum);
+        const std::vector<double> a = normalised_autocorrelation(shorter);
+        double worst = 0;
+        for (size_t lag = 0; lag < target.size(); ++lag)
+            worst = std::max(worst, std::abs((lag < a.size() ? a[lag] : 0.0) - target[lag]));
+        if (worst > tolerance) break;
+        kept = std::move(shorter);
+    }
+    return kept;
+}
+
 }  // namespace
 
 // The integral takes tens of milliseconds (Bessel functions on a fine grid) and every plan of
@@ -115,6 +144,7 @@ GrainModel design_grain(const GrainSpec& spec, double d_min, double pitch_um, No
     double unit_noise_sigma48 = aperture_rms_per_unit_noise(spec.grain_size_um, kGranularityApertureUm);
     g.sigma_per_pixel = spec.rms_granularity / unit_noise_sigma48 / pitch_um;
     g.kernel = pixel_averaged_grain_kernel(spec.grain_size_um / pitch_um);
+    if (fast) g.kernel = trimmed_grain_kernel(g.kernel, kFastGrainCorrelationTolerance);
     g.radius = int(g.kernel.size() / 2);
     return g;
 }

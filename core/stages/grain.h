@@ -27,6 +27,7 @@
 namespace darkroom {
 
 constexpr double kGranularityApertureUm = 48.0;
+constexpr double kFastGrainCorrelationTolerance = 0.01;
 
 // sigma_48 / sqrt(W0) for a Gaussian grain of this size: the aperture integral above.
 double aperture_rms_per_unit_noise(double grain_size_um, double aperture_diameter_um);
@@ -39,7 +40,10 @@ struct GrainModel {
     double density_exponent = 1.0 / 3.0;
     NoiseKey key;
     // The fast tiers: noise from hashed_noise_run (core/random.h) instead of Philox and
-    // Box-Muller (and the amplitude from the H&D table: develop_with_grain).
+    // Box-Muller (and the amplitude from the H&D table: develop_with_grain), and the kernel's
+    // outer taps dropped where the field's correlation at every lag (over its variance)
+    // moves by at most kFastGrainCorrelationTolerance (they are a few thousandths of the
+    // centre at film pitches: 3 taps of 5).
     bool fast = false;
 
     // Below this standard deviation (in density) at net density 1 the stage is skipped:

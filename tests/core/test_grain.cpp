@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "core/stages/grain.h"
@@ -69,6 +70,45 @@ TEST_CASE("grain is the same for any window of the frame", "[grain][determinism]
     apply_grain(part, g, 1);
     for (int y = 7; y < 30; ++y)
         for (int x = 13; x < 41; ++x) REQUIRE(part.at(x, y) == full.at(x, y));
+}
+
+TEST_CASE("the fast tiers' grain kernel drops only taps the field's correlation does not need", "[grain]") {
+    // The autocorrelation over lag 0 of a kernel, at lags 0 ... n (0 past its length).
+    auto correlation = [](const std::vector<float>& k, size_t lags) {
+        std::vector<double> a(lags + 1, 0.0);
+        for (size_t lag = 0; lag <= lags; ++lag)
+            for (size_t j = 0; j + lag < k.size(); ++j) a[lag] += double(k[j]) * k[j + lag];
+        for (size_t lag = lags + 1; lag-- > 0;) a[lag] /= a[0];
+        return a;
+    };
+    // Vision3-like grain at a 4K frame's pitch (whose outer taps are ~0.2 % of the centre), and
+    // larger grain at a finer pitch.
+    const auto [size_um, pitch_um] = GENERATE(std::pair{1.0, 6.2}, std::pair{1.44, 3.1}, std::pair{3.0, 2.0});
+    const GrainSpec spec{0.006, size_um, 0.5};
+    const GrainModel full = design_grain(spec, 0.2, pitch_um, NoiseKey{}, false);
+    const GrainModel fast = design_grain(spec, 0.2, pitch_um, NoiseKey{}, true);
+    CAPTURE(size_um, pitch_um, full.kernel.size(), fast.kernel.size());
+    CHECK(fast.kernel.size() % 2 == 1);
+    CHECK(fast.radius == int(fast.kernel.size() / 2));
+    CHECK(fast.kernel.size() <= full.kernel.size());
+    double sum = 0;
+    for (float v : fast.kernel) sum += v;
+    CHECK(sum == Approx(1.0).epsilon(1e-6));  // the 48 um reading kept
+    const std::vector<double> a_full = correlation(full.kernel, full.kernel.size() - 1);
+    const std::vector<double> a_fast = correlation(fast.kernel, full.kernel.size() - 1);
+    for (size_t lag = 0; lag < a_full.size(); ++lag) CHECK(std::abs(a_fast[lag] - a_full[lag]) <= kFastGrainCorrelationTolerance);
+    if (pitch_um > 6) CHECK(fast.kernel.size() == 3);  // the two outer taps of five go
+    // One pair more would break the tolerance (or none is left).
+    if (fast.kernel.size() > 1) {
+        std::vector<float> shorter(fast.kernel.begin() + 1, fast.kernel.end() - 1);
+        double s = 0;
+        for (float v : shorter) s += v;
+        for (float& v : shorter) v = float(v / s);
+        const std::vector<double> a_short = correlation(shorter, full.kernel.size() - 1);
+        double worst = 0;
+        for (size_t lag = 0; lag < a_full.size(); ++lag) worst = std::max(worst, std::abs(a_short[lag] - a_full[lag]));
+        CHECK(worst > kFastGrainCorrelationTolerance);
+    }
 }
 
 TEST_CASE("the fast tiers' develop and grain in one pass: the table's density plus its amplitude times the field",
