@@ -267,15 +267,7 @@ void print_densities(const PrintExposure& enlarger, const Stock& paper, const do
 // G the grain's 2D kernel (its 1D kernel's outer product), K the scatter's as applied.
 double variance_kept_by_scatter(const GrainModel& grain, const ScatterKernel& scatter) {
     const int rg = grain.radius, rs = scatter.radius, side_s = 2 * rs + 1, r = rg + rs;
-    std::vector<double> taps(size_t(side_s) * side_s, 0.0);  // the scatter kernel as applied
-    if (scatter.separable.empty())
-        for (size_t i = 0; i < taps.size(); ++i) taps[i] = scatter.taps[i];
-    else
-        for (size_t k = 0; k < scatter.separable.size(); ++k)
-            for (int y = 0; y < side_s; ++y)
-                for (int x = 0; x < side_s; ++x)
-                    taps[size_t(y) * side_s + x] +=
-                        double(scatter.separable_sign[k]) * scatter.separable[k][y] * scatter.separable[k][x];
+    const std::vector<double> taps = scatter.applied_taps();
     double kept = 0, grain_sum = 0;
     for (float a : grain.kernel)
         for (float b : grain.kernel) grain_sum += double(a) * a * b * b;
@@ -688,7 +680,8 @@ std::vector<std::string> Plan::describe() const {
                                 " px, " +
                                 (m.scatter[i].separable.empty()
                                      ? std::string("direct 2D sum")
-                                     : std::to_string(m.scatter[i].separable.size()) + " separable terms"));
+                                     : std::to_string(m.scatter[i].separable.size()) + " separable terms" +
+                                           (m.scatter[i].centre != 0 ? " and a centre delta" : "")));
             lines.push_back("  develop (" + l.name + "): H&D curve, D " + fmt(l.density_curve.y_min()) + " to " +
                             fmt(l.density_curve.y_max()));
             if (m.grain[i])

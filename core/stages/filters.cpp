@@ -146,6 +146,7 @@ SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters
     // Rows are a cache line more than the width apart: at widths of a power of two, rows
     // exactly 2^k bytes apart share the L1 cache's sets and would evict each other.
     stride_ = size_t(width) + 16;
+    padded_stride_ = size_t(width) + 2 * radius_ + 16;
     for (const SeparableFilter& f : filters_) {
         std::vector<std::vector<float>> vertical;
         for (size_t t = 0; t < f.terms.size(); ++t) {
@@ -153,20 +154,29 @@ SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters
             for (float v : f.terms[t]) vertical.back().push_back(f.signs[t] * v);
         }
         vertical_.push_back(std::move(vertical));
-        ring_.emplace_back();
-        ring_.back().resize(std::max<size_t>(1, f.terms.size()) * slots_ * stride_);
-        padded_.emplace_back(size_t(width) + 2 * radius_);
-        padded_rows_.push_back(padded_.back().data());
+        centre_.push_back({f.centre});
+        ring_.emplace_back(f.terms.size() * slots_ * stride_);
+        padded_.emplace_back((keeps_input_rows(f) ? slots_ : 1) * padded_stride_);
         for (int o = 0; o < 2; ++o) {
             output_[o].emplace_back(size_t(width));
             out_rows_[o].push_back(output_[o].back().data());
         }
     }
+    padded_rows_.resize(filters_.size());
     column_.resize(slots_);
 }
 
+// A plane whose output reads its input rows themselves (a centre, or the identity) keeps them
+// in a ring as its terms' rows are kept; the others' input rows are read once, as they arrive.
+bool SeparableStream::keeps_input_rows(const SeparableFilter& f) { return f.centre != 0 || f.terms.empty(); }
+
 float* SeparableStream::ring_row(size_t plane, int term, int y) {
     return &ring_[plane][(size_t(term) * slots_ + ((y % slots_) + slots_) % slots_) * stride_];
+}
+
+float* SeparableStream::padded_row(size_t plane, int y) {
+    const size_t slot = keeps_input_rows(filters_[plane]) ? size_t(((y % slots_) + slots_) % slots_) : 0;
+    return &padded_[plane][slot * padded_stride_];
 }
 
 float* const* SeparableStream::row(int y) {
@@ -180,18 +190,18 @@ float* const* SeparableStream::row(int y) {
     }
     const int rows = y + 1 < rows_end_ ? 2 : 1;  // this row, and the next with it where it is asked for
     for (; next_ <= std::min(y + rows - 1 + radius_, row_end_ - 1); ++next_) {
+        for (size_t p = 0; p < filters_.size(); ++p) padded_rows_[p] = padded_row(p, next_);
         source_(next_, padded_rows_.data());
         for (size_t p = 0; p < filters_.size(); ++p) {
             const SeparableFilter& f = filters_[p];
             const float* in = padded_rows_[p] + (radius_ - f.radius());  // the plane's own halo
-            if (f.terms.empty()) std::copy_n(in, width_, ring_row(p, 0, next_));
             for (size_t t = 0; t < f.terms.size(); ++t) convolve_row(in, f.terms[t], width_, ring_row(p, int(t), next_));
         }
     }
     for (size_t p = 0; p < filters_.size(); ++p) {
         const SeparableFilter& f = filters_[p];
-        if (f.terms.empty()) {  // (its ring rows outlive the pair: the ring holds 2R + 2)
-            for (int o = 0; o < rows; ++o) out_rows_[o][p] = ring_row(p, 0, y + o);
+        if (f.is_identity()) {  // (its input rows outlive the pair: the ring holds 2R + 2)
+            for (int o = 0; o < rows; ++o) out_rows_[o][p] = padded_row(p, y + o) + radius_;
             continue;
         }
         float* out[2] = {output_[0][p].data(), output_[1][p].data()};
@@ -204,6 +214,11 @@ float* const* SeparableStream::row(int y) {
                 convolve_columns(column_.data(), vertical_[p][t], width_, out, t > 0);
             else
                 (t == 0 ? convolve_column : convolve_column_add)(column_.data(), vertical_[p][t], width_, out[0]);
+        }
+        if (f.centre == 0) continue;
+        for (int o = 0; o < rows; ++o) {  // after the terms: one order of the sum for every row
+            const float* pixels = padded_row(p, y + o) + radius_;
+            (f.terms.empty() ? convolve_column : convolve_column_add)(&pixels, centre_[p], width_, out[o]);
         }
     }
     if (rows == 2) pending_row_ = y + 1;

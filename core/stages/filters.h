@@ -28,11 +28,14 @@ void convolve_columns(const float* const* rows, const std::vector<float>& taps, 
                       bool add);
 
 // A sum of separable filters, sum_t sign_t (taps_t in x, then taps_t in y), all of 2r + 1
-// taps. No terms: the identity.
+// taps, plus `centre` times the pixel itself (a delta, which costs a multiply and an add where
+// a term costs two passes of 2r + 1 taps). No terms and no centre: the identity.
 struct SeparableFilter {
     std::vector<std::vector<float>> terms;
     std::vector<float> signs;  // +1 or -1 per term
+    float centre = 0;
     int radius() const { return terms.empty() ? 0 : int(terms[0].size() / 2); }
+    bool is_identity() const { return terms.empty() && centre == 0; }
 };
 
 // Planes filtered as they stream down the rows, each by its own SeparableFilter, for one
@@ -55,19 +58,24 @@ public:
     float* const* row(int y);
 
 private:
+    static bool keeps_input_rows(const SeparableFilter& f);
     float* ring_row(size_t plane, int term, int y);
+    float* padded_row(size_t plane, int y);
     int width_, radius_, row_begin_, row_end_, rows_end_, slots_;
-    size_t stride_;
+    size_t stride_, padded_stride_;
     std::vector<SeparableFilter> filters_;
     std::vector<std::vector<std::vector<float>>> vertical_;  // per plane and term, the sign folded in
-    // Per plane: terms (or 1 for the identity) x slots rows, each written before it is read
-    // (so left unset, from recycled memory: core/image.h).
+    std::vector<std::vector<float>> centre_;                  // per plane, {centre} (a one-tap vertical pass)
+    // Per plane: terms x slots rows, each written before it is read (so left unset, from
+    // recycled memory: core/image.h).
     std::vector<std::vector<float, UnsetAllocator<float>>> ring_;
+    // Per plane, the input rows as the source writes them (width + 2R): the last slots of them
+    // where the plane keeps them (keeps_input_rows), else one.
     std::vector<std::vector<float>> padded_;
     std::vector<float*> padded_rows_;
     std::vector<const float*> column_;
     // Per plane, the pair of output rows summed together; out_rows_[o] points at each plane's
-    // row o of the pair (or, for the identity, its ring row).
+    // row o of the pair (or, for the identity, its input row).
     std::vector<std::vector<float>> output_[2];
     std::vector<float*> out_rows_[2];
     int pending_row_;  // the pair's second row, to be returned next

@@ -97,16 +97,21 @@ constexpr int kMaxGrid = 256;
 
 namespace {
 
-// Scales the separable terms so that they sum to exactly 1, as the taps do: the terms
-// left out would otherwise change the image's mean (by up to the tolerance per tap).
-void unit_gain(ScatterKernel& kernel) {
+// The gain of separable terms: each term's sum squared, signed.
+double terms_gain(const std::vector<std::vector<float>>& terms, const std::vector<float>& signs) {
     double gain = 0;
-    for (size_t k = 0; k < kernel.separable.size(); ++k) {
+    for (size_t k = 0; k < terms.size(); ++k) {
         double sum = 0;
-        for (float v : kernel.separable[k]) sum += v;
-        gain += kernel.separable_sign[k] * sum * sum;
+        for (float v : terms[k]) sum += v;
+        gain += signs[k] * sum * sum;
     }
-    const float scale = float(1.0 / std::sqrt(gain));
+    return gain;
+}
+
+// Scales the separable terms so that with the centre they sum to exactly 1, as the taps do:
+// the terms left out would otherwise change the image's mean (by up to the tolerance per tap).
+void unit_gain(ScatterKernel& kernel) {
+    const float scale = float(std::sqrt((1.0 - kernel.centre) / terms_gain(kernel.separable, kernel.separable_sign)));
     for (auto& term : kernel.separable)
         for (float& v : term) v *= scale;
 }
@@ -158,18 +163,24 @@ void symmetric_eigen(std::vector<double>& a, int n, std::vector<double>& values,
     for (int i = 0; i < n; ++i) values[i] = at(i, i);
 }
 
-// The kernel matrix's eigen-decomposition as separable terms, largest |eigenvalue| first
-// (the best approximation of each rank), until the residual is within `tolerance` of the
-// largest tap everywhere or there are `max_terms` terms. Left empty when the tolerance needs
-// so many terms that the direct sum is cheaper (2 passes of 2r+1 taps per term against
-// (2r+1)^2).
+// A kernel matrix's eigen-decomposition as separable terms, largest |eigenvalue| first (the
+// best approximation of each rank), until the residual is within `tolerance` everywhere or
+// there are `max_terms` terms; not found where the tolerance needs so many terms that the
+// direct sum is cheaper (2 passes of 2r+1 taps per term against (2r+1)^2).
 // The PSF is even in x and in y, so every eigenvector with a non-zero eigenvalue is even:
 // the decomposition runs on the r + 1 components from the centre out, in the coordinates
 // w_0 = u_0, w_b = sqrt(2) u_b (where the full vector's norm is |w|), whose matrix
 // S_ab = d_a d_b K(a, b) is symmetric (d_0 = 1, d_b = sqrt(2)); K is the kernel's even part.
-void make_separable(ScatterKernel& kernel, double tolerance, int max_terms) {
-    const int r = kernel.radius, side = 2 * r + 1, n = r + 1;
-    auto tap = [&](int x, int y) { return double(kernel.taps[size_t(y + r) * side + (x + r)]); };
+struct SeparableFit {
+    bool found = false;
+    std::vector<std::vector<float>> terms;
+    std::vector<float> signs;
+    double worst = 0;  // the largest |residual tap|
+};
+
+SeparableFit fit_separable(const std::vector<double>& taps, int r, double tolerance, int max_terms) {
+    const int side = 2 * r + 1, n = r + 1;
+    auto tap = [&](int x, int y) { return taps[size_t(y + r) * side + (x + r)]; };
     auto d = [](int b) { return b ? M_SQRT2 : 1.0; };  // component b's scale, d_b above
     std::vector<double> s(size_t(n) * n);
     for (int a = 0; a < n; ++a)
@@ -184,16 +195,15 @@ void make_separable(ScatterKernel& kernel, double tolerance, int max_terms) {
     for (int k = 0; k < n; ++k) order[k] = k;
     std::stable_sort(order.begin(), order.end(), [&](int i, int j) { return std::abs(values[i]) > std::abs(values[j]); });
 
-    std::vector<double> residual(kernel.taps.begin(), kernel.taps.end());
-    double largest = 0;
-    for (double v : residual) largest = std::max(largest, std::abs(v));
+    SeparableFit fit;
+    std::vector<double> residual = taps;
     const int cheaper_terms = r;  // k terms cost less than the direct sum: 2 (2r+1) k < (2r+1)^2
     for (int term = 0; term <= cheaper_terms; ++term) {
-        double worst = 0;
-        for (double v : residual) worst = std::max(worst, std::abs(v));
-        if (worst <= tolerance * largest || (max_terms > 0 && term == max_terms)) {
-            unit_gain(kernel);
-            return;
+        fit.worst = 0;
+        for (double v : residual) fit.worst = std::max(fit.worst, std::abs(v));
+        if (fit.worst <= tolerance || (max_terms > 0 && term == max_terms)) {
+            fit.found = true;
+            return fit;
         }
         if (term == cheaper_terms) break;
         const int k = order[term];
@@ -205,11 +215,45 @@ void make_separable(ScatterKernel& kernel, double tolerance, int max_terms) {
         // Deflate with the float term, so the residual measures what the convolution uses.
         for (int i = 0; i < side; ++i)
             for (int j = 0; j < side; ++j) residual[size_t(i) * side + j] -= double(sign) * scaled[i] * scaled[j];
-        kernel.separable.push_back(scaled);
-        kernel.separable_sign.push_back(sign);
+        fit.terms.push_back(scaled);
+        fit.signs.push_back(sign);
     }
-    kernel.separable.clear();
-    kernel.separable_sign.clear();
+    return SeparableFit{};
+}
+
+// The centre weights tried for a delta split off the centre tap: this many steps of it.
+constexpr int kCentreSteps = 200;
+
+// The kernel's separable form (design.separable_tolerance, max_terms, centre_term), with
+// unit gain; none where the direct sum is cheaper.
+void make_separable(ScatterKernel& kernel, const ScatterDesign& design) {
+    const int r = kernel.radius;
+    const std::vector<double> taps(kernel.taps.begin(), kernel.taps.end());
+    double largest = 0;
+    for (double v : taps) largest = std::max(largest, std::abs(v));
+    const double tolerance = design.separable_tolerance * largest;
+    SeparableFit best = fit_separable(taps, r, tolerance, design.max_terms);
+    double best_centre = 0;
+    const size_t centre_index = size_t(r) * (2 * r + 1) + r;
+    for (int step = 1; design.centre_term && step <= kCentreSteps; ++step) {
+        const double centre = taps[centre_index] * step / kCentreSteps;
+        std::vector<double> rest = taps;
+        rest[centre_index] -= centre;
+        SeparableFit fit = fit_separable(rest, r, tolerance, design.max_terms);
+        // At least one term: a delta alone within the tolerance per tap can still leave out
+        // the MTF's few percent at Nyquist, which the no-op test (mtf_deviation_to_nyquist)
+        // is the measure of. (And terms that could not take the rest of the gain, 1 -
+        // centre, would be no kernel.)
+        if (!fit.found || fit.terms.empty() || !((1.0 - centre) / terms_gain(fit.terms, fit.signs) > 0)) continue;
+        if (!best.found || fit.terms.size() < best.terms.size() ||
+            (fit.terms.size() == best.terms.size() && fit.worst < best.worst))
+            best = std::move(fit), best_centre = centre;
+    }
+    if (!best.found) return;
+    kernel.separable = std::move(best.terms);
+    kernel.separable_sign = std::move(best.signs);
+    kernel.centre = float(best_centre);
+    unit_gain(kernel);
 }
 
 // Tapers the kernel to zero at max_radius (a raised cosine from half of it) and
@@ -269,7 +313,7 @@ ScatterKernel design_uncached(const Curve& mtf, double pixel_pitch_um, const Sca
             for (int x = -radius; x <= radius; ++x)
                 kernel.taps[(y + radius) * side + (x + radius)] = float(tap(x, y) / sum);
         if (design.max_radius_px > 0 && radius > design.max_radius_px) taper(kernel, design.max_radius_px);
-        if (design.separable_tolerance > 0) make_separable(kernel, design.separable_tolerance, design.max_terms);
+        if (design.separable_tolerance > 0) make_separable(kernel, design);
         return kernel;
     }
 }
@@ -279,10 +323,11 @@ ScatterKernel design_uncached(const Curve& mtf, double pixel_pitch_um, const Sca
 // A design takes up to seconds (the DFT grid and the eigen-terms) and every frame of a
 // sequence asks for the same few: each is computed once per process.
 ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design) {
-    using Key = std::tuple<std::vector<double>, std::vector<double>, double, int, double, int>;
+    using Key = std::tuple<std::vector<double>, std::vector<double>, double, int, double, int, bool>;
     static std::mutex mutex;
     static std::map<Key, ScatterKernel> cache;
-    Key key{mtf.x, mtf.y, pixel_pitch_um, design.max_radius_px, design.separable_tolerance, design.max_terms};
+    Key key{mtf.x, mtf.y, pixel_pitch_um, design.max_radius_px, design.separable_tolerance, design.max_terms,
+            design.centre_term};
     {
         std::lock_guard<std::mutex> lock(mutex);
         auto it = cache.find(key);
@@ -293,6 +338,18 @@ ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, con
     // A long session (a plugin across many pitches and stocks) must not grow it without bound.
     if (cache.size() >= kMaxCachedKernels) cache.clear();
     return cache.emplace(key, std::move(kernel)).first->second;
+}
+
+std::vector<double> ScatterKernel::applied_taps() const {
+    if (separable.empty()) return std::vector<double>(taps.begin(), taps.end());
+    const int side = 2 * radius + 1;
+    std::vector<double> applied(size_t(side) * side, 0.0);
+    for (size_t k = 0; k < separable.size(); ++k)
+        for (int y = 0; y < side; ++y)
+            for (int x = 0; x < side; ++x)
+                applied[size_t(y) * side + x] += double(separable_sign[k]) * separable[k][y] * separable[k][x];
+    applied[size_t(radius) * side + radius] += centre;
+    return applied;
 }
 
 void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads) {

@@ -27,10 +27,16 @@ struct ScatterKernel {
     // the largest and costs fewer operations than the direct sum; empty otherwise.
     std::vector<std::vector<float>> separable;  // e_k scaled by sqrt|weight_k|
     std::vector<float> separable_sign;          // sign of weight_k
+    // Where the design splits a delta off the centre first (ScatterDesign::centre_term): its
+    // weight, the terms then being those of taps - centre delta.
+    float centre = 0;
     bool is_identity() const { return radius == 0; }
-    // The separable terms as a filter: none (it passes its rows through) for the identity, and
+    // The separable form as a filter: none (it passes its rows through) for the identity, and
     // for a kernel summed directly, which has no terms to run.
-    SeparableFilter separable_filter() const { return {separable, separable_sign}; }
+    SeparableFilter separable_filter() const { return {separable, separable_sign, centre}; }
+    // The (2r+1)^2 taps as the convolution applies them: the separable form's sum where it has
+    // one, else `taps`.
+    std::vector<double> applied_taps() const;
 };
 constexpr double kSeparableTolerance = 1e-6;
 
@@ -52,6 +58,11 @@ struct ScatterDesign {
     // approximation of that rank: the largest eigen-terms); 0: as many as the tolerance
     // needs, while they cost less than the direct sum.
     int max_terms = 0;
+    // Split a delta off the centre tap first, of the weight that leaves the terms' residual
+    // smallest, where that takes fewer terms (or, at max_terms, leaves a smaller residual):
+    // a compact PSF is a sharp centre over a smooth spread, which one term fits once the
+    // centre's spike is out of it, and a delta costs a multiply and an add.
+    bool centre_term = false;
 };
 
 // Throws std::invalid_argument for an MTF whose response at 0 is not positive (scattering

@@ -116,17 +116,14 @@ TEST_CASE("the separable form of a scatter kernel gives the direct convolution's
 // The largest |tap - rebuilt tap| of a kernel's separable terms, after the common scale
 // that gives them unit gain.
 static double separable_residual(const ScatterKernel& k) {
-    const int side = 2 * k.radius + 1;
-    std::vector<double> rebuilt(side * side, 0.0);
+    const std::vector<double> rebuilt = k.applied_taps();
     double product = 0, square = 0;
-    for (int i = 0; i < side * side; ++i) {
-        for (size_t t = 0; t < k.separable.size(); ++t)
-            rebuilt[i] += k.separable_sign[t] * double(k.separable[t][i / side]) * k.separable[t][i % side];
+    for (size_t i = 0; i < rebuilt.size(); ++i) {
         product += rebuilt[i] * k.taps[i];
         square += double(k.taps[i]) * k.taps[i];
     }
     double worst = 0;
-    for (int i = 0; i < side * side; ++i) worst = std::max(worst, std::abs(rebuilt[i] - product / square * k.taps[i]));
+    for (size_t i = 0; i < rebuilt.size(); ++i) worst = std::max(worst, std::abs(rebuilt[i] - product / square * k.taps[i]));
     return worst;
 }
 
@@ -153,6 +150,47 @@ TEST_CASE("a design limited to k separable terms keeps the k largest, where the 
             gain += k.separable_sign[t] * sum * sum;
         }
         CHECK(gain == Approx(1.0).margin(1e-5));  // the image's mean is kept
+    }
+}
+
+TEST_CASE("a compact PSF as a centre delta and one term: as close as two terms, and applied as designed", "[scatter]") {
+    // Vision3-like at a 4K frame's pitch, tapered to 3 px as the fast tier designs it: a sharp
+    // centre (0.7 of the weight) over a smooth spread.
+    const Curve mtf = make_curve({0, 5, 10, 20, 40, 60, 80}, {1, 1, 1, 0.95, 0.75, 0.55, 0.4}, "mtf");
+    const ScatterKernel two = design_scatter_kernel(mtf, 6.0, {3, 1e-3, 2});
+    const ScatterKernel centred = design_scatter_kernel(mtf, 6.0, {3, 1e-3, 2, true});
+    REQUIRE(two.separable.size() == 2);
+    REQUIRE(centred.separable.size() == 1);
+    CHECK(centred.centre > 0.3f);
+    CHECK(centred.centre < centred.taps[size_t(3) * 7 + 3]);
+    // Every tap within the tolerance, as the two terms are; the gain exactly 1.
+    double largest = 0, gain = 0, worst = 0, worst_two = 0;
+    const std::vector<double> applied = centred.applied_taps(), applied_two = two.applied_taps();
+    for (size_t i = 0; i < applied.size(); ++i) {
+        largest = std::max(largest, double(std::abs(centred.taps[i])));
+        gain += applied[i];
+        worst = std::max(worst, std::abs(applied[i] - centred.taps[i]));
+        worst_two = std::max(worst_two, std::abs(applied_two[i] - two.taps[i]));
+    }
+    CHECK(gain == Approx(1.0).margin(1e-6));
+    CHECK(worst <= 1.5e-3 * largest);
+    CHECK(worst <= 2 * worst_two);
+    // The stream (one pass, or a plane at a time) applies the centre with the term: the direct
+    // sum of the applied taps' pixels, edges included, whatever the threads.
+    const Window frame{0, 0, 150, 90};
+    Plane src(frame), streamed(frame), direct(frame);
+    for (int y = 0; y < 90; ++y)
+        for (int x = 0; x < 150; ++x) src.at(x, y) = float((x / 7 + y / 5) % 3) + 0.1f * float(x % 11);
+    scatter(src, streamed, centred, frame, 2);
+    ScatterKernel taps_only = centred;
+    taps_only.taps.assign(applied.begin(), applied.end());
+    taps_only.separable.clear();
+    scatter(src, direct, taps_only, frame, 2);
+    for (size_t i = 0; i < src.pixels.size(); ++i) REQUIRE(streamed.pixels[i] == Approx(direct.pixels[i]).margin(1e-5));
+    for (int threads : {1, 7}) {
+        Plane again(frame);
+        scatter(src, again, centred, frame, threads);
+        CHECK(again.pixels == streamed.pixels);
     }
 }
 
