@@ -8,8 +8,9 @@
 //   high       the same spectral printing; the PSF as a sum of separable terms (every tap
 //              within 1e-6 of the largest); grain as filtered Gaussian noise
 //   fast       printing and viewing through 3D tables on layer densities, the PSF tapered
-//              to a compact kernel, halation on a 4x coarser grid, tabulated H&D curves,
-//              grain from hashed noise (sums of uniform bytes: core/random.h)
+//              to a compact kernel (a centre delta and separable terms), halation on a 4x
+//              coarser grid, tabulated H&D curves, grain from hashed noise (sums of uniform
+//              bytes: core/random.h) through a kernel without its negligible outer taps
 //   preview    as fast with smaller kernels, and the print as one 3D table from the
 //              negative's densities to the print's colour, the paper's MTF applied to the
 //              negative's densities and its grain folded into the film's
