@@ -204,8 +204,7 @@ float* const* SeparableStream::row(int y) {
             for (int o = 0; o < rows; ++o) out_rows_[o][p] = padded_row(p, y + o) + radius_;
             continue;
         }
-        float* out[2] = {output_[0][p].data(), output_[1][p].data()};
-        out_rows_[0][p] = out[0], out_rows_[1][p] = out[1];
+        float* out[2] = {out_rows_[0][p], out_rows_[1][p]};  // (the plane's own output rows: set once)
         const int r = f.radius();
         for (size_t t = 0; t < f.terms.size(); ++t) {
             for (int k = -r; k <= r + rows - 1; ++k)
