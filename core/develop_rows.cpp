@@ -107,7 +107,7 @@ __attribute__((always_inline)) inline void exposure_lanes(const float* px, int s
                                                           const float* weights, const float* grey_scale, int layers,
                                                           float scale, int x, float* const* exposure) {
     constexpr float max = float(kMaxInput);
-    V c[3];
+    V c[3]{};  // (only the first `colours` are read; zeroed so the compiler need not prove it)
     channels_at(px + size_t(x) * stride, stride, grey_image, colours, c);
     for (int i = 0; i < colours; ++i) sanitize_lanes(c[i]);
     for (int l = 0; l < layers; ++l) {
@@ -126,7 +126,7 @@ template <typename V>
 __attribute__((always_inline)) inline void write_lanes(const float* const* result, const float* in_px, int in_stride,
                                                        int alpha, float* out_px, int out_stride, int x) {
     constexpr int lanes = sizeof(V) / sizeof(float);
-    V c[4];
+    V c[4]{};  // (c[3], the alpha, only where the input has one)
     for (int i = 0; i < 3; ++i) simd::load(c[i], result[i] + x);
     if (in_px)
         for (int k = 0; k < lanes; ++k) c[3][k] = in_px[size_t(x + k) * in_stride + alpha];
