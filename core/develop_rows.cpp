@@ -158,24 +158,41 @@ struct WriteRow {
     __attribute__((always_inline)) static void run(const float* const* result, const float* in_px, int in_stride,
                                                    int alpha, float* out_px, int out_stride, int width) {
         int x = 0;
-        for (; x + lanes <= width; x += lanes)
+        for (; x + lanes <= width; x += lanes) {
+            simd::prefetch_ahead<true>(out_px + size_t(x) * out_stride, lanes * out_stride * int(sizeof(float)));
             write_lanes<typename simd::Lanes<lanes>::F>(result, in_px, in_stride, alpha, out_px, out_stride, x);
+        }
         for (; x < width; ++x) write_lanes<simd::Float1>(result, in_px, in_stride, alpha, out_px, out_stride, x);
     }
 };
+
+template <int lanes>
+__attribute__((always_inline)) inline void exposure_row(const float* px, int stride, bool grey_image, int colours,
+                                                        const float* weights, const float* grey_scale, int layers,
+                                                        float scale, int width, float* const* exposure) {
+    int x = 0;
+    for (; x + lanes <= width; x += lanes) {
+        simd::prefetch_ahead(px + size_t(x) * stride, lanes * stride * int(sizeof(float)));
+        exposure_lanes<typename simd::Lanes<lanes>::F>(px, stride, grey_image, colours, weights, grey_scale, layers,
+                                                       scale, x, exposure);
+    }
+    for (; x < width; ++x)
+        exposure_lanes<simd::Float1>(px, stride, grey_image, colours, weights, grey_scale, layers, scale, x, exposure);
+}
 
 struct ExposureRow {
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* px, int stride, bool grey_image, int colours,
                                                    const float* weights, const float* grey_scale, int layers,
                                                    float scale, int width, float* const* exposure) {
-        int x = 0;
-        for (; x + lanes <= width; x += lanes)
-            exposure_lanes<typename simd::Lanes<lanes>::F>(px, stride, grey_image, colours, weights, grey_scale,
-                                                           layers, scale, x, exposure);
-        for (; x < width; ++x)
-            exposure_lanes<simd::Float1>(px, stride, grey_image, colours, weights, grey_scale, layers, scale, x,
-                                         exposure);
+        // RGB or RGBA pixels onto three layers, the common shapes, with their sizes as
+        // constants (the other shapes' branches gone, the loops unrolled); the same operations.
+        if (colours == 3 && !grey_image && layers == 3 && stride == 3)
+            exposure_row<lanes>(px, 3, false, 3, weights, grey_scale, 3, scale, width, exposure);
+        else if (colours == 3 && !grey_image && layers == 3 && stride == 4)
+            exposure_row<lanes>(px, 4, false, 3, weights, grey_scale, 3, scale, width, exposure);
+        else
+            exposure_row<lanes>(px, stride, grey_image, colours, weights, grey_scale, layers, scale, width, exposure);
     }
 };
 
