@@ -59,8 +59,10 @@ struct AddHaloRow {
     __attribute__((always_inline)) static void run(const float* in, const float* top, const float* bottom, float ty,
                                                    float strength, int n, float* out) {
         int c = 0;
-        for (; c + lanes <= n; c += lanes)
+        for (; c + lanes <= n; c += lanes) {
+            simd::prefetch_ahead(in + c, lanes * int(sizeof(float)));  // (a ring row read back, from memory)
             lanes_of_halo<typename simd::Lanes<lanes>::F>(in, top, bottom, ty, strength, c, out);
+        }
         for (; c < n; ++c) lanes_of_halo<simd::Float1>(in, top, bottom, ty, strength, c, out);
     }
 };
