@@ -20,25 +20,26 @@ __attribute__((always_inline)) inline V byte_sum_noise(const U& h) {
     return (__builtin_convertvector(sum, V) - kHashedNoiseMean) * kHashedNoiseScale;
 }
 
+// The noise at columns x + lane of a row: one piece of code for the vector blocks and the
+// scalar tail (lane 0 .. lanes - 1, or {0}).
+template <typename U, typename V>
+__attribute__((always_inline)) inline void hashed_noise_lanes(uint32_t row_hash, int x, const U& lane, float* out) {
+    U h = (uint32_t(x) + lane) * kNoiseColumnStep ^ row_hash;
+    mix32_in_place(h);
+    simd::store(out, byte_sum_noise<U, V>(h));
+}
+
 // The hashes and their noise in vectors of `lanes`, then one at a time.
 struct HashedNoiseRun {
     template <int lanes>
     __attribute__((always_inline)) static void run(uint32_t row_hash, int x0, int n, float* out) {
         using U = typename simd::Lanes<lanes>::U;
-        using V = typename simd::Lanes<lanes>::F;
         U lane;
         for (int k = 0; k < lanes; ++k) lane[k] = uint32_t(k);
         int i = 0;
-        for (; i + lanes <= n; i += lanes) {
-            U h = (uint32_t(x0 + i) + lane) * kNoiseColumnStep ^ row_hash;
-            mix32_in_place(h);
-            simd::store(out + i, byte_sum_noise<U, V>(h));
-        }
-        for (; i < n; ++i) {
-            simd::Uint1 h{(uint32_t(x0 + i) * kNoiseColumnStep) ^ row_hash};
-            mix32_in_place(h);
-            out[i] = byte_sum_noise<simd::Uint1, simd::Float1>(h)[0];
-        }
+        for (; i + lanes <= n; i += lanes)
+            hashed_noise_lanes<U, typename simd::Lanes<lanes>::F>(row_hash, x0 + i, lane, out + i);
+        for (; i < n; ++i) hashed_noise_lanes<simd::Uint1, simd::Float1>(row_hash, x0 + i, simd::Uint1{0}, out + i);
     }
 };
 

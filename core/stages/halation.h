@@ -55,7 +55,7 @@ private:
     struct PlaneHalo {
         float strength = 0;
         std::vector<float> column_sums;  // none: no halation
-        std::vector<float> across[2];             // coarse rows j (by j's parity) interpolated to out's columns
+        std::vector<float> across[2];    // coarse rows j (by j's parity) interpolated to out's columns
     };
     float* ring_row(size_t plane, int y);
     void read_to(int y);
