@@ -59,7 +59,7 @@ void add_colour_flags(CLI::App& cmd, ColourOptions& colour) {
 }
 
 ColourIO::ColourIO(const ColourOptions& o, OutputMode output, bool verbose)
-    : converter_(resolve_config(o)), input_space_(o.input_space) {
+    : converter_(resolve_config(o)), input_space_(o.input_space), output_mode_(output) {
     const bool to_display = !o.display_view.empty();
     const bool converts_result = to_display || !o.output_space.empty();
     if (output == OutputMode::density && converts_result)
@@ -94,6 +94,30 @@ ColourIO::ColourIO(const ColourOptions& o, OutputMode output, bool verbose)
     };
     say("input", *input_);
     say((std::string(output_mode_name(output)) + " result").c_str(), *output_);
+}
+
+std::string ColourIO::input_tag_warning(const std::string& path, const std::string& file_space) const {
+    if (!input_space_.empty() || file_space.empty()) return "";
+    std::string space;
+    try {
+        if (converter_.to_working(file_space)->is_noop()) return "";
+        space = converter_.canonical_color_space(file_space);
+    } catch (const ocio::OcioError&) {
+        return "";  // a name the config does not know says nothing it can act on
+    }
+    return "'" + path + "' says its pixels are in '" + space + "' (oiio:ColorSpace \"" + file_space +
+           "\"), but they are read as the working space '" + converter_.working_space().color_space +
+           "' (no --iscolorspace): give --iscolorspace \"" + space + "\" to convert them";
+}
+
+std::string ColourIO::integer_output_warning(const std::string& path, bool integer_file) const {
+    const bool linear = output_mode_ == OutputMode::print || output_mode_ == OutputMode::negative ||
+                        output_mode_ == OutputMode::texture;
+    if (!integer_file || !linear || !output_->is_noop()) return "";
+    return "'" + path + "' gets the " + output_mode_name(output_mode_) + "'s linear values ('" + output_space_ +
+           "') as integers: a display shows them dark and values above 1 clip; give --ociodisplay DISPLAY VIEW "
+           "(\"\" \"\" for the config's defaults; sRGB Standard in the embedded one) or --tocolorspace for a "
+           "picture to view, or write a float format such as .exr";
 }
 
 void ColourIO::apply(const ocio::Conversion& conversion, Image& image, int threads) {

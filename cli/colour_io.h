@@ -46,6 +46,16 @@ public:
     const std::string& input_space() const { return input_space_; }
     const ocio::Conversion& input_conversion() const { return *input_; }
     const ocio::Conversion& output_conversion() const { return *output_; }
+    // What to warn of when an input file's own tag ("oiio:ColorSpace", `file_space`) names a
+    // colour space the config knows and the pixels are read as another: without --iscolorspace
+    // an sRGB PNG or JPEG would be taken as scene-linear. Empty when there is nothing to say:
+    // --iscolorspace given (it overrides the tag), no tag, a tag the config does not know
+    // (OpenImageIO's "Linear" for float formats), or the working space under any name.
+    std::string input_tag_warning(const std::string& path, const std::string& file_space) const;
+    // What to warn of when working-space (linear) values are written unconverted to an
+    // integer file (a PNG, a JPEG, -d uint8 or uint16): it shows dark and clips at 1. Empty
+    // for a float file, a converted result, a scan (code values) or densities (refused elsewhere).
+    std::string integer_output_warning(const std::string& path, bool integer_file) const;
     // The config's name for the colour space the written result is in, for the output's
     // "oiio:ColorSpace"; empty where the result is data (density) or in no space the config
     // names (a scan without a Cineon log space, a working space reached through ACES).
@@ -56,6 +66,7 @@ private:
 
     ocio::ColorConverter converter_;
     std::string input_space_, output_space_;
+    OutputMode output_mode_;
     ocio::ConversionPtr input_, output_;
 };
 

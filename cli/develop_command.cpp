@@ -70,17 +70,28 @@ void warn_of_long_reference_render(const Plan& plan, const Window& out, FrameRep
     });
 }
 
+// Say once that the input's own colour-space tag is not the space it is read as (an sRGB PNG
+// taken as scene-linear without --iscolorspace): the frames of a sequence share their tag.
+void warn_of_input_tag(const ColourIO& colour, const std::string& path, const OIIO::ImageSpec& spec,
+                       FrameReport& report) {
+    const std::string warning = colour.input_tag_warning(path, spec.get_string_attribute("oiio:ColorSpace"));
+    if (warning.empty()) return;
+    static std::once_flag warned;
+    std::call_once(warned, [&] { report.warnings.push_back(warning); });
+}
+
 size_t count_non_finite(const Image& image) {
     return size_t(std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
 }
 
 // Develops and writes one frame; its report goes to `progress` as its output takes its
 // name (so a run interrupted then logs every finished output).
-void develop_frame(const DevelopOptions& o, PlanCache& plans, const FrameJob& job, int threads, bool print_plan,
-                   FrameReport& report, Progress& progress) {
+void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& plans, const FrameJob& job,
+                   int threads, bool print_plan, FrameReport& report, Progress& progress) {
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_image(job.input);
     report.read_seconds = seconds_since(start);
+    warn_of_input_tag(colour, job.input, in.spec, report);
     if (size_t bad = count_non_finite(in.pixels))
         report.warnings.push_back(std::to_string(bad) + " non-finite pixel values (NaN counts as no light, +Inf as 1e30)");
 
@@ -110,8 +121,8 @@ void develop_frame(const DevelopOptions& o, PlanCache& plans, const FrameJob& jo
 }
 
 // One frame, its report added to `progress`; returns its status.
-FrameReport::Status process_frame(const DevelopOptions& o, PlanCache& plans, const FrameJob& job, int threads,
-                                  bool print_plan, Progress& progress) {
+FrameReport::Status process_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& plans,
+                                  const FrameJob& job, int threads, bool print_plan, Progress& progress) {
     FrameReport report;
     report.frame = job.frame;
     report.input = job.input;
@@ -123,7 +134,7 @@ FrameReport::Status process_frame(const DevelopOptions& o, PlanCache& plans, con
         if (!fs::exists(job.input)) report.warnings.push_back("input '" + job.input + "' does not exist");
     } else {
         try {
-            develop_frame(o, plans, job, threads, print_plan, report, progress);
+            develop_frame(o, colour, plans, job, threads, print_plan, report, progress);
             return report.status;  // added as its output took its name
         } catch (const std::exception& e) {
             report.status = FrameReport::Status::failed;
@@ -137,7 +148,8 @@ FrameReport::Status process_frame(const DevelopOptions& o, PlanCache& plans, con
 // Frames run in parallel, each with its share of the threads: whole frames scale better
 // than one frame's rows (reading and writing overlap with developing). Without
 // --skip-bad-frames the first failure stops new frames from starting.
-void run_frames(const DevelopOptions& o, const std::vector<FrameJob>& jobs, int threads, Progress& progress) {
+void run_frames(const DevelopOptions& o, const ColourIO& colour, const std::vector<FrameJob>& jobs, int threads,
+                Progress& progress) {
     const int most = o.run.frames_at_once > 0 ? o.run.frames_at_once : std::min(threads, kDefaultMaxFramesAtOnce);
     const int workers = std::max(1, std::min(int(jobs.size()), most));
     const int threads_per_frame = std::max(1, threads / workers);
@@ -152,7 +164,7 @@ void run_frames(const DevelopOptions& o, const std::vector<FrameJob>& jobs, int 
     auto work = [&] {
         for (size_t i = next++; i < jobs.size() && !stop; i = next++) {
             const FrameReport::Status status =
-                process_frame(o, plans, jobs[i], threads_per_frame, o.look.verbose && i == 0, progress);
+                process_frame(o, colour, plans, jobs[i], threads_per_frame, o.look.verbose && i == 0, progress);
             if (status == FrameReport::Status::failed && !o.run.skip_bad_frames) stop = true;
         }
     };
@@ -214,7 +226,12 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
     o.run.in_place = fs::absolute(o.input).lexically_normal() == fs::absolute(o.output).lexically_normal();
     o.write.command_line = command_line();
     o.write.look_json = look_json(cmd).dump();
-    o.write.colour_space = ColourIO(o.look.colour, o.look.settings.output, false).output_space();
+    const ColourIO colour(o.look.colour, o.look.settings.output, false);
+    o.write.colour_space = colour.output_space();
+    // Integers: a format without float pixels (PNG, JPEG), or -d uint8 or uint16.
+    const bool integer_output = !is_float_format(o.output) || o.write.data_type.find("int") != std::string::npos;
+    if (const std::string w = colour.integer_output_warning(o.output, integer_output); !w.empty())
+        std::cerr << "darkroom: warning: " << w << "\n";
     if (!o.run.dry_run) remove_stale_outputs_temps(jobs, o.run.quiet);
 
     // A single image is developed silently, as oiiotool does, unless asked (-v, -n).
@@ -229,7 +246,7 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
                 write_run_log(o.run.log_path, progress.reports(), progress.elapsed_seconds(), command_line(),
                               signal_number);
         });
-        run_frames(o, jobs, threads, progress);
+        run_frames(o, colour, jobs, threads, progress);
     }
     progress.finish();
     const std::vector<FrameReport> reports = progress.reports();

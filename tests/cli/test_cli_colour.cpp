@@ -300,3 +300,43 @@ TEST_CASE("a LUT from bake-lut, applied by oiiotool, matches develop without gra
         CHECK(mean < 0.001);
     }
 }
+
+// An input whose own tag names another colour space than the one its pixels are read as (an
+// sRGB PNG without --iscolorspace), and linear values written to an integer file, are warned
+// of, naming the flag that fixes them; where nothing is wrong, nothing is said.
+TEST_CASE("develop warns of an input read in another space than its tag and of linear values in integers",
+          "[cli][colour]") {
+    ScopedOcioVariable unset(std::nullopt);
+    const std::string png = tmp("colour-warn-in.png"), exr = make_input("colour-warn-in.exr");
+    OIIO::ImageSpec spec(16, 12, 3, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:ColorSpace", "sRGB");
+    OIIO::ImageBuf buf(spec);
+    OIIO::ImageBufAlgo::fill(buf, {0.4f, 0.4f, 0.4f});
+    REQUIRE(buf.write(png));
+    auto run = [](const std::string& args) {
+        Result r = darkroom("develop " + args + " --no-grain");
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+        return r.output;
+    };
+    const std::string tag_warning = "says its pixels are in 'sRGB - Texture' (oiio:ColorSpace \"sRGB\")";
+    const std::string integer_warning = "linear values ('lin_rec709') as integers";
+
+    const std::string both = run(png + " -o " + tmp("colour-warn-1.png"));
+    CHECK(both.find(tag_warning) != std::string::npos);
+    CHECK(both.find("--iscolorspace \"sRGB - Texture\"") != std::string::npos);
+    CHECK(both.find(integer_warning) != std::string::npos);
+    // The named fixes silence them; a float input (OpenImageIO's "Linear", which the config does
+    // not name) and a float output have nothing to warn of.
+    CHECK(run(png + " -o " + tmp("colour-warn-2.png") + " --iscolorspace sRGB --ociodisplay sRGB Standard").empty());
+    CHECK(run(exr + " -o " + tmp("colour-warn-3.exr")).empty());
+    CHECK(run(exr + " -o " + tmp("colour-warn-4.exr") + " -d half").empty());
+    // Integers that are not linear: a scan's code values, or a tag that is the working space.
+    CHECK(run(exr + " -o " + tmp("colour-warn-5.png") + " --output scan").empty());
+    CHECK(run(exr + " -o " + tmp("colour-warn-6.tif") + " -d uint16").find(integer_warning) != std::string::npos);
+    const std::string linear_png = tmp("colour-warn-linear.png");
+    spec.attribute("oiio:ColorSpace", "lin_rec709");
+    OIIO::ImageBuf linear(spec);
+    REQUIRE(linear.write(linear_png));
+    CHECK(run(linear_png + " -o " + tmp("colour-warn-7.exr")).empty());
+}
