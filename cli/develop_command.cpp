@@ -221,6 +221,9 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
         throw UserError("--frame is for a single image: each frame of a sequence uses its own frame number");
     const std::vector<FrameJob> jobs = expand_frames(o.input, o.output, o.sequence, o.look.settings.frame);
     check_output_format(o);
+    std::set<fs::path> folders;  // one check a folder: a sequence's frames share theirs
+    for (const FrameJob& job : jobs)
+        if (folders.insert(fs::path(job.output).parent_path()).second) require_writable(job.output);
     // Only an output named as the input itself replaces it; an output that merely resolves
     // to an input (another spelling of a pattern, a link) is refused frame by frame.
     o.run.in_place = fs::absolute(o.input).lexically_normal() == fs::absolute(o.output).lexically_normal();

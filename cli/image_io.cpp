@@ -37,6 +37,13 @@ bool is_float_format(const std::string& path) {
     return ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".hdr";
 }
 
+void require_writable(const std::string& path) {
+    if (!OIIO::ImageOutput::create(path)) throw UserError("cannot write '" + path + "': " + OIIO::geterror());
+    const fs::path folder = fs::path(path).parent_path();
+    if (!folder.empty() && !fs::is_directory(folder))
+        throw UserError("cannot write '" + path + "': the folder '" + folder.string() + "' does not exist");
+}
+
 const std::vector<std::string>& output_data_types() {
     static const std::vector<std::string> types{"uint8", "uint16", "half", "float"};
     return types;

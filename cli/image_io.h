@@ -34,6 +34,10 @@ struct WriteOptions {
     std::optional<std::string> colour_space;
 };
 
+// Throws UserError, before any work, when `path` cannot be written: OpenImageIO has no writer
+// for its format (by its extension), or its folder does not exist.
+void require_writable(const std::string& path);
+
 // The data types -d accepts.
 const std::vector<std::string>& output_data_types();
 

@@ -59,6 +59,21 @@ TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[c
     CHECK_FALSE(fs::exists(out));
 }
 
+// An output that cannot be written is found before any frame is read or developed (a frame's
+// failure is reported as "frame N ... failed"), so a farm job fails at once, not after a frame.
+TEST_CASE("an unwritable output is refused before any frame is developed", "[cli][bad-input]") {
+    const std::string in = make_input("unwritable-in.exr");
+    for (const auto& [output, message] : {std::pair<std::string, std::string>{"/nonexistent-dir/x.exr", "the folder '/nonexistent-dir' does not exist"},
+                                          {(kTmp / "x.no-such-format").string(), "could not find a format writer"}}) {
+        Result r = darkroom("develop " + in + " -o " + output);
+        INFO(r.output);
+        CHECK(r.exit_code == 1);
+        CHECK_THAT(r.output, Catch::Contains(message));
+        CHECK_THAT(r.output, !Catch::Contains("frame 0"));
+        CHECK_FALSE(fs::exists(output));
+    }
+}
+
 TEST_CASE("a corrupt image and a bad stock file are reported, and leave no output", "[cli][bad-input]") {
     std::string bad_image = (kTmp / "corrupt.exr").string(), bad_stock = (kTmp / "bad-stock.json").string();
     std::ofstream(bad_image) << "this is not an EXR file";
