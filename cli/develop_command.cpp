@@ -80,6 +80,13 @@ void warn_of_input_tag(const ColourIO& colour, const std::string& path, const OI
     std::call_once(warned, [&] { report.warnings.push_back(warning); });
 }
 
+// The channel of an alpha the colour is premultiplied by, -1 for none: OpenImageIO's readers
+// give premultiplied colour (a PNG's or TIFF's straight alpha converted as it is read) unless
+// the spec says "oiio:UnassociatedAlpha".
+int premultiplied_alpha_channel(const OIIO::ImageSpec& spec) {
+    return spec.alpha_channel >= 0 && spec.get_int_attribute("oiio:UnassociatedAlpha", 0) == 0 ? spec.alpha_channel : -1;
+}
+
 size_t count_non_finite(const Image& image) {
     return size_t(std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
 }
@@ -109,7 +116,7 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width), job.frame);
     const Window out_window = output_window(o, in.pixels.window).moved(dx, dy);
     warn_of_long_reference_render(plan, out_window, report);
-    Image out = develop_image(look, plan, view, out_window);
+    Image out = develop_image(look, plan, view, out_window, premultiplied_alpha_channel(in.spec));
     out.window = out.window.moved(-dx, -dy);  // write_image takes the data window's coordinates
     report.develop_seconds = seconds_since(start);
 

@@ -167,29 +167,38 @@ Image develop_image(const LookOptions& look, const ConstImageView& in, const Win
     return develop_image(look, compile_look(look, frame_geometry(in)), in, out_window);
 }
 
-Image develop_image(const LookOptions& look, const Plan& plan, const ConstImageView& in, const Window& out_window) {
+Image develop_image(const LookOptions& look, const Plan& plan, const ConstImageView& in, const Window& out_window,
+                    int premultiplied_alpha) {
     const ColourIO colour(look.colour, look.settings.output, look.verbose);
     // RGB, then what the input has past its colour: alpha (grey and alpha input: RGBA) and
     // any further channels.
     const int colour_channels = colour_channel_count(in.channels);
+    const bool premultiplied = premultiplied_alpha >= colour_channels && premultiplied_alpha < in.channels;
     Image out(out_window, 3 + in.channels - colour_channels);
-    if (colour.input_conversion().is_noop()) {
+    if (colour.input_conversion().is_noop() && !premultiplied) {
         plan.run(in, out.view(), look.threads);
     } else {
-        // Per-pixel conversion of just the pixels the plan reads: a window stays that window
-        // of the full render.
+        // Per-pixel work on just the pixels the plan reads: a window stays that window of the
+        // full render.
         const Window needed = plan.input_window(out_window);
         Image working(needed, in.channels);
         for (int y = needed.y0; y < needed.y1; ++y)
-            for (int x = needed.x0; x < needed.x1; ++x) std::copy_n(in.at(x, y), in.channels, working.at(x, y));
+            for (int x = needed.x0; x < needed.x1; ++x) {
+                float* px = working.at(x, y);
+                std::copy_n(in.at(x, y), in.channels, px);
+                if (premultiplied) unpremultiply(px, colour_channels, px[premultiplied_alpha]);
+            }
         colour.input_to_working(working, look.threads);
         plan.run(working.view(), out.view(), look.threads);
     }
     colour.result_to_output(out, look.threads);
     if (!look.grain_profile.empty()) add_plate_grain(look, out);
     for (int y = out.window.y0; y < out.window.y1; ++y)
-        for (int x = out.window.x0; x < out.window.x1; ++x)
-            for (int c = 3; c < out.channels; ++c) out.at(x, y)[c] = in.at(x, y)[colour_channels + c - 3];
+        for (int x = out.window.x0; x < out.window.x1; ++x) {
+            float* px = out.at(x, y);
+            for (int c = 3; c < out.channels; ++c) px[c] = in.at(x, y)[colour_channels + c - 3];
+            if (premultiplied) premultiply(px, 3, in.at(x, y)[premultiplied_alpha]);
+        }
     return out;
 }
 

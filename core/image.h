@@ -45,6 +45,16 @@ struct Window {
 // hold one, RGB (3) and RGB with alpha and more (4+) three; the channel after them is alpha.
 inline int colour_channel_count(int channels) { return channels >= 3 ? 3 : 1; }
 
+// Colour premultiplied by an alpha, divided by it where it is above 0 (at 0 there is no
+// coverage to divide out), and multiplied back: the plugin's and the program's, one code.
+inline void unpremultiply(float* pixel, int colour_channels, float alpha) {
+    if (alpha > 0)
+        for (int c = 0; c < colour_channels; ++c) pixel[c] /= alpha;
+}
+inline void premultiply(float* pixel, int colour_channels, float alpha) {
+    for (int c = 0; c < colour_channels; ++c) pixel[c] *= alpha;
+}
+
 template <typename T>
 struct BasicImageView {
     T* data = nullptr;          // first pixel, i.e. (window.x0, window.y0)

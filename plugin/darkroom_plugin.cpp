@@ -331,13 +331,12 @@ void render_band(BandJob& job, const Window& band) {
                                       (std::ptrdiff_t)channels * band.width()});
     // Keyed by absolute pixel like the film grain: a band gets that band of the full frame.
     if (job.plate_grain) apply_grain_profile(*job.plate_grain, out.view(), job.seed, job.grain_frame, 1);
-    const bool premultiply = job.output->premultiplied();
+    const bool premultiplied_output = job.output->premultiplied();
     for (int y = band.y0; y < band.y1; ++y)
         for (int x = band.x0; x < band.x1; ++x) {
             float px[4];
             std::copy_n(out.at(x, y), channels, px);
-            if (premultiply)
-                for (int c = 0; c < 3; ++c) px[c] *= px[3];
+            if (premultiplied_output) premultiply(px, 3, px[3]);
             job.output->write(x + job.film.x1, job.film.y2 - 1 - y, px);
         }
 }
@@ -477,8 +476,7 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
                 continue;
             }
             source.read(ox, oy, px);
-            if (source.premultiplied() && px[3] > 0)
-                for (int c = 0; c < 3; ++c) px[c] /= px[3];
+            if (source.premultiplied()) unpremultiply(px, 3, px[3]);
         }
     colour.in->apply({in.data, in_core.width(), in_core.height(), in_channels, in_channels, in.row_stride});
 

@@ -54,7 +54,8 @@ struct ParsedLook {
 };
 
 py::array_t<float> develop(py::array_t<float, py::array::c_style | py::array::forcecast> pixels,
-                           const std::string& look_file, int frame, int threads, const py::kwargs& settings) {
+                           const std::string& look_file, int frame, int threads, bool premultiplied,
+                           const py::kwargs& settings) {
     if (pixels.ndim() != 3 && pixels.ndim() != 2)
         throw py::value_error("darkroom: pixels must be an array of shape (height, width) or (height, width, channels)");
     const int height = int(pixels.shape(0)), width = int(pixels.shape(1));
@@ -78,7 +79,9 @@ py::array_t<float> develop(py::array_t<float, py::array::c_style | py::array::fo
     darkroom::Image out;
     {
         py::gil_scoped_release release;
-        out = darkroom::cli::develop_image(parsed.look, *plan, in, full);
+        // The alpha is the channel after the colour (RGBA, YA), as OpenImageIO names it.
+        const int alpha = darkroom::colour_channel_count(channels);
+        out = darkroom::cli::develop_image(parsed.look, *plan, in, full, premultiplied && alpha < channels ? alpha : -1);
     }
     py::array_t<float> result({height, width, out.channels});
     std::copy(out.pixels.begin(), out.pixels.end(), result.mutable_data());
@@ -101,9 +104,11 @@ PYBIND11_MODULE(darkroom, m) {
     m.doc() = "Photographic film and paper development for numpy images (the darkroom program's engine)";
     py::register_exception<darkroom::cli::UserError>(m, "DarkroomError", PyExc_ValueError);
     m.def("develop", &develop, py::arg("pixels"), py::kw_only(), py::arg("look") = "", py::arg("frame") = 0,
-          py::arg("threads") = 0,
+          py::arg("threads") = 0, py::arg("premultiplied") = true,
           "Develops a scene-linear float image of shape (height, width[, channels]); returns (height, width, "
           "max(3, channels)) float32. look: a look file; frame: the frame number (each frame has its own grain); "
+          "premultiplied: the colour is premultiplied by the alpha after it (RGBA, YA), as OpenImageIO reads "
+          "files: divided out before developing and multiplied back after (False: straight colour); "
           "other keywords: the program's look flags with '_' for '-', overriding the look file.");
     m.def("release_memory", &darkroom::release_plane_memory,
           "Frees the working planes develop keeps for the next image (up to 2 GB; about 0.3 GB after a 4K frame "

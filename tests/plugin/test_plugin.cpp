@@ -345,6 +345,14 @@ TEST_CASE("premultiplied input is unpremultiplied, developed and premultiplied a
             // Unpremultiplying (c a) / a can differ from c in the last bit, hence the tolerance.
             for (int c = 0; c < 3; ++c) REQUIRE(b[c] == Approx(a[c] * a[3]).epsilon(1e-4).margin(1e-7));
         }
+    // darkroom develop reads an RGBA EXR as premultiplied (OpenImageIO's convention) and gives
+    // the same pixels, bit for bit.
+    const std::vector<float> cli = develop(write_exr("plugin-premultiplied.exr", premultiplied, w, h, 4), kCommonFlags + " --frame 1");
+    const std::vector<float> ofx = p.output.to_top_down();
+    REQUIRE(cli.size() == ofx.size());
+    long differing = 0;
+    for (size_t i = 0; i < cli.size(); ++i) differing += ofx[i] != cli[i];
+    CHECK(differing == 0);
 }
 
 TEST_CASE("16-bit and 8-bit images render as the float image does, to their precision", "[plugin]") {

@@ -62,6 +62,23 @@ class ModuleEqualsProgram(unittest.TestCase):
         self.assertTrue(np.array_equal(got, expected))
         self.assertTrue(np.array_equal(got[..., 3], self.plate[..., 3]))  # alpha passes through
 
+    def test_premultiplied_colour_is_divided_by_alpha_and_multiplied_back(self):
+        straight = self.plate.copy()
+        straight[..., :3] /= np.where(self.plate[..., 3:] > 0, self.plate[..., 3:], 1)
+        opaque = straight.copy()
+        opaque[..., 3] = 1
+        expected = darkroom.develop(opaque, look=self.look, frame=2)[..., :3] * self.plate[..., 3:]
+        got = darkroom.develop(self.plate, look=self.look, frame=2)
+        np.testing.assert_allclose(got[..., :3], expected, rtol=1e-5, atol=1e-7)
+        self.assertTrue(np.all(got[self.plate[..., 3] == 0][..., :3] == 0))
+        # premultiplied=False: the colour is developed as it is (as with an opaque alpha), the
+        # alpha passed through.
+        plate_opaque = self.plate.copy()
+        plate_opaque[..., 3] = 1
+        as_straight = darkroom.develop(self.plate, look=self.look, frame=2, premultiplied=False)
+        self.assertTrue(np.array_equal(as_straight[..., :3], darkroom.develop(plate_opaque, look=self.look, frame=2)[..., :3]))
+        self.assertTrue(np.array_equal(as_straight[..., 3], self.plate[..., 3]))
+
     def test_keywords_override_the_look_file_as_flags_do(self):
         expected = self.program("--look", self.look, "--frame", "3", "--exposure", "-1", "--no-mtf")
         got = darkroom.develop(self.plate, look=self.look, frame=3, exposure=-1, mtf=False, threads=1)
