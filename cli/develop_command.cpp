@@ -80,13 +80,6 @@ void warn_of_input_tag(const ColourIO& colour, const std::string& path, const OI
     std::call_once(warned, [&] { report.warnings.push_back(warning); });
 }
 
-// The channel of an alpha the colour is premultiplied by, -1 for none: OpenImageIO's readers
-// give premultiplied colour (a PNG's or TIFF's straight alpha converted as it is read) unless
-// the spec says "oiio:UnassociatedAlpha".
-int premultiplied_alpha_channel(const OIIO::ImageSpec& spec) {
-    return spec.alpha_channel >= 0 && spec.get_int_attribute("oiio:UnassociatedAlpha", 0) == 0 ? spec.alpha_channel : -1;
-}
-
 size_t count_non_finite(const Image& image) {
     return size_t(std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
 }

@@ -269,7 +269,17 @@ void run_apply(const ApplyOptions& o) {
     if (in.pixels.channels < (int)profile.channels.size())
         throw UserError("'" + o.profile + "' has " + std::to_string(profile.channels.size()) + " channels, '" + o.input +
                         "' only " + std::to_string(in.pixels.channels));
+    // Grain on the light, not on light times coverage: premultiplied colour is divided by its
+    // alpha first and multiplied back after, so where an element is transparent it adds no
+    // grain over the plate it is comped onto (as develop does).
+    const int colours = int(profile.channels.size()), alpha = premultiplied_alpha_channel(in.spec);
+    const bool premultiplied = alpha >= colours && alpha < in.pixels.channels;
+    auto each_pixel = [&](auto&& f) {
+        for (size_t i = 0; i < in.pixels.pixels.size(); i += in.pixels.channels) f(&in.pixels.pixels[i]);
+    };
+    if (premultiplied) each_pixel([&](float* px) { unpremultiply(px, colours, px[alpha]); });
     apply_grain_profile(profile, in.pixels.view(), o.seed, o.frame, o.threads);
+    if (premultiplied) each_pixel([&](float* px) { premultiply(px, colours, px[alpha]); });
     write_image(o.output, in.pixels, in.spec, o.input);
 }
 

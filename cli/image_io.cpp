@@ -26,6 +26,10 @@ LoadedImage read_image(const std::string& path) {
     return out;
 }
 
+int premultiplied_alpha_channel(const OIIO::ImageSpec& spec) {
+    return spec.alpha_channel >= 0 && spec.get_int_attribute("oiio:UnassociatedAlpha", 0) == 0 ? spec.alpha_channel : -1;
+}
+
 static bool same_file(const std::string& a, const std::string& b) {
     std::error_code ec;
     return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);

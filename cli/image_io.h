@@ -20,6 +20,11 @@ struct LoadedImage {
 
 LoadedImage read_image(const std::string& path);
 
+// The channel of an alpha the colour is premultiplied by, -1 for none: OpenImageIO's readers
+// give premultiplied colour (a PNG's or TIFF's straight alpha converted as it is read) unless
+// the spec says "oiio:UnassociatedAlpha".
+int premultiplied_alpha_channel(const OIIO::ImageSpec& spec);
+
 // Whether the file's format (by its extension) stores float pixels: .exr, .tif, .hdr.
 bool is_float_format(const std::string& path);
 

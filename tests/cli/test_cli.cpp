@@ -187,6 +187,45 @@ TEST_CASE("grain predict, apply, analyze and compare: a plate's grain carried on
     CHECK_THAT(r.output, Catch::Contains("grain does not match"));
 }
 
+// A CG element with alpha gets grain on its light, not on its light times coverage: the
+// premultiplied element's grain is the straight one's times alpha, so a transparent pixel gets
+// none to add over the plate.
+TEST_CASE("grain apply to premultiplied colour grains the light and keeps the coverage", "[cli][grain]") {
+    const std::string straight = make_patches("grain-alpha-straight.exr", 128), profile = (kTmp / "alpha-profile.json").string(),
+                      element = (kTmp / "grain-alpha-element.exr").string();
+    REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + profile).exit_code == 0);
+    auto alpha_at = [](int x, int y) { return float((x / 16 + y / 16) % 5) / 4.0f; };  // 0 to 1 in steps
+    OIIO::ImageSpec spec;
+    std::vector<float> rgb = pixels(straight, &spec);
+    OIIO::ImageBuf buf(OIIO::ImageSpec(spec.width, spec.height, 4, OIIO::TypeDesc::FLOAT));
+    for (OIIO::ImageBuf::Iterator<float> p(buf); !p.done(); ++p) {
+        const size_t i = (size_t(p.y()) * spec.width + p.x()) * 3;
+        const float a = alpha_at(p.x(), p.y());
+        for (int c = 0; c < 3; ++c) p[c] = rgb[i + c] * a;
+        p[3] = a;
+    }
+    REQUIRE(buf.write(element));
+    const std::string grained_straight = (kTmp / "grain-alpha-straight-out.exr").string(),
+                      grained_element = (kTmp / "grain-alpha-element-out.exr").string();
+    for (const auto& [in, out] : {std::pair{straight, grained_straight}, std::pair{element, grained_element}}) {
+        Result r = darkroom("grain apply " + in + " --profile " + profile + " -o " + out + " --seed 4");
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+    }
+    const std::vector<float> s = pixels(grained_straight), e = pixels(grained_element);
+    REQUIRE(e.size() == s.size() / 3 * 4);
+    long transparent = 0;
+    for (int y = 0; y < spec.height; ++y)
+        for (int x = 0; x < spec.width; ++x) {
+            const size_t i = size_t(y) * spec.width + x;
+            const float a = alpha_at(x, y);
+            REQUIRE(e[i * 4 + 3] == a);
+            for (int c = 0; c < 3; ++c) REQUIRE(e[i * 4 + c] == Approx(s[i * 3 + c] * a).epsilon(1e-5).margin(1e-7));
+            transparent += a == 0 && e[i * 4] == 0 && s[i * 3] != rgb[i * 3];  // grain in the straight one, none here
+        }
+    CHECK(transparent > 1000);
+}
+
 TEST_CASE("grain apply to a window of the frame gives that window of the full frame", "[cli][grain][determinism]") {
     const std::string clean = make_patches("grain-window-clean.exr"), profile = (kTmp / "window-profile.json").string(),
                       crop = (kTmp / "grain-window-crop.exr").string(), full = (kTmp / "grain-window-full.exr").string(),
