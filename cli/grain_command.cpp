@@ -144,9 +144,13 @@ GrainProfile analyze_files(const std::vector<std::string>& paths, const AnalyzeO
     if (settings.channels == 0) settings.channels = first.nchannels;
     for (int c = 0; c < settings.channels && c < (int)first.channelnames.size(); ++c)
         settings.channel_names.push_back(first.channelnames[c]);
+    // The encoding: as given, else as --iscolorspace names it, else as the file's own tag does
+    // (OpenImageIO tags a log DPX scan "KodakLog", a PNG "sRGB", an EXR "Linear"), else by
+    // the pixels' type.
     const bool integer_pixels = !first.format.is_floating_point();
+    const SignalEncoding by_type = integer_pixels ? SignalEncoding::display : SignalEncoding::linear;
     settings.encoding = !o.encoding.empty() ? parse_encoding(o.encoding)
-                        : encoding_from(o.colorspace, integer_pixels ? SignalEncoding::display : SignalEncoding::linear);
+                        : encoding_from(o.colorspace, encoding_from(first.get_string_attribute("oiio:ColorSpace"), by_type));
     for (size_t i = 0; i < images.size(); ++i) {
         if (images[i].pixels.channels < settings.channels)
             throw UserError("'" + paths[i] + "' has " + std::to_string(images[i].pixels.channels) + " channels, '" +

@@ -226,6 +226,30 @@ TEST_CASE("grain apply to premultiplied colour grains the light and keeps the co
     CHECK(transparent > 1000);
 }
 
+// Without --encoding or --iscolorspace, the plate's own tag decides its encoding: a log DPX
+// scan (OpenImageIO's "KodakLog") is log, where an untagged integer file is display.
+TEST_CASE("grain analyze takes a plate's encoding from its colour-space tag", "[cli][grain]") {
+    const std::string clean = make_patches("grain-tag-clean.exr"), profile = (kTmp / "tag-profile.json").string(),
+                      grained = (kTmp / "grain-tag-plate.exr").string();
+    REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + profile).exit_code == 0);
+    REQUIRE(darkroom("grain apply " + clean + " --profile " + profile + " -o " + grained + " --seed 6").exit_code == 0);
+    auto analysed_encoding = [&](const std::string& name, const std::string& tag) {
+        OIIO::ImageBuf plate(grained);
+        REQUIRE(plate.read(0, 0, true, OIIO::TypeDesc::FLOAT));
+        const std::string path = (kTmp / name).string();
+        if (!tag.empty()) plate.specmod().attribute("oiio:ColorSpace", tag);
+        plate.set_write_format(OIIO::TypeDesc::UINT16);
+        REQUIRE(plate.write(path));
+        const std::string measured = path + ".json";
+        Result r = darkroom("grain analyze " + path + " -o " + measured);
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+        return read_json(measured)["encoding"].get<std::string>();
+    };
+    CHECK(analysed_encoding("grain-tag-log.dpx", "KodakLog") == "log");
+    CHECK(analysed_encoding("grain-tag-untagged.tif", "") == "display");
+}
+
 TEST_CASE("grain apply to a window of the frame gives that window of the full frame", "[cli][grain][determinism]") {
     const std::string clean = make_patches("grain-window-clean.exr"), profile = (kTmp / "window-profile.json").string(),
                       crop = (kTmp / "grain-window-crop.exr").string(), full = (kTmp / "grain-window-full.exr").string(),
