@@ -47,12 +47,17 @@ inline int colour_channel_count(int channels) { return channels >= 3 ? 3 : 1; }
 
 // Colour premultiplied by an alpha, divided by it where it is above 0 (at 0 there is no
 // coverage to divide out), and multiplied back: the plugin's and the program's, one code.
+// The alpha counts as a coverage in [0, 1]: beyond it, its nearest end; NaN, 0 (no light),
+// so a bad alpha never makes the colour non-finite.
+inline float coverage(float alpha) { return alpha > 0 ? (alpha < 1 ? alpha : 1.0f) : 0.0f; }
 inline void unpremultiply(float* pixel, int colour_channels, float alpha) {
-    if (alpha > 0)
-        for (int c = 0; c < colour_channels; ++c) pixel[c] /= alpha;
+    const float a = coverage(alpha);
+    if (a > 0)
+        for (int c = 0; c < colour_channels; ++c) pixel[c] /= a;
 }
 inline void premultiply(float* pixel, int colour_channels, float alpha) {
-    for (int c = 0; c < colour_channels; ++c) pixel[c] *= alpha;
+    const float a = coverage(alpha);
+    for (int c = 0; c < colour_channels; ++c) pixel[c] *= a;
 }
 
 template <typename T>

@@ -288,6 +288,36 @@ TEST_CASE("grey and alpha input develops as grey and keeps its alpha, as RGBA", 
     }
 }
 
+// An alpha that is no coverage (negative, above 1, infinite, NaN) counts as its nearest one
+// (NaN: 0): the colour stays finite, 0 where the coverage is 0, and the alpha passes through.
+TEST_CASE("a bad alpha counts as its nearest coverage and leaves the colour finite", "[cli][batch][bad-input]") {
+    fs::path dir = fresh_dir("bad-alpha");
+    const float alphas[] = {-0.5f, 0.0f, 1.0f, 2.0f, INFINITY, -INFINITY, NAN};
+    const int n = int(std::size(alphas));
+    OIIO::ImageBuf buf(OIIO::ImageSpec(n, 4, 4, OIIO::TypeDesc::FLOAT));
+    for (OIIO::ImageBuf::Iterator<float> p(buf); !p.done(); ++p) {
+        for (int c = 0; c < 3; ++c) p[c] = 0.18f;
+        p[3] = alphas[p.x()];
+    }
+    const std::string in = (dir / "in.exr").string(), out = (dir / "out.exr").string();
+    REQUIRE(buf.write(in));
+    Result r = darkroom("develop " + in + " -o " + out + kLook + " --no-grain");  // a flat picture, a flat print
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    const std::vector<float> px = pixels(out);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < n; ++x) {
+            const float* p = &px[(size_t(y) * n + x) * 4];
+            INFO("alpha " << alphas[x]);
+            for (int c = 0; c < 3; ++c) CHECK(std::isfinite(p[c]));
+            if (!(alphas[x] > 0)) CHECK(p[0] == 0.0f);
+            CHECK((std::isnan(alphas[x]) ? std::isnan(p[3]) : p[3] == alphas[x]));
+        }
+    // Beyond 1 counts as 1: the same colour as an opaque pixel's.
+    CHECK(px[3 * 4] == px[2 * 4]);
+    CHECK(px[4 * 4] == px[2 * 4]);
+}
+
 // An EXR of the pattern below on the data window (x, y, width, height) of a 128x96 display window.
 static void write_part_of_frame(const std::string& path, int x, int y, int width, int height) {
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::FLOAT);
