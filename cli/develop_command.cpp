@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <iostream>
 #include <mutex>
-#include <set>
+#include <map>
 #include <thread>
 #include <unistd.h>
 
@@ -179,10 +179,15 @@ int resolve_threads(int requested) {
     return std::max(1u, std::thread::hardware_concurrency());
 }
 
-void remove_stale_outputs_temps(const std::vector<FrameJob>& jobs, bool quiet) {
-    std::set<fs::path> directories;
-    for (const FrameJob& job : jobs) directories.insert(fs::path(job.output).parent_path());
-    for (const fs::path& dir : directories)
+// The folders the outputs go to, each with the first output there.
+std::map<fs::path, std::string> output_folders(const std::vector<FrameJob>& jobs) {
+    std::map<fs::path, std::string> folders;
+    for (const FrameJob& job : jobs) folders.emplace(fs::path(job.output).parent_path(), job.output);
+    return folders;
+}
+
+void remove_stale_outputs_temps(const std::map<fs::path, std::string>& folders, bool quiet) {
+    for (const auto& [dir, output] : folders)
         if (int removed = remove_stale_temps(dir); removed > 0 && !quiet)
             std::cerr << "darkroom: removed " << removed << " partial output(s) left in '"
                       << (dir.empty() ? "." : dir.string()) << "' by an interrupted run\n";
@@ -221,9 +226,8 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
         throw UserError("--frame is for a single image: each frame of a sequence uses its own frame number");
     const std::vector<FrameJob> jobs = expand_frames(o.input, o.output, o.sequence, o.look.settings.frame);
     check_output_format(o);
-    std::set<fs::path> folders;  // one check a folder: a sequence's frames share theirs
-    for (const FrameJob& job : jobs)
-        if (folders.insert(fs::path(job.output).parent_path()).second) require_writable(job.output);
+    const std::map<fs::path, std::string> folders = output_folders(jobs);
+    for (const auto& [folder, output] : folders) require_writable(output);  // a sequence's frames share theirs
     // Only an output named as the input itself replaces it; an output that merely resolves
     // to an input (another spelling of a pattern, a link) is refused frame by frame.
     o.run.in_place = fs::absolute(o.input).lexically_normal() == fs::absolute(o.output).lexically_normal();
@@ -231,11 +235,9 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
     o.write.look_json = look_json(cmd).dump();
     const ColourIO colour(o.look.colour, o.look.settings.output, false);
     o.write.colour_space = colour.output_space();
-    // Integers: a format without float pixels (PNG, JPEG), or -d uint8 or uint16.
-    const bool integer_output = !is_float_format(o.output) || o.write.data_type.find("int") != std::string::npos;
-    if (const std::string w = colour.integer_output_warning(o.output, integer_output); !w.empty())
+    if (const std::string w = colour.integer_output_warning(o.output, writes_integers(o.output, o.write)); !w.empty())
         std::cerr << "darkroom: warning: " << w << "\n";
-    if (!o.run.dry_run) remove_stale_outputs_temps(jobs, o.run.quiet);
+    if (!o.run.dry_run) remove_stale_outputs_temps(folders, o.run.quiet);
 
     // A single image is developed silently, as oiiotool does, unless asked (-v, -n).
     const bool quiet = o.run.quiet || (!sequence && !o.run.dry_run && !o.look.verbose);

@@ -55,10 +55,15 @@ const std::vector<std::string>& output_data_types() {
 
 namespace {
 
+// The pixels' type asked of the writer: -d, else float for float formats and uint16 for others.
+OIIO::TypeDesc output_type(const std::string& path, const WriteOptions& options) {
+    if (!options.data_type.empty()) return OIIO::TypeDesc(options.data_type);
+    return is_float_format(path) ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT16;
+}
+
 OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, const std::string& path,
                             const WriteOptions& options) {
-    OIIO::TypeDesc type = is_float_format(path) ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT16;
-    if (!options.data_type.empty()) type = OIIO::TypeDesc(options.data_type);
+    const OIIO::TypeDesc type = output_type(path, options);
     OIIO::ImageSpec spec(image.window.width(), image.window.height(), image.channels, type);
     spec.extra_attribs = like.extra_attribs;
     // The input's bit depth describes the input's encoding, not a new data type's (as oiiotool).
@@ -93,6 +98,10 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
 }
 
 }  // namespace
+
+bool writes_integers(const std::string& path, const WriteOptions& options) {
+    return !is_float_format(path) || !output_type(path, options).is_floating_point();
+}
 
 void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
                  const std::string& protected_input, const WriteOptions& options,

@@ -43,6 +43,10 @@ struct WriteOptions {
 // for its format (by its extension), or its folder does not exist.
 void require_writable(const std::string& path);
 
+// Whether the file gets integer pixels: a format without float ones (PNG, JPEG, DPX), or
+// -d uint8 or uint16.
+bool writes_integers(const std::string& path, const WriteOptions& options);
+
 // The data types -d accepts.
 const std::vector<std::string>& output_data_types();
 
