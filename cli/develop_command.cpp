@@ -60,24 +60,21 @@ Window output_window(const DevelopOptions& o, const Window& frame) {
 }
 
 // Say once, before it starts, that a reference render will take long (core/develop.h).
-void warn_of_long_reference_render(const Plan& plan, const Window& out, FrameReport& report) {
+void warn_of_long_reference_render(const Plan& plan, const Window& out, FrameReport& report, Progress& progress) {
     const std::string warning = long_reference_render_warning(plan, out, "--quality ");
     if (warning.empty()) return;
     static std::once_flag warned;
-    std::call_once(warned, [&] {
-        std::cerr << "darkroom: warning: " << warning << "\n";
-        report.warnings.push_back(warning);
-    });
+    std::call_once(warned, [&] { progress.warn(report, warning); });
 }
 
 // Say once that the input's own colour-space tag is not the space it is read as (an sRGB PNG
 // taken as scene-linear without --iscolorspace): the frames of a sequence share their tag.
 void warn_of_input_tag(const ColourIO& colour, const std::string& path, const OIIO::ImageSpec& spec,
-                       FrameReport& report) {
+                       FrameReport& report, Progress& progress) {
     const std::string warning = colour.input_tag_warning(path, spec.get_string_attribute("oiio:ColorSpace"));
     if (warning.empty()) return;
     static std::once_flag warned;
-    std::call_once(warned, [&] { report.warnings.push_back(warning); });
+    std::call_once(warned, [&] { progress.warn(report, warning); });
 }
 
 size_t count_non_finite(const Image& image) {
@@ -91,9 +88,9 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_image(job.input);
     report.read_seconds = seconds_since(start);
-    warn_of_input_tag(colour, job.input, in.spec, report);
+    warn_of_input_tag(colour, job.input, in.spec, report, progress);
     if (size_t bad = count_non_finite(in.pixels))
-        report.warnings.push_back(std::to_string(bad) + " non-finite pixel values (NaN counts as no light, +Inf as 1e30)");
+        progress.warn(report, std::to_string(bad) + " non-finite pixel values (NaN counts as no light, +Inf as 1e30)");
 
     start = std::chrono::steady_clock::now();
     LookOptions look = o.look;
@@ -108,8 +105,8 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     view.window = view.window.moved(dx, dy);
     const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width), job.frame);
     const Window out_window = output_window(o, in.pixels.window).moved(dx, dy);
-    warn_of_long_reference_render(plan, out_window, report);
-    Image out = develop_image(look, plan, view, out_window, premultiplied_alpha_channel(in.spec));
+    warn_of_long_reference_render(plan, out_window, report, progress);
+    Image out = develop_image(look, colour, plan, view, out_window, premultiplied_alpha_channel(in.spec));
     out.window = out.window.moved(-dx, -dy);  // write_image takes the data window's coordinates
     report.develop_seconds = seconds_since(start);
 
@@ -131,7 +128,7 @@ FrameReport::Status process_frame(const DevelopOptions& o, const ColourIO& colou
         report.status = FrameReport::Status::skipped_existing;
     } else if (o.run.dry_run) {
         report.status = FrameReport::Status::dry_run;
-        if (!fs::exists(job.input)) report.warnings.push_back("input '" + job.input + "' does not exist");
+        if (!fs::exists(job.input)) progress.warn(report, "input '" + job.input + "' does not exist");
     } else {
         try {
             develop_frame(o, colour, plans, job, threads, print_plan, report, progress);
@@ -208,10 +205,10 @@ std::string failure_summary(const std::vector<FrameReport>& reports, size_t tota
 }
 
 void check_output_format(const DevelopOptions& o) {
-    if (o.look.settings.output == OutputMode::density && !is_float_format(o.output) &&
-        (o.write.data_type.empty() || o.write.data_type.find("int") != std::string::npos))
-        throw UserError("--output density writes float densities: give a float format such as .exr or .tif, not '" +
-                        o.output + "'");
+    // Densities run past 1 D: a file of integers (PNG whatever -d says, -d uint16) clips them.
+    if (o.look.settings.output == OutputMode::density && writes_integers(o.output, o.write))
+        throw UserError("--output density writes float densities: give a float format such as .exr or .tif (and -d "
+                        "half or float), not '" + o.output + "'" + (o.write.data_type.empty() ? "" : " -d " + o.write.data_type));
 }
 
 void run_develop(DevelopOptions& o, CLI::App& cmd) {
@@ -233,7 +230,7 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
     o.run.in_place = fs::absolute(o.input).lexically_normal() == fs::absolute(o.output).lexically_normal();
     o.write.command_line = command_line();
     o.write.look_json = look_json(cmd).dump();
-    const ColourIO colour(o.look.colour, o.look.settings.output, false);
+    const ColourIO colour(o.look.colour, o.look.settings.output, o.look.verbose);
     o.write.colour_space = colour.output_space();
     if (const std::string w = colour.integer_output_warning(o.output, writes_integers(o.output, o.write)); !w.empty())
         std::cerr << "darkroom: warning: " << w << "\n";
@@ -241,7 +238,7 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
 
     // A single image is developed silently, as oiiotool does, unless asked (-v, -n).
     const bool quiet = o.run.quiet || (!sequence && !o.run.dry_run && !o.look.verbose);
-    Progress progress(jobs.size(), quiet, isatty(STDERR_FILENO) && sequence && !o.run.dry_run);
+    Progress progress(jobs.size(), sequence, quiet, isatty(STDERR_FILENO) && sequence && !o.run.dry_run);
     const int threads = resolve_threads(o.look.threads);
     OIIO::attribute("threads", threads);  // OpenImageIO's own pool (EXR decoding) keeps to --threads too
     {

@@ -163,13 +163,8 @@ Plan PlanCache::plan_for(const FrameGeometry& frame, int frame_number) {
     return it->second.in_image(frame).for_frame(frame_number);
 }
 
-Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window) {
-    return develop_image(look, compile_look(look, frame_geometry(in)), in, out_window);
-}
-
-Image develop_image(const LookOptions& look, const Plan& plan, const ConstImageView& in, const Window& out_window,
-                    int premultiplied_alpha) {
-    const ColourIO colour(look.colour, look.settings.output, look.verbose);
+Image develop_image(const LookOptions& look, const ColourIO& colour, const Plan& plan, const ConstImageView& in,
+                    const Window& out_window, int premultiplied_alpha) {
     // RGB, then what the input has past its colour: alpha (grey and alpha input: RGBA) and
     // any further channels.
     const int colour_channels = colour_channel_count(in.channels);

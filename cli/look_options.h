@@ -82,16 +82,15 @@ private:
 };
 
 // Develops `out_window` of the image `in` (its window in the film frame's coordinates) with `look`
-// through `plan` (compiled for `look` and this frame). The output has max(3, input channels)
+// through `plan` (compiled for `look` and this frame), converting colour with `colour` (built
+// from `look`'s colour flags and output mode, once for a run). The output has max(3, input channels)
 // channels; those past RGB (alpha, depth, mattes) are not film's business and pass through.
 // `premultiplied_alpha`: the input channel holding an alpha its colour is premultiplied by
 // (-1: none). The colour is then divided by it where it is above 0, developed, and multiplied
 // by it again, as the plugin does: film develops light, not light times coverage, and where
 // the alpha is 0 the result is 0 (a transparent pixel adds nothing when comped over a plate).
 // The one path for the program and the Python module.
-Image develop_image(const LookOptions& look, const Plan& plan, const ConstImageView& in, const Window& out_window,
-                    int premultiplied_alpha = -1);
-// The same, compiling the plan.
-Image develop_image(const LookOptions& look, const ConstImageView& in, const Window& out_window);
+Image develop_image(const LookOptions& look, const ColourIO& colour, const Plan& plan, const ConstImageView& in,
+                    const Window& out_window, int premultiplied_alpha = -1);
 
 }  // namespace darkroom::cli

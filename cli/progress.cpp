@@ -29,21 +29,33 @@ std::string clock_time(double seconds) {
 
 }  // namespace
 
-Progress::Progress(size_t total_frames, bool quiet, bool terminal)
-    : total_(total_frames), quiet_(quiet), terminal_(terminal), start_(std::chrono::steady_clock::now()) {}
+Progress::Progress(size_t total_frames, bool sequence, bool quiet, bool terminal)
+    : total_(total_frames), sequence_(sequence), quiet_(quiet), terminal_(terminal),
+      start_(std::chrono::steady_clock::now()) {}
 
 double Progress::elapsed_seconds() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
 }
 
+void Progress::warn(FrameReport& report, const std::string& warning) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (terminal_ && !quiet_) std::cerr << "\r\033[K";
+    std::cerr << "darkroom: " << (sequence_ ? "frame " + std::to_string(report.frame) + ": " : "") << "warning: " << warning
+              << "\n";
+    report.warnings.push_back(warning);
+    if (terminal_ && !quiet_) draw_bar();
+}
+
 void Progress::add(FrameReport r) {
     std::lock_guard<std::mutex> lock(mutex_);
     const bool failed = r.status == FrameReport::Status::failed;
-    if (terminal_ && !quiet_ && (failed || !r.warnings.empty())) std::cerr << "\r\033[K";
-    if (failed) std::cerr << "darkroom: frame " << r.frame << " (" << r.input << ") failed: " << r.error << "\n";
-    for (const std::string& w : r.warnings) std::cerr << "darkroom: frame " << r.frame << ": warning: " << w << "\n";
+    if (failed && sequence_) {
+        if (terminal_ && !quiet_) std::cerr << "\r\033[K";
+        std::cerr << "darkroom: frame " << r.frame << " (" << r.input << ") failed: " << r.error << "\n";
+    }
     if (!quiet_ && !terminal_ && !failed) {
-        std::printf("frame %d: %s -> %s: %s", r.frame, r.input.c_str(), r.output.c_str(), to_string(r.status));
+        if (sequence_) std::printf("frame %d: ", r.frame);
+        std::printf("%s -> %s: %s", r.input.c_str(), r.output.c_str(), to_string(r.status));
         if (r.status == FrameReport::Status::developed)
             std::printf(" in %.2f s", r.read_seconds + r.develop_seconds + r.write_seconds);
         std::printf("\n");

@@ -25,9 +25,14 @@ const char* to_string(FrameReport::Status status);
 class Progress {
 public:
     // `terminal`: draw a bar on stderr; otherwise print a line per frame on stdout.
-    Progress(size_t total_frames, bool quiet, bool terminal);
+    // `sequence`: messages name the frame ("frame 12:"); a single image's name no frame, and
+    // its failure is left to the caller (it is the run's error).
+    Progress(size_t total_frames, bool sequence, bool quiet, bool terminal);
 
-    // Thread-safe. Failures and warnings are printed even when quiet.
+    // Thread-safe, and printed even when quiet. A warning is printed when it arises (a render
+    // that will take hours says so before it starts) and kept in the frame's report for the log.
+    void warn(FrameReport& report, const std::string& warning);
+    // A frame's report, when it is finished (or failed, or skipped).
     void add(FrameReport report);
     // Ends the bar's line.
     void finish();
@@ -40,7 +45,7 @@ private:
 
     mutable std::mutex mutex_;
     size_t total_;
-    bool quiet_, terminal_;
+    bool sequence_, quiet_, terminal_;
     std::chrono::steady_clock::time_point start_;
     std::vector<FrameReport> reports_;
 };

@@ -76,12 +76,13 @@ py::array_t<float> develop(py::array_t<float, py::array::c_style | py::array::fo
     const std::string warning = darkroom::long_reference_render_warning(*plan, full, "quality=");
     if (!warning.empty() && PyErr_WarnEx(PyExc_RuntimeWarning, ("darkroom: " + warning).c_str(), 1) < 0)
         throw py::error_already_set();
+    const darkroom::cli::ColourIO colour(parsed.look.colour, parsed.look.settings.output, parsed.look.verbose);
     darkroom::Image out;
     {
         py::gil_scoped_release release;
         // The alpha is the channel after the colour (RGBA, YA), as OpenImageIO names it.
         const int alpha = darkroom::colour_channel_count(channels);
-        out = darkroom::cli::develop_image(parsed.look, *plan, in, full, premultiplied && alpha < channels ? alpha : -1);
+        out = darkroom::cli::develop_image(parsed.look, colour, *plan, in, full, premultiplied && alpha < channels ? alpha : -1);
     }
     py::array_t<float> result({height, width, out.channels});
     std::copy(out.pixels.begin(), out.pixels.end(), result.mutable_data());

@@ -571,3 +571,46 @@ TEST_CASE("a sequence that cannot be made is refused before any work", "[cli][ba
     }
     CHECK_FALSE(fs::exists(frame_name(dir, "out", 1)));
 }
+
+// A single image's warnings and failure name no frame (the wording is a sequence's) and are
+// printed once each; a sequence's name their frame. Every warning is in the log either way.
+TEST_CASE("a single image's messages name no frame and come once, a sequence's name the frame", "[cli][batch][bad-input]") {
+    fs::path dir = fresh_dir("messages");
+    auto count = [](const std::string& text, const std::string& what) {
+        size_t n = 0;
+        for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+        return n;
+    };
+    OIIO::ImageBuf with_nan(OIIO::ImageSpec(16, 12, 3, OIIO::TypeDesc::FLOAT));
+    const float grey[3] = {0.18f, 0.18f, 0.18f}, nan[3] = {NAN, 0.18f, 0.18f};
+    OIIO::ImageBufAlgo::fill(with_nan, grey);
+    with_nan.setpixel(3, 4, nan);
+    const std::string nan_image = (dir / "nan.exr").string(), corrupt = (dir / "corrupt.exr").string();
+    REQUIRE(with_nan.write(nan_image));
+    std::ofstream(corrupt) << "this is not an EXR file";
+
+    Result r = darkroom("develop " + nan_image + " -o " + (dir / "out.exr").string() + " --log " +
+                        (dir / "log.json").string());
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(count(r.output, "darkroom: warning: 1 non-finite pixel values") == 1);
+    CHECK(count(r.output, "non-finite") == 1);
+    CHECK(r.output.find("frame 0") == std::string::npos);
+    const nlohmann::json log = nlohmann::json::parse(file_bytes(dir / "log.json"));
+    CHECK(log["frames"][0]["warnings"].size() == 1);
+
+    r = darkroom("develop " + corrupt + " -o " + (dir / "out2.exr").string());
+    INFO(r.output);
+    CHECK(r.exit_code == 1);
+    CHECK(count(r.output, "is not an OpenEXR file") == 1);
+    CHECK(r.output.find("frame 0") == std::string::npos);
+
+    fs::copy_file(nan_image, dir / "plate.0001.exr");
+    fs::copy_file(corrupt, dir / "plate.0002.exr");
+    r = darkroom("develop " + (dir / "plate.####.exr").string() + " -o " + (dir / "o.####.exr").string() +
+                 " --skip-bad-frames --frames-at-once 1");
+    INFO(r.output);
+    CHECK(r.exit_code == 1);
+    CHECK(count(r.output, "darkroom: frame 1: warning: 1 non-finite pixel values") == 1);
+    CHECK(count(r.output, "darkroom: frame 2 (" + (dir / "plate.0002.exr").string() + ") failed") == 1);
+}

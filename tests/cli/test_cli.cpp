@@ -50,6 +50,8 @@ TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[c
              {"develop " + in + " -o " + out + " --film " + (kTmp / "missing.json").string(), "cannot open"},
              {"frobnicate", "subcommand is required"},
              {"develop " + in + " -o " + (kTmp / "d.png").string() + " --output density", "float"},
+             {"develop " + in + " -o " + (kTmp / "d.png").string() + " --output density -d float", "not '"},
+             {"develop " + in + " -o " + out + " --output density -d uint16", "-d uint16"},
          }) {
         Result r = darkroom(c.args);
         INFO(c.args << "\n" << r.output);

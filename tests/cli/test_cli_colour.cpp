@@ -148,7 +148,7 @@ TEST_CASE("the output is tagged with the colour space its pixels are in", "[cli]
     CHECK(tag_of("colour-tag-density.tif", " --output density -d float") == "(none)");
 }
 
-TEST_CASE("verbose output names the active config and why; the config used is the one named", "[cli][colour]") {
+TEST_CASE("verbose output names the active config and why, and the config used is the one named", "[cli][colour]") {
     const std::string in = make_input("colour-config-in.exr", 16, 12), config = show_config("colour-config.ocio");
     const std::string develop = "develop " + in + " --no-grain -v --iscolorspace srgb -o ";
     auto run = [&](const std::string& out, const std::string& flags, const std::string& active,

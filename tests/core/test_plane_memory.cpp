@@ -30,7 +30,7 @@ constexpr size_t kMiB = size_t(1) << 20;
 
 }  // namespace
 
-TEST_CASE("a freed large plane's memory serves the next plane of its size; small planes are not kept",
+TEST_CASE("a freed large plane's memory serves the next plane of its size, and small planes are not kept",
           "[plane_memory]") {
     PoolLimit limit(64 * kMiB);
     const float* first;
