@@ -77,8 +77,22 @@ void warn_of_input_tag(const ColourIO& colour, const std::string& path, const OI
     std::call_once(warned, [&] { progress.warn(report, warning); });
 }
 
-size_t count_non_finite(const Image& image) {
-    return size_t(std::count_if(image.pixels.begin(), image.pixels.end(), [](float v) { return !std::isfinite(v); }));
+// Say how many values film reads are not finite, and how it takes them: the colour's, and an
+// alpha's the colour is premultiplied by. Depth, mattes and a straight alpha pass through
+// untouched (a depth of +Inf is a render's background), so they are not counted.
+void warn_of_non_finite(const Image& image, int premultiplied_alpha, FrameReport& report, Progress& progress) {
+    const int colour_channels = colour_channel_count(image.channels);
+    size_t colour = 0, alpha = 0;
+    for (size_t i = 0; i < image.pixels.size(); i += image.channels) {
+        for (int c = 0; c < colour_channels; ++c) colour += !std::isfinite(image.pixels[i + c]);
+        if (premultiplied_alpha >= 0) alpha += !std::isfinite(image.pixels[i + premultiplied_alpha]);
+    }
+    if (colour > 0)
+        progress.warn(report, std::to_string(colour) +
+                                  " non-finite colour values (NaN and -Inf count as no light, +Inf as 1e30)");
+    if (alpha > 0)
+        progress.warn(report, std::to_string(alpha) +
+                                  " non-finite alpha values (as coverage: NaN and -Inf count as 0, +Inf as 1)");
 }
 
 // Develops and writes one frame; its report goes to `progress` as its output takes its
@@ -89,8 +103,8 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     LoadedImage in = read_image(job.input);
     report.read_seconds = seconds_since(start);
     warn_of_input_tag(colour, job.input, in.spec, report, progress);
-    if (size_t bad = count_non_finite(in.pixels))
-        progress.warn(report, std::to_string(bad) + " non-finite pixel values (NaN counts as no light, +Inf as 1e30)");
+    const int premultiplied_alpha = premultiplied_alpha_channel(in.spec);
+    warn_of_non_finite(in.pixels, premultiplied_alpha, report, progress);
 
     start = std::chrono::steady_clock::now();
     LookOptions look = o.look;
@@ -106,7 +120,7 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width), job.frame);
     const Window out_window = output_window(o, in.pixels.window).moved(dx, dy);
     warn_of_long_reference_render(plan, out_window, report, progress);
-    Image out = develop_image(look, colour, plan, view, out_window, premultiplied_alpha_channel(in.spec));
+    Image out = develop_image(look, colour, plan, view, out_window, premultiplied_alpha);
     out.window = out.window.moved(-dx, -dy);  // write_image takes the data window's coordinates
     report.develop_seconds = seconds_since(start);
 

@@ -593,7 +593,7 @@ TEST_CASE("a single image's messages name no frame and come once, a sequence's n
                         (dir / "log.json").string());
     INFO(r.output);
     REQUIRE(r.exit_code == 0);
-    CHECK(count(r.output, "darkroom: warning: 1 non-finite pixel values") == 1);
+    CHECK(count(r.output, "darkroom: warning: 1 non-finite colour values") == 1);
     CHECK(count(r.output, "non-finite") == 1);
     CHECK(r.output.find("frame 0") == std::string::npos);
     const nlohmann::json log = nlohmann::json::parse(file_bytes(dir / "log.json"));
@@ -611,6 +611,43 @@ TEST_CASE("a single image's messages name no frame and come once, a sequence's n
                  " --skip-bad-frames --frames-at-once 1");
     INFO(r.output);
     CHECK(r.exit_code == 1);
-    CHECK(count(r.output, "darkroom: frame 1: warning: 1 non-finite pixel values") == 1);
+    CHECK(count(r.output, "darkroom: frame 1: warning: 1 non-finite colour values") == 1);
     CHECK(count(r.output, "darkroom: frame 2 (" + (dir / "plate.0002.exr").string() + ") failed") == 1);
+}
+
+// Only what film reads is counted: the colour, and the alpha it is premultiplied by. A depth
+// of +Inf (a render's background) passes through and says nothing.
+TEST_CASE("non-finite values are counted in the colour and the alpha, not in the channels passed through",
+          "[cli][batch][bad-input]") {
+    fs::path dir = fresh_dir("non-finite-channels");
+    OIIO::ImageSpec spec(8, 6, 5, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = {"R", "G", "B", "A", "Z"};
+    spec.alpha_channel = 3;
+    spec.z_channel = 4;
+    OIIO::ImageBuf render(spec);
+    const float background[5] = {0.1f, 0.1f, 0.1f, 1.0f, INFINITY};
+    OIIO::ImageBufAlgo::fill(render, background);
+    const std::string clean = (dir / "depth.exr").string(), bad_alpha = (dir / "bad-alpha.exr").string();
+    REQUIRE(render.write(clean));
+    const float nan_alpha[5] = {0.1f, -INFINITY, 0.1f, NAN, INFINITY};
+    render.setpixel(1, 2, nan_alpha);
+    render.setpixel(2, 2, nan_alpha);
+    REQUIRE(render.write(bad_alpha));
+
+    Result r = darkroom("develop " + clean + " -o " + (dir / "a.exr").string());
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.output.find("warning") == std::string::npos);
+    r = darkroom("develop " + bad_alpha + " -o " + (dir / "b.exr").string());
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.output.find("2 non-finite colour values") != std::string::npos);
+    CHECK(r.output.find("2 non-finite alpha values") != std::string::npos);
+    // The colour is finite; the alpha and the depth pass through as they were.
+    const std::vector<float> in = pixels(bad_alpha), out = pixels((dir / "b.exr").string());
+    REQUIRE(out.size() == in.size());
+    for (size_t i = 0; i < out.size(); ++i) {
+        if (i % 5 < 3) CHECK(std::isfinite(out[i]));
+        else CHECK((out[i] == in[i] || (std::isnan(out[i]) && std::isnan(in[i]))));
+    }
 }
