@@ -74,9 +74,12 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
     spec.full_y = like.full_y;
     spec.full_width = like.full_width > 0 ? like.full_width : spec.width;
     spec.full_height = like.full_height > 0 ? like.full_height : spec.height;
+    // The input's names where its channels map one to one (a layer's "diffuse.R" stays so);
+    // a grey input's developed colour is R, G, B.
+    const bool same_channels = like.nchannels == image.channels;
     for (int c = 0; c < image.channels; ++c) {
         const char* rgb[3] = {"R", "G", "B"};
-        spec.channelnames[c] = c < 3 ? rgb[c] : c < like.nchannels ? like.channelnames[c] : "A";
+        spec.channelnames[c] = same_channels ? like.channelnames[c] : c < 3 ? rgb[c] : "A";
     }
     spec.alpha_channel = like.alpha_channel >= 3 && like.alpha_channel < image.channels ? like.alpha_channel
                          : image.channels == 4                                           ? 3

@@ -370,6 +370,30 @@ TEST_CASE("a file holding part of the frame (a CG element's bounding box, oversc
     }
 }
 
+// A layer's channels keep their names: developing a render's "diffuse" layer alone gives a
+// "diffuse" layer, and the beauty's further layers pass through under their own names.
+TEST_CASE("the output's channels keep the input's names", "[cli][batch][metadata]") {
+    fs::path dir = fresh_dir("channel-names");
+    for (const std::vector<std::string>& names :
+         {std::vector<std::string>{"diffuse.R", "diffuse.G", "diffuse.B"},
+          std::vector<std::string>{"R", "G", "B", "A", "diffuse.R", "diffuse.G", "diffuse.B"}}) {
+        OIIO::ImageSpec spec(12, 8, int(names.size()), OIIO::TypeDesc::FLOAT);
+        spec.channelnames = names;
+        spec.alpha_channel = names.size() > 3 ? 3 : -1;
+        OIIO::ImageBuf buf(spec);
+        std::vector<float> value(names.size(), 0.18f);
+        OIIO::ImageBufAlgo::fill(buf, value);
+        const std::string in = (dir / "layers.exr").string(), out = (dir / "out.exr").string();
+        REQUIRE(buf.write(in));
+        Result r = darkroom("develop " + in + " -o " + out + kLook);
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+        auto file = OIIO::ImageInput::open(out);
+        REQUIRE(file);
+        CHECK(file->spec().channelnames == names);
+    }
+}
+
 TEST_CASE("metadata, windows, pixel aspect and extra channels survive", "[cli][batch][metadata]") {
     fs::path dir = fresh_dir("metadata");
     std::string in = (dir / "plate.exr").string(), out = (dir / "out.exr").string();
