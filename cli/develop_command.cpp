@@ -103,6 +103,10 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     LoadedImage in = read_image(job.input);
     report.read_seconds = seconds_since(start);
     warn_of_input_tag(colour, job.input, in.spec, report, progress);
+    if (const std::string w = other_subimages_warning(job.input, in); !w.empty()) {
+        static std::once_flag warned;  // a sequence's frames share their parts
+        std::call_once(warned, [&] { progress.warn(report, w); });
+    }
     const int premultiplied_alpha = premultiplied_alpha_channel(in.spec);
     warn_of_non_finite(in.pixels, premultiplied_alpha, report, progress);
 

@@ -23,7 +23,16 @@ LoadedImage read_image(const std::string& path) {
     out.pixels = Image(s.width, s.height, s.nchannels);
     if (!in->read_image(0, 0, 0, s.nchannels, OIIO::TypeDesc::FLOAT, out.pixels.pixels.data()))
         throw UserError("cannot read pixels of '" + path + "': " + in->geterror());
+    while (in->seek_subimage(out.subimages, 0)) ++out.subimages;
     return out;
+}
+
+std::string other_subimages_warning(const std::string& path, const LoadedImage& image) {
+    if (image.subimages <= 1) return "";
+    const std::string name = image.spec.get_string_attribute("oiio:subimagename");
+    return "'" + path + "' has " + std::to_string(image.subimages) + " parts: only the first" +
+           (name.empty() ? "" : " ('" + name + "')") + " is read and written, the other " +
+           std::to_string(image.subimages - 1) + " are left out of the output";
 }
 
 int premultiplied_alpha_channel(const OIIO::ImageSpec& spec) {

@@ -16,9 +16,15 @@ namespace darkroom::cli {
 struct LoadedImage {
     Image pixels;               // window: (0, 0, width, height) of the data window
     OIIO::ImageSpec spec;       // the file's own description, for metadata pass-through
+    int subimages = 1;          // the file's parts (a multi-part EXR, a multi-page TIFF)
 };
 
+// The file's first subimage (part), as oiiotool reads a file without -a.
 LoadedImage read_image(const std::string& path);
+
+// What to warn of when a file read by read_image has parts past its first, which are neither
+// processed nor written (empty when it has one).
+std::string other_subimages_warning(const std::string& path, const LoadedImage& image);
 
 // The channel of an alpha the colour is premultiplied by, -1 for none: OpenImageIO's readers
 // give premultiplied colour (a PNG's or TIFF's straight alpha converted as it is read) unless
