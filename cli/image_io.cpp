@@ -83,17 +83,23 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
     spec.full_y = like.full_y;
     spec.full_width = like.full_width > 0 ? like.full_width : spec.width;
     spec.full_height = like.full_height > 0 ? like.full_height : spec.height;
-    // The input's names where its channels map one to one (a layer's "diffuse.R" stays so);
-    // a grey input's developed colour is R, G, B.
-    const bool same_channels = like.nchannels == image.channels;
+    // Output channel c >= 3 is the input's channel c - 3 past its colour (develop_image's
+    // layout), under the input's name: a layer's "diffuse.R" stays so, a grey input's depth
+    // stays "Z" (and not alpha); a grey input's developed colour is R, G, B. A fourth channel
+    // the input does not describe is alpha.
+    const int colours = colour_channel_count(like.nchannels);
+    auto input_channel = [&](int c) { return c < 3 ? (colours == 3 ? c : -1) : colours + c - 3; };
+    auto output_channel = [&](int input) { return input >= colours && input - colours + 3 < image.channels ? input - colours + 3 : -1; };
     for (int c = 0; c < image.channels; ++c) {
         const char* rgb[3] = {"R", "G", "B"};
-        spec.channelnames[c] = same_channels ? like.channelnames[c] : c < 3 ? rgb[c] : "A";
+        const int from = input_channel(c);
+        spec.channelnames[c] = from >= 0 && from < like.nchannels ? like.channelnames[from] : c < 3 ? rgb[c] : "A";
     }
-    spec.alpha_channel = like.alpha_channel >= 3 && like.alpha_channel < image.channels ? like.alpha_channel
-                         : image.channels == 4                                           ? 3
-                                                                                         : -1;
-    spec.z_channel = like.z_channel >= 3 && like.z_channel < image.channels ? like.z_channel : -1;
+    const bool described = input_channel(image.channels - 1) < like.nchannels;
+    spec.alpha_channel = like.alpha_channel >= 0             ? output_channel(like.alpha_channel)
+                         : !described && image.channels == 4 ? 3
+                                                             : -1;
+    spec.z_channel = like.z_channel >= 0 ? output_channel(like.z_channel) : -1;
     if (options.colour_space && options.colour_space->empty()) spec.erase_attribute("oiio:ColorSpace");
     if (options.colour_space && !options.colour_space->empty()) spec.attribute("oiio:ColorSpace", *options.colour_space);
     if (!options.compression.empty()) spec.attribute("compression", options.compression);

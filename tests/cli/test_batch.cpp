@@ -371,15 +371,27 @@ TEST_CASE("a file holding part of the frame (a CG element's bounding box, oversc
 }
 
 // A layer's channels keep their names: developing a render's "diffuse" layer alone gives a
-// "diffuse" layer, and the beauty's further layers pass through under their own names.
+// "diffuse" layer, and the beauty's further layers pass through under their own names. A grey
+// input's colour becomes R, G, B and its depth stays depth (not alpha).
 TEST_CASE("the output's channels keep the input's names", "[cli][batch][metadata]") {
     fs::path dir = fresh_dir("channel-names");
-    for (const std::vector<std::string>& names :
-         {std::vector<std::string>{"diffuse.R", "diffuse.G", "diffuse.B"},
-          std::vector<std::string>{"R", "G", "B", "A", "diffuse.R", "diffuse.G", "diffuse.B"}}) {
+    using Names = std::vector<std::string>;
+    struct Case {
+        Names in, out;
+        int out_alpha, out_z;
+    };
+    for (const Case& c : {Case{{"diffuse.R", "diffuse.G", "diffuse.B"}, {"diffuse.R", "diffuse.G", "diffuse.B"}, -1, -1},
+                          Case{{"R", "G", "B", "A", "diffuse.R", "diffuse.G", "diffuse.B"},
+                               {"R", "G", "B", "A", "diffuse.R", "diffuse.G", "diffuse.B"}, 3, -1},
+                          Case{{"Y", "Z"}, {"R", "G", "B", "Z"}, -1, 3},
+                          Case{{"Y", "A"}, {"R", "G", "B", "A"}, 3, -1}}) {
+        const Names& names = c.in;
         OIIO::ImageSpec spec(12, 8, int(names.size()), OIIO::TypeDesc::FLOAT);
         spec.channelnames = names;
-        spec.alpha_channel = names.size() > 3 ? 3 : -1;
+        spec.alpha_channel = int(std::find(names.begin(), names.end(), "A") - names.begin());
+        if (spec.alpha_channel == int(names.size())) spec.alpha_channel = -1;
+        spec.z_channel = int(std::find(names.begin(), names.end(), "Z") - names.begin());
+        if (spec.z_channel == int(names.size())) spec.z_channel = -1;
         OIIO::ImageBuf buf(spec);
         std::vector<float> value(names.size(), 0.18f);
         OIIO::ImageBufAlgo::fill(buf, value);
@@ -390,7 +402,9 @@ TEST_CASE("the output's channels keep the input's names", "[cli][batch][metadata
         REQUIRE(r.exit_code == 0);
         auto file = OIIO::ImageInput::open(out);
         REQUIRE(file);
-        CHECK(file->spec().channelnames == names);
+        CHECK(file->spec().channelnames == c.out);
+        CHECK(file->spec().alpha_channel == c.out_alpha);
+        CHECK(file->spec().z_channel == c.out_z);
     }
 }
 
