@@ -226,7 +226,8 @@ void check_output_format(const DevelopOptions& o) {
     // Densities run past 1 D: a file of integers (PNG whatever -d says, -d uint16) clips them.
     if (o.look.settings.output == OutputMode::density && writes_integers(o.output, o.write))
         throw UserError("--output density writes float densities: give a float format such as .exr or .tif (and -d "
-                        "half or float), not '" + o.output + "'" + (o.write.data_type.empty() ? "" : " -d " + o.write.data_type));
+                        "half or float), not '" + o.output + "'" +
+                        (o.write.data_type.empty() ? "" : " -d " + o.write.data_type));
 }
 
 void run_develop(DevelopOptions& o, CLI::App& cmd) {

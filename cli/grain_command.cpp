@@ -270,7 +270,8 @@ void run_apply(const ApplyOptions& o) {
         throw UserError("'" + o.profile + "' was measured in " + profile.colorspace + ", the input is " + o.colorspace +
                         ": convert the input to " + profile.colorspace + " first (grain levels are in its encoding)");
     LoadedImage in = read_plate(o.input);
-    if (const std::string w = other_subimages_warning(o.input, in); !w.empty()) std::cerr << "darkroom: warning: " << w << "\n";
+    if (const std::string w = other_subimages_warning(o.input, in); !w.empty())
+        std::cerr << "darkroom: warning: " << w << "\n";
     if (in.pixels.channels < (int)profile.channels.size())
         throw UserError("'" + o.profile + "' has " + std::to_string(profile.channels.size()) + " channels, '" + o.input +
                         "' only " + std::to_string(in.pixels.channels));

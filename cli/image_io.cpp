@@ -83,18 +83,22 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
     spec.full_y = like.full_y;
     spec.full_width = like.full_width > 0 ? like.full_width : spec.width;
     spec.full_height = like.full_height > 0 ? like.full_height : spec.height;
-    // Output channel c >= 3 is the input's channel c - 3 past its colour (develop_image's
-    // layout), under the input's name: a layer's "diffuse.R" stays so, a grey input's depth
-    // stays "Z" (and not alpha); a grey input's developed colour is R, G, B. A fourth channel
-    // the input does not describe is alpha.
-    const int colours = colour_channel_count(like.nchannels);
-    auto input_channel = [&](int c) { return c < 3 ? (colours == 3 ? c : -1) : colours + c - 3; };
-    auto output_channel = [&](int input) { return input >= colours && input - colours + 3 < image.channels ? input - colours + 3 : -1; };
+    // The input's channels under their names and roles (a layer's "diffuse.R" stays so). A grey
+    // input developed (develop_image's layout) has R, G, B for its one channel of colour, and
+    // the channels past it two places on: its depth stays "Z", the z channel, not alpha.
+    const int shift = colour_channel_count(like.nchannels) == 1 && image.channels == like.nchannels + 2 ? 2 : 0;
+    auto input_channel = [&](int c) { return shift > 0 && c < 3 ? -1 : c - shift; };
+    const int first_passed = shift > 0 ? 1 : 0;  // a developed grey's channel 0 is colour, not alpha or depth
+    auto output_channel = [&](int input) {
+        const int c = input + shift;
+        return input >= first_passed && c < image.channels ? c : -1;
+    };
     for (int c = 0; c < image.channels; ++c) {
         const char* rgb[3] = {"R", "G", "B"};
         const int from = input_channel(c);
         spec.channelnames[c] = from >= 0 && from < like.nchannels ? like.channelnames[from] : c < 3 ? rgb[c] : "A";
     }
+    // A fourth channel the input does not describe is alpha.
     const bool described = input_channel(image.channels - 1) < like.nchannels;
     spec.alpha_channel = like.alpha_channel >= 0             ? output_channel(like.alpha_channel)
                          : !described && image.channels == 4 ? 3

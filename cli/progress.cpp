@@ -40,8 +40,8 @@ double Progress::elapsed_seconds() const {
 void Progress::warn(FrameReport& report, const std::string& warning) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (terminal_ && !quiet_) std::cerr << "\r\033[K";
-    std::cerr << "darkroom: " << (sequence_ ? "frame " + std::to_string(report.frame) + ": " : "") << "warning: " << warning
-              << "\n";
+    const std::string frame = sequence_ ? "frame " + std::to_string(report.frame) + ": " : "";
+    std::cerr << "darkroom: " << frame << "warning: " << warning << "\n";
     report.warnings.push_back(warning);
     if (terminal_ && !quiet_) draw_bar();
 }
