@@ -49,16 +49,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-Window output_window(const DevelopOptions& o, const Window& frame) {
-    if (o.window.empty()) return frame;
-    const Window w{o.window[0], o.window[1], o.window[0] + o.window[2], o.window[1] + o.window[3]};
-    if (w.empty() || !frame.contains(w))
-        throw UserError("--window " + std::to_string(o.window[0]) + "," + std::to_string(o.window[1]) + "," +
-                        std::to_string(o.window[2]) + "," + std::to_string(o.window[3]) + " is not inside the " +
-                        std::to_string(frame.width()) + "x" + std::to_string(frame.height()) + " frame");
-    return w;
-}
-
 // Say once, before it starts, that a reference render will take long (core/develop.h).
 void warn_of_long_reference_render(const Plan& plan, const Window& out, FrameReport& report, Progress& progress) {
     const std::string warning = long_reference_render_warning(plan, out, "--quality ");
@@ -122,7 +112,7 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     ConstImageView view = in.pixels.view();
     view.window = view.window.moved(dx, dy);
     const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width), job.frame);
-    const Window out_window = output_window(o, in.pixels.window).moved(dx, dy);
+    const Window out_window = window_flag(o.window, in.pixels.window, "--window").moved(dx, dy);
     warn_of_long_reference_render(plan, out_window, report, progress);
     Image out = develop_image(look, colour, plan, view, out_window, premultiplied_alpha);
     out.window = out.window.moved(-dx, -dy);  // write_image takes the data window's coordinates

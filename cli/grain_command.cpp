@@ -102,16 +102,6 @@ std::vector<std::string> expand_frames(const std::vector<std::string>& plates, c
     return out;
 }
 
-Window parse_region(const std::vector<int>& r, const Window& frame, const std::string& flag) {
-    if (r.empty()) return frame;
-    Window w{r[0], r[1], r[0] + r[2], r[1] + r[3]};
-    if (w.empty() || !frame.contains(w))
-        throw UserError(flag + " " + std::to_string(r[0]) + "," + std::to_string(r[1]) + "," + std::to_string(r[2]) +
-                        "," + std::to_string(r[3]) + " is not inside the " + std::to_string(frame.width()) + "x" +
-                        std::to_string(frame.height()) + " image");
-    return w;
-}
-
 // Pixels in absolute frame coordinates (the file's data window).
 LoadedImage read_plate(const std::string& path) {
     LoadedImage in = read_image(path);
@@ -156,7 +146,7 @@ GrainProfile analyze_files(const std::vector<std::string>& paths, const AnalyzeO
             throw UserError("'" + paths[i] + "' has " + std::to_string(images[i].pixels.channels) + " channels, '" +
                             paths[0] + "' " + std::to_string(settings.channels));
         ConstImageView view = images[i].pixels.view();
-        Window w = parse_region(region, view.window, region_flag);
+        Window w = window_flag(region, view.window, region_flag);
         view.data = view.at(w.x0, w.y0);
         view.window = w;
         views.push_back(view);

@@ -35,6 +35,18 @@ std::string other_subimages_warning(const std::string& path, const LoadedImage& 
            std::to_string(image.subimages - 1) + " are left out of the output";
 }
 
+Window window_flag(const std::vector<int>& xywh, const Window& image, const std::string& flag) {
+    if (xywh.empty()) return image;
+    const Window w{xywh[0], xywh[1], xywh[0] + xywh[2], xywh[1] + xywh[3]};
+    const std::string given = flag + " " + std::to_string(xywh[0]) + "," + std::to_string(xywh[1]) + "," +
+                              std::to_string(xywh[2]) + "," + std::to_string(xywh[3]);
+    if (w.empty()) throw UserError(given + " has no pixels: its width and height (the last two) must be above 0");
+    if (!image.contains(w))
+        throw UserError(given + " is not inside the " + std::to_string(image.width()) + "x" +
+                        std::to_string(image.height()) + " image");
+    return w;
+}
+
 int premultiplied_alpha_channel(const OIIO::ImageSpec& spec) {
     return spec.alpha_channel >= 0 && spec.get_int_attribute("oiio:UnassociatedAlpha", 0) == 0 ? spec.alpha_channel : -1;
 }

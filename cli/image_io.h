@@ -19,6 +19,10 @@ struct LoadedImage {
     int subimages = 1;          // the file's parts (a multi-part EXR, a multi-page TIFF)
 };
 
+// The window a flag's X,Y,W,H gives (from the image's first pixel): all of `image` when it is
+// empty; a UserError naming `flag` when it has no pixels or is not inside `image`.
+Window window_flag(const std::vector<int>& xywh, const Window& image, const std::string& flag);
+
 // The file's first subimage (part), as oiiotool reads a file without -a.
 LoadedImage read_image(const std::string& path);
 

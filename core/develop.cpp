@@ -221,27 +221,30 @@ std::vector<Plane> per_pixel(const std::vector<Plane>& in, const Window& window,
     });
 }
 
-void check_setting(bool ok, const std::string& problem) {
-    if (!ok) throw std::invalid_argument(problem);
+// Refuses a setting outside [lo, hi] (NaN included), naming it and the value it was given:
+// "<what> must be <range>, not <value>".
+void check_range(double value, double lo, double hi, const std::string& what, const std::string& range) {
+    if (value >= lo && value <= hi) return;
+    std::ostringstream given;
+    given << value;
+    throw std::invalid_argument(what + " must be " + range + ", not " + given.str());
 }
 
 void validate(const DevelopSettings& s) {
-    for (double v : {s.exposure_ev, s.print_exposure_ev})
-        check_setting(std::isfinite(v) && std::abs(v) <= 64, "exposure must be within +-64 EV");
-    for (double v : {s.frame_width_mm, s.print_width_mm})
-        check_setting(std::isfinite(v) && v >= 0 && v <= 1e4, "frame and print widths must be 0-10000 mm");
-    check_setting(std::isfinite(s.halation) && s.halation >= 0 && s.halation <= 100, "halation must be 0-100");
+    check_range(s.exposure_ev, -64, 64, "camera exposure", "within +-64 EV");
+    check_range(s.print_exposure_ev, -64, 64, "print exposure", "within +-64 EV");
+    check_range(s.frame_width_mm, 0, 1e4, "frame width", "0-10000 mm");
+    check_range(s.print_width_mm, 0, 1e4, "print width", "0-10000 mm");
+    check_range(s.halation, 0, 100, "halation", "0-100");
     for (int c = 0; c < 3; ++c) {
-        check_setting(std::isfinite(s.grain_amount[c]) && s.grain_amount[c] >= 0 && s.grain_amount[c] <= 100,
-                      "grain amount must be 0-100");
-        check_setting(std::isfinite(s.grain_size[c]) && s.grain_size[c] >= 0 && s.grain_size[c] <= 100,
-                      "grain size must be 0-100");
-        double e = s.grain_density_exponent[c];
-        check_setting(std::isnan(e) || (e >= 0 && e <= 4), "grain response (density exponent) must be 0-4");
-        check_setting(std::isfinite(s.printer_lights[c]) && std::abs(s.printer_lights[c] - 25) <= 200,
-                      "printer lights must be within 25 +-200 points");
-        check_setting(std::isfinite(s.filtration_ymc[c]) && s.filtration_ymc[c] >= 0 && s.filtration_ymc[c] <= 1000,
-                      "filtration must be 0-1000 CC");
+        const std::string channel = std::string(" (") + "RGB"[c] + ")";
+        check_range(s.grain_amount[c], 0, 100, "grain amount" + channel, "0-100");
+        check_range(s.grain_size[c], 0, 100, "grain size" + channel, "0-100");
+        // NaN: the stock's own response.
+        if (!std::isnan(s.grain_density_exponent[c]))
+            check_range(s.grain_density_exponent[c], 0, 4, "grain response (density exponent)" + channel, "0-4");
+        check_range(s.printer_lights[c], 25 - 200, 25 + 200, "printer lights" + channel, "within 25 +-200 points");
+        check_range(s.filtration_ymc[c], 0, 1000, std::string("filtration (") + "YMC"[c] + ")", "0-1000 CC");
     }
 }
 

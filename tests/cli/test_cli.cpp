@@ -45,6 +45,8 @@ TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[c
              {"develop " + in + " -o " + out + " --output slide", "--output"},
              {"develop " + in + " -o " + out + " --window 60,40,10,10", "not inside"},
              {"develop " + in + " -o " + out + " --window 1,2,3", "--window"},
+             {"develop " + in + " -o " + out + " --window 0,0,0,5", "has no pixels"},
+             {"develop " + in + " -o " + out + " --print-exposure inf", "print exposure must be within +-64 EV, not inf"},
              {"develop " + in + " -o " + out + " --paper none", "--paper none"},
              {"develop " + in + " -o /nonexistent-dir/x.exr", "cannot write"},
              {"develop " + in + " -o " + out + " --film " + (kTmp / "missing.json").string(), "cannot open"},

@@ -378,24 +378,26 @@ TEST_CASE("settings just past their limits are refused, naming the setting", "[s
         return "accepted";
     };
     const double above = std::nextafter(100.0, 200.0), below_zero = -std::numeric_limits<double>::denorm_min();
-    CHECK_THAT(refusal([&](DevelopSettings& s) { s.grain_amount[2] = above; }), Catch::Contains("grain amount must be 0-100"));
+    CHECK_THAT(refusal([&](DevelopSettings& s) { s.grain_amount[2] = above; }), Catch::Contains("grain amount (B) must be 0-100, not 100"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.grain_amount[0] = below_zero; }), Catch::Contains("grain amount"));
-    CHECK_THAT(refusal([&](DevelopSettings& s) { s.grain_size[1] = above; }), Catch::Contains("grain size must be 0-100"));
+    CHECK_THAT(refusal([&](DevelopSettings& s) { s.grain_size[1] = above; }), Catch::Contains("grain size (G) must be 0-100"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.grain_density_exponent[0] = std::nextafter(4.0, 5.0); }),
                Catch::Contains("grain response"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.halation = above; }), Catch::Contains("halation must be 0-100"));
-    CHECK_THAT(refusal([&](DevelopSettings& s) { s.halation = kNaN; }), Catch::Contains("halation"));
+    CHECK_THAT(refusal([&](DevelopSettings& s) { s.halation = kNaN; }), Catch::Contains("halation must be 0-100, not nan"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.frame_width_mm = std::nextafter(1e4, 2e4); }),
-               Catch::Contains("frame and print widths"));
-    CHECK_THAT(refusal([&](DevelopSettings& s) { s.print_width_mm = below_zero; }), Catch::Contains("frame and print widths"));
+               Catch::Contains("frame width must be 0-10000 mm"));
+    CHECK_THAT(refusal([&](DevelopSettings& s) { s.print_width_mm = below_zero; }), Catch::Contains("print width must be 0-10000 mm"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.printer_lights[1] = std::nextafter(225.0, 300.0); }),
                Catch::Contains("printer lights"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.printer_lights[2] = std::nextafter(-175.0, -300.0); }),
                Catch::Contains("printer lights"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.filtration_ymc[0] = std::nextafter(1000.0, 2000.0); }),
-               Catch::Contains("filtration must be 0-1000 CC"));
+               Catch::Contains("filtration (Y) must be 0-1000 CC"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.filtration_ymc[2] = below_zero; }), Catch::Contains("filtration"));
-    CHECK_THAT(refusal([&](DevelopSettings& s) { s.exposure_ev = kInf; }), Catch::Contains("exposure"));
+    CHECK_THAT(refusal([&](DevelopSettings& s) { s.exposure_ev = kInf; }), Catch::Contains("camera exposure must be within +-64 EV, not inf"));
+    CHECK_THAT(refusal([&](DevelopSettings& s) { s.print_exposure_ev = -kInf; }),
+               Catch::Contains("print exposure must be within +-64 EV, not -inf"));
 }
 
 TEST_CASE("1x1, 1xN, Nx1 and very wide images, and windows of them, develop in range", "[stability]") {
