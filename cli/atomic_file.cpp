@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <mutex>
 #include <set>
@@ -123,16 +124,24 @@ void TempFile::commit(const std::function<void()>& committed) {
     if (committed) committed();
 }
 
+void require_folder(const std::string& path) {
+    const fs::path folder = fs::path(path).parent_path();
+    if (!folder.empty() && !fs::is_directory(folder))
+        throw UserError("cannot write '" + path + "': the folder '" + folder.string() + "' does not exist");
+}
+
 void write_text_atomically(const std::string& path, const std::string& text) {
+    require_folder(path);
     TempFile temp{fs::path(path)};
     {
         std::ofstream out;
-        temp.create([&] {
-            out.open(temp.path());
-            return out.is_open();
-        });
+        if (!temp.create([&] {
+                out.open(temp.path());
+                return out.is_open();
+            }))
+            throw UserError("cannot write '" + path + "': " + std::strerror(errno));
         out << text;
-        if (!out.flush()) throw UserError("cannot write '" + path + "'");
+        if (!out.flush()) throw UserError("cannot write '" + path + "': " + std::strerror(errno));
     }
     temp.commit();
 }

@@ -57,7 +57,11 @@ private:
     bool committed_ = false;
 };
 
-// Writes `text` to `path` through a TempFile.
+// Throws UserError naming `path` when the folder it would go in does not exist, so that a
+// command can refuse before it does the work.
+void require_folder(const std::string& path);
+
+// Writes `text` to `path` through a TempFile; UserError naming `path` and why if it cannot.
 void write_text_atomically(const std::string& path, const std::string& text);
 
 // Removes this host's temporaries in `directory` whose process no longer runs; returns how

@@ -6,8 +6,9 @@
 #include <iostream>
 #include <sstream>
 
+#include "cli/atomic_file.h"
 #include "cli/commands.h"
-#include "cli/image_io.h"
+#include "cli/user_error.h"
 #include "cli/look_options.h"
 #include "ocio/lut_bake.h"
 
@@ -55,11 +56,13 @@ void run_bake_lut(const BakeLutOptions& o) {
     s.grain = false;
     s.mtf = false;
     s.halation = 0;
+    ocio::LutFormat format;
     try {
-        ocio::lut_format_for_path(o.output);
+        format = ocio::lut_format_for_path(o.output);
     } catch (const ocio::OcioError& e) {
         throw UserError(e.what());
     }
+    require_folder(o.output);  // before the lattice is developed
     const ColourIO colour(look.colour, s.output, look.verbose);
 
     const ocio::PixelFunction develop_lattice = [&](float* rgb, std::size_t n_pixels) {
@@ -77,13 +80,14 @@ void run_bake_lut(const BakeLutOptions& o) {
     settings.cube_size = o.cube_size;
     settings.title = "Darkroom look (" + look.film + ")";
     settings.description = describe_look(look, colour.input_space(), colour.output_conversion());
+    ocio::BakedLut baked;
     try {
-        const ocio::BakedLut baked =
-            ocio::bake_look(colour.converter(), colour.input_space(), develop_lattice, settings, o.output);
-        std::cout << "wrote " << baked.path << ": " << baked.summary << "\n";
+        baked = ocio::bake_look(colour.converter(), colour.input_space(), develop_lattice, settings, format);
     } catch (const ocio::OcioError& e) {
         throw UserError(e.what());
     }
+    write_text_atomically(o.output, baked.text);
+    std::cout << "wrote " << o.output << ": " << baked.summary << "\n";
 }
 
 }  // namespace

@@ -3,8 +3,8 @@
 // run without a config).
 #include <iostream>
 
+#include "cli/atomic_file.h"
 #include "cli/commands.h"
-#include "cli/image_io.h"
 #include "ocio/config.h"
 
 namespace darkroom::cli {
@@ -14,11 +14,7 @@ void add_colorconfig_command(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand("colorconfig", "Write the embedded OCIO config to a .ocio file");
     cmd->add_option("-o,--out", *path, "The .ocio file to write")->required();
     cmd->callback([path] {
-        try {
-            ocio::write_embedded_config(*path);
-        } catch (const ocio::OcioError& e) {
-            throw UserError(e.what());
-        }
+        write_text_atomically(*path, ocio::embedded_config_yaml());
         std::cout << "wrote " << *path << " (the embedded Darkroom config)\n";
     });
 }

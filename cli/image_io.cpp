@@ -64,9 +64,7 @@ bool is_float_format(const std::string& path) {
 
 void require_writable(const std::string& path) {
     if (!OIIO::ImageOutput::create(path)) throw UserError("cannot write '" + path + "': " + OIIO::geterror());
-    const fs::path folder = fs::path(path).parent_path();
-    if (!folder.empty() && !fs::is_directory(folder))
-        throw UserError("cannot write '" + path + "': the folder '" + folder.string() + "' does not exist");
+    require_folder(path);
 }
 
 const std::vector<std::string>& output_data_types() {

@@ -3,10 +3,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <initializer_list>
 #include <sstream>
-#include <unistd.h>
 
 namespace darkroom::ocio {
 
@@ -357,34 +355,6 @@ std::string embedded_config_yaml() {
     std::ostringstream yaml;
     embedded_config()->serialize(yaml);
     return yaml.str();
-}
-
-void write_file_atomically(const std::string& path, const std::string& contents, const std::string& what) {
-    const fs::path target(path);
-    const fs::path temp =
-        target.parent_path() / ("." + target.filename().string() + ".tmp-" + std::to_string(getpid()));
-    {
-        std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-        if (!out) throw OcioError("cannot write " + what + " '" + path + "': cannot create '" + temp.string() + "'");
-        out.write(contents.data(), (std::streamsize)contents.size());
-        out.close();
-        if (!out) {
-            std::error_code ec;
-            fs::remove(temp, ec);
-            throw OcioError("cannot write " + what + " '" + path + "': writing '" + temp.string() + "' failed");
-        }
-    }
-    std::error_code ec;
-    fs::rename(temp, target, ec);
-    if (ec) {
-        std::error_code ignored;
-        fs::remove(temp, ignored);
-        throw OcioError("cannot write " + what + " '" + path + "': " + ec.message());
-    }
-}
-
-void write_embedded_config(const std::string& path) {
-    write_file_atomically(path, embedded_config_yaml(), "config");
 }
 
 std::vector<std::string> color_space_names(const OCIO::Config& config) {

@@ -140,13 +140,6 @@ ActiveConfig embedded_active_config(const std::string& reason = "no config was g
 // The embedded config as .ocio YAML, e.g. to start a show config from.
 std::string embedded_config_yaml();
 
-// Writes the embedded config to `path` (e.g. for oiiotool --colorconfig); OcioError
-// naming the file if it cannot.
-void write_embedded_config(const std::string& path);
-
-// Writes `contents` to a temporary file beside `path`, then renames it into place, so a
-// failed write leaves nothing; OcioError "cannot write <what> '<path>': ..." otherwise.
-void write_file_atomically(const std::string& path, const std::string& contents, const std::string& what);
 
 // Linear Rec.709 (D65) -> ACES2065-1 from OCIO built-in transforms alone (the inverse
 // of UTILITY - ACES-AP1_to_LINEAR-REC709_BFD, then ACEScg_to_ACES2065-1): valid in any

@@ -201,10 +201,9 @@ LutFormat lut_format_for_path(const std::string& path) {
     throw OcioError("cannot tell the LUT format of '" + path + "': use a .cube or .clf file name");
 }
 
-BakedLut bake_lut(const PixelFunction& look, const LutBakeSettings& settings, const std::string& path) {
+BakedLut bake_lut(const PixelFunction& look, const LutBakeSettings& settings, LutFormat format) {
     BakedLut baked;
-    baked.path = path;
-    baked.format = lut_format_for_path(path);
+    baked.format = format;
     validate(settings, baked.format);
     if (settings.clf_prefix && baked.format != LutFormat::clf)
         throw std::invalid_argument("darkroom::ocio::bake_lut: only a .clf can hold input operations");
@@ -249,10 +248,8 @@ BakedLut bake_lut(const PixelFunction& look, const LutBakeSettings& settings, co
                    std::to_string(settings.clf_prefix->getNumTransforms()) + " OCIO operations)";
     baked.summary = summary;
 
-    const std::string text = baked.format == LutFormat::cube
-                                 ? cube_text(settings, summary, shaped ? &sampled : nullptr, lattice)
-                                 : clf_text(settings, summary, lattice);
-    write_file_atomically(path, text, "LUT");
+    baked.text = baked.format == LutFormat::cube ? cube_text(settings, summary, shaped ? &sampled : nullptr, lattice)
+                                                 : clf_text(settings, summary, lattice);
     return baked;
 }
 
@@ -274,16 +271,15 @@ OCIO::ConstGroupTransformRcPtr clf_writable_operations(const OCIO::Processor& pr
 }  // namespace
 
 BakedLut bake_look(const ColorConverter& converter, const std::string& input_space,
-                   const PixelFunction& look_from_working, LutBakeSettings settings, const std::string& path) {
-    const LutFormat format = lut_format_for_path(path);
+                   const PixelFunction& look_from_working, LutBakeSettings settings, LutFormat format) {
     settings.clf_prefix = nullptr;
     settings.input = LutInput::scene_linear;
-    if (input_space.empty()) return bake_lut(look_from_working, settings, path);
+    if (input_space.empty()) return bake_lut(look_from_working, settings, format);
     const ConversionPtr to_working = converter.to_working(input_space);
-    if (to_working->is_noop()) return bake_lut(look_from_working, settings, path);
+    if (to_working->is_noop()) return bake_lut(look_from_working, settings, format);
     if (format == LutFormat::clf) {
         settings.clf_prefix = clf_writable_operations(*to_working->processor());
-        if (settings.clf_prefix) return bake_lut(look_from_working, settings, path);
+        if (settings.clf_prefix) return bake_lut(look_from_working, settings, format);
     }
     // Sample the conversion too: on the encoded values for log and video spaces.
     const std::string encoding = converter.encoding(input_space);
@@ -292,7 +288,7 @@ BakedLut bake_look(const ColorConverter& converter, const std::string& input_spa
         to_working->apply_rgb(rgb, n);
         look_from_working(rgb, n);
     };
-    return bake_lut(folded, settings, path);
+    return bake_lut(folded, settings, format);
 }
 
 }  // namespace darkroom::ocio

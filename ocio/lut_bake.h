@@ -54,7 +54,7 @@
 // Applying them: `oiiotool --colorconfig CONFIG in.exr --ociofiletransform look.cube -o
 // out.exr`. oiiotool 2.4 with OCIO 2.1 refuses --ociofiletransform when no config is
 // active ($OCIO unset), so give it one: any config works, e.g. the embedded config written
-// out (write_embedded_config(), `darkroom colorconfig -o FILE`).
+// out (embedded_config_yaml(), `darkroom colorconfig -o FILE`).
 #pragma once
 
 #include <cstddef>
@@ -102,26 +102,26 @@ struct LutBakeSettings {
     OCIO::ConstGroupTransformRcPtr clf_prefix;
 };
 
-// What was written, for -v.
+// A baked LUT: the file's text, to be written by the caller (the program writes every output
+// through one atomic writer, cli/atomic_file.h).
 struct BakedLut {
-    std::string path;
     LutFormat format = LutFormat::clf;
     std::string summary;  // one line: sizes, shaper and input range
+    std::string text;     // the .cube or .clf file
 };
 
 // .cube or .clf by the path's extension (case-insensitive); throws OcioError otherwise.
 LutFormat lut_format_for_path(const std::string& path);
 
-// Samples `look` on the lattice (one call with every lattice point) and writes the file.
-// Throws OcioError for bad settings, a look that returns non-finite values, or a file
-// that cannot be written (naming the file).
-BakedLut bake_lut(const PixelFunction& look, const LutBakeSettings& settings, const std::string& path);
+// Samples `look` on the lattice (one call with every lattice point) into a LUT file's text.
+// Throws OcioError for bad settings or a look that returns non-finite values.
+BakedLut bake_lut(const PixelFunction& look, const LutBakeSettings& settings, LutFormat format);
 
 // Bakes a look defined on the working space for pictures in `input_space` of the
 // converter's config (empty: the working space itself): the LUT's input is
 // `input_space`, its output whatever `look_from_working` gives. Chooses the layout described above; `settings.input` and
 // `clf_prefix` are set here.
 BakedLut bake_look(const ColorConverter& converter, const std::string& input_space,
-                   const PixelFunction& look_from_working, LutBakeSettings settings, const std::string& path);
+                   const PixelFunction& look_from_working, LutBakeSettings settings, LutFormat format);
 
 }  // namespace darkroom::ocio

@@ -226,6 +226,8 @@ TEST_CASE("bad colour input: a message naming the config and the problem, and no
              {develop + "--tocolorspace ACEScg --ociodisplay sRGB Standard", "excludes"},
              {"bake-lut -o " + tmp("colour-never.3dl"), ".cube or .clf"},
              {"bake-lut -o " + tmp("colour-never.cube") + " --input-units lux-seconds", "scene-linear"},
+             {"bake-lut -o " + tmp("no-such-dir/look.cube"), "the folder '" + tmp("no-such-dir") + "' does not exist"},
+             {"colorconfig -o " + tmp("no-such-dir/c.ocio"), "the folder '" + tmp("no-such-dir") + "' does not exist"},
          }) {
         Result r = darkroom(c.args);
         INFO(c.args << "\n" << r.output);
