@@ -8,8 +8,8 @@
 
 #include "cli/atomic_file.h"
 #include "cli/commands.h"
-#include "cli/user_error.h"
 #include "cli/look_options.h"
+#include "cli/user_error.h"
 #include "ocio/lut_bake.h"
 
 namespace darkroom::cli {

@@ -26,7 +26,7 @@
 //         so the only error is the 3D interpolation. Readers that know only IRIDAS .cube
 //         (no 1D part) cannot read such a file; baked from encoded input it is a plain 3D
 //         .cube that every reader takes.
-// Files are written to a temporary name beside the target and renamed into place.
+// Baking gives the file's text; the program writes it (cli/atomic_file.h).
 //
 // Pictures in another colour space (bake_look): a .clf starts with the exact OCIO
 // operations from that space to the working space (matrices, log curves: no sampling),
