@@ -67,24 +67,6 @@ void warn_of_input_tag(const ColourIO& colour, const std::string& path, const OI
     std::call_once(warned, [&] { progress.warn(report, warning); });
 }
 
-// Say how many values film reads are not finite, and how it takes them: the colour's, and an
-// alpha's the colour is premultiplied by. Depth, mattes and a straight alpha pass through
-// untouched (a depth of +Inf is a render's background), so they are not counted.
-void warn_of_non_finite(const Image& image, int premultiplied_alpha, FrameReport& report, Progress& progress) {
-    const int colour_channels = colour_channel_count(image.channels);
-    size_t colour = 0, alpha = 0;
-    for (size_t i = 0; i < image.pixels.size(); i += image.channels) {
-        for (int c = 0; c < colour_channels; ++c) colour += !std::isfinite(image.pixels[i + c]);
-        if (premultiplied_alpha >= 0) alpha += !std::isfinite(image.pixels[i + premultiplied_alpha]);
-    }
-    if (colour > 0)
-        progress.warn(report, std::to_string(colour) +
-                                  " non-finite colour values (NaN and -Inf count as no light, +Inf as 1e30)");
-    if (alpha > 0)
-        progress.warn(report, std::to_string(alpha) +
-                                  " non-finite alpha values (as coverage: NaN and -Inf count as 0, +Inf as 1)");
-}
-
 // Develops and writes one frame; its report goes to `progress` as its output takes its
 // name (so a run interrupted then logs every finished output).
 void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& plans, const FrameJob& job,
@@ -98,7 +80,7 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
         std::call_once(warned, [&] { progress.warn(report, w); });
     }
     const int premultiplied_alpha = premultiplied_alpha_channel(in.spec);
-    warn_of_non_finite(in.pixels, premultiplied_alpha, report, progress);
+    for (const std::string& w : non_finite_warnings(in.pixels.view(), premultiplied_alpha)) progress.warn(report, w);
 
     start = std::chrono::steady_clock::now();
     LookOptions look = o.look;

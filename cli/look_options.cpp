@@ -1,5 +1,6 @@
 #include "cli/look_options.h"
 
+#include <cmath>
 #include <iostream>
 
 #include "cli/user_error.h"
@@ -161,6 +162,25 @@ Plan PlanCache::plan_for(const FrameGeometry& frame, int frame_number) {
     auto it = plans_.find(key);
     if (it == plans_.end()) it = plans_.emplace(key, compile_look(look_, frame)).first;
     return it->second.in_image(frame).for_frame(frame_number);
+}
+
+std::vector<std::string> non_finite_warnings(const ConstImageView& in, int premultiplied_alpha) {
+    const int colour_channels = colour_channel_count(in.channels);
+    size_t colour = 0, alpha = 0;
+    for (int y = in.window.y0; y < in.window.y1; ++y)
+        for (int x = in.window.x0; x < in.window.x1; ++x) {
+            const float* px = in.at(x, y);
+            for (int c = 0; c < colour_channels; ++c) colour += !std::isfinite(px[c]);
+            if (premultiplied_alpha >= 0) alpha += !std::isfinite(px[premultiplied_alpha]);
+        }
+    std::vector<std::string> warnings;
+    if (colour > 0)
+        warnings.push_back(std::to_string(colour) +
+                           " non-finite colour values (NaN and -Inf count as no light, +Inf as 1e30)");
+    if (alpha > 0)
+        warnings.push_back(std::to_string(alpha) +
+                           " non-finite alpha values (as coverage: NaN and -Inf count as 0, +Inf as 1)");
+    return warnings;
 }
 
 Image develop_image(const LookOptions& look, const ColourIO& colour, const Plan& plan, const ConstImageView& in,

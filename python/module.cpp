@@ -72,17 +72,21 @@ py::array_t<float> develop(py::array_t<float, py::array::c_style | py::array::fo
         py::gil_scoped_release release;
         plan = darkroom::cli::compile_look(parsed.look, darkroom::cli::frame_geometry(in));
     }
-    // Before a render that will take hours (a filter set to "error" refuses it).
-    const std::string warning = darkroom::long_reference_render_warning(*plan, full, "quality=");
-    if (!warning.empty() && PyErr_WarnEx(PyExc_RuntimeWarning, ("darkroom: " + warning).c_str(), 1) < 0)
-        throw py::error_already_set();
+    // The alpha is the channel after the colour (RGBA, YA), as OpenImageIO names it.
+    const int alpha = darkroom::colour_channel_count(channels);
+    const int premultiplied_alpha = premultiplied && alpha < channels ? alpha : -1;
+    // Before a render that will take hours (a filter set to "error" refuses it), and of
+    // non-finite input, as the program warns.
+    std::vector<std::string> warnings = darkroom::cli::non_finite_warnings(in, premultiplied_alpha);
+    warnings.push_back(darkroom::long_reference_render_warning(*plan, full, "quality="));
+    for (const std::string& warning : warnings)
+        if (!warning.empty() && PyErr_WarnEx(PyExc_RuntimeWarning, ("darkroom: " + warning).c_str(), 1) < 0)
+            throw py::error_already_set();
     const darkroom::cli::ColourIO colour(parsed.look.colour, parsed.look.settings.output, parsed.look.verbose);
     darkroom::Image out;
     {
         py::gil_scoped_release release;
-        // The alpha is the channel after the colour (RGBA, YA), as OpenImageIO names it.
-        const int alpha = darkroom::colour_channel_count(channels);
-        out = darkroom::cli::develop_image(parsed.look, colour, *plan, in, full, premultiplied && alpha < channels ? alpha : -1);
+        out = darkroom::cli::develop_image(parsed.look, colour, *plan, in, full, premultiplied_alpha);
     }
     py::array_t<float> result({height, width, out.channels});
     std::copy(out.pixels.begin(), out.pixels.end(), result.mutable_data());

@@ -110,6 +110,24 @@ class ModuleEqualsProgram(unittest.TestCase):
             with self.assertRaisesRegex(RuntimeWarning, "draws every silver grain.*CPU hours"):
                 darkroom.develop(self.plate, quality="reference")
 
+    def test_non_finite_input_is_warned_of_as_the_program_does(self):
+        # Colour and the premultiplying alpha are counted; the result stays finite.
+        plate = self.plate.copy()
+        plate[0, 0, 0] = np.nan
+        plate[1, 1, 1] = np.inf
+        plate[2, 2, 3] = np.nan
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            out = darkroom.develop(plate, look=self.look, frame=1)
+        messages = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
+        self.assertIn("darkroom: 2 non-finite colour values (NaN and -Inf count as no light, +Inf as 1e30)", messages)
+        self.assertTrue(any("1 non-finite alpha values" in m for m in messages), messages)
+        self.assertTrue(np.isfinite(out[..., :3]).all())
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            darkroom.develop(self.plate, look=self.look, frame=1)
+        self.assertEqual([w for w in caught if "non-finite" in str(w.message)], [])
+
     def test_bad_settings_are_named(self):
         with self.assertRaisesRegex(TypeError, "exposur"):
             darkroom.develop(self.plate, exposur=1)
