@@ -230,6 +230,33 @@ TEST_CASE("grain apply to premultiplied colour grains the light and keeps the co
     CHECK(transparent > 1000);
 }
 
+// A grey plate's grain goes on a grey element under the element's own channel name (it was
+// renamed R): grain apply writes the channels it read.
+TEST_CASE("grain apply to a grey plate keeps its channel", "[cli][grain][metadata]") {
+    const std::string clean = make_patches("grain-grey-clean-rgb.exr"), rgb_profile = (kTmp / "grey-rgb.json").string(),
+                      grained_rgb = (kTmp / "grain-grey-grained-rgb.exr").string();
+    REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + rgb_profile).exit_code == 0);
+    REQUIRE(darkroom("grain apply " + clean + " --profile " + rgb_profile + " -o " + grained_rgb + " --seed 3")
+                .exit_code == 0);
+    auto grey_of = [](const std::string& from, const std::string& name) {
+        OIIO::ImageBuf grey = OIIO::ImageBufAlgo::channels(OIIO::ImageBuf(from), 1, {0}, {}, {"Y"});
+        const std::string path = (kTmp / name).string();
+        REQUIRE(grey.write(path));
+        return path;
+    };
+    const std::string grey_plate = grey_of(grained_rgb, "grain-grey-plate.exr"),
+                      grey_clean = grey_of(clean, "grain-grey-clean.exr");
+    const std::string profile = (kTmp / "grey.json").string(), out = (kTmp / "grain-grey-out.exr").string();
+    Result r = darkroom("grain analyze " + grey_plate + " -o " + profile);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    REQUIRE(darkroom("grain apply " + grey_clean + " --profile " + profile + " -o " + out).exit_code == 0);
+    OIIO::ImageSpec spec;
+    const std::vector<float> before = pixels(grey_clean), after = pixels(out, &spec);
+    CHECK(spec.channelnames == std::vector<std::string>{"Y"});
+    CHECK(after != before);  // grained
+}
+
 // Without --encoding or --iscolorspace, the plate's own tag decides its encoding: a log DPX
 // scan (OpenImageIO's "KodakLog") is log, where an untagged integer file is display.
 TEST_CASE("grain analyze takes a plate's encoding from its colour-space tag", "[cli][grain]") {
