@@ -5,7 +5,6 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
-#include <mutex>
 #include <map>
 #include <thread>
 #include <unistd.h>
@@ -49,24 +48,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// Say once, before it starts, that a reference render will take long (core/develop.h).
-void warn_of_long_reference_render(const Plan& plan, const Window& out, FrameReport& report, Progress& progress) {
-    const std::string warning = long_reference_render_warning(plan, out, "--quality ");
-    if (warning.empty()) return;
-    static std::once_flag warned;
-    std::call_once(warned, [&] { progress.warn(report, warning); });
-}
-
-// Say once that the input's own colour-space tag is not the space it is read as (an sRGB PNG
-// taken as scene-linear without --iscolorspace): the frames of a sequence share their tag.
-void warn_of_input_tag(const ColourIO& colour, const std::string& path, const OIIO::ImageSpec& spec,
-                       FrameReport& report, Progress& progress) {
-    const std::string warning = colour.input_tag_warning(path, spec.get_string_attribute("oiio:ColorSpace"));
-    if (warning.empty()) return;
-    static std::once_flag warned;
-    std::call_once(warned, [&] { progress.warn(report, warning); });
-}
-
 // Develops and writes one frame; its report goes to `progress` as its output takes its
 // name (so a run interrupted then logs every finished output).
 void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& plans, const FrameJob& job,
@@ -74,11 +55,12 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_image(job.input);
     report.read_seconds = seconds_since(start);
-    warn_of_input_tag(colour, job.input, in.spec, report, progress);
-    if (const std::string w = other_subimages_warning(job.input, in); !w.empty()) {
-        static std::once_flag warned;  // a sequence's frames share their parts
-        std::call_once(warned, [&] { progress.warn(report, w); });
-    }
+    // An input read in another space than its tag names (an sRGB PNG taken as scene-linear
+    // without --iscolorspace), and parts left out: said once, for a sequence's frames share them.
+    if (const std::string w = colour.input_tag_warning(job.input, in.spec.get_string_attribute("oiio:ColorSpace"));
+        !w.empty())
+        progress.warn_once("input tag", report, w);
+    if (const std::string w = other_subimages_warning(job.input, in); !w.empty()) progress.warn_once("parts", report, w);
     const int premultiplied_alpha = premultiplied_alpha_channel(in.spec);
     for (const std::string& w : non_finite_warnings(in.pixels.view(), premultiplied_alpha)) progress.warn(report, w);
 
@@ -95,7 +77,9 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     view.window = view.window.moved(dx, dy);
     const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width), job.frame);
     const Window out_window = window_flag(o.window, in.pixels.window, "--window").moved(dx, dy);
-    warn_of_long_reference_render(plan, out_window, report, progress);
+    // Before the render starts, that a reference render will take long (core/develop.h).
+    if (const std::string w = long_reference_render_warning(plan, out_window, "--quality "); !w.empty())
+        progress.warn_once("long reference render", report, w);
     Image out = develop_image(look, colour, plan, view, out_window, premultiplied_alpha);
     out.window = out.window.moved(-dx, -dy);  // write_image takes the data window's coordinates
     report.develop_seconds = seconds_since(start);

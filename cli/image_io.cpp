@@ -2,6 +2,7 @@
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/strutil.h>
+#include <algorithm>
 #include <filesystem>
 
 #include "cli/atomic_file.h"
@@ -97,23 +98,21 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
     // input developed (develop_image's layout) has R, G, B for its one channel of colour, and
     // the channels past it two places on: its depth stays "Z", the z channel, not alpha.
     const int shift = colour_channel_count(like.nchannels) == 1 && image.channels == like.nchannels + 2 ? 2 : 0;
-    auto input_channel = [&](int c) { return shift > 0 && c < 3 ? -1 : c - shift; };
-    const int first_passed = shift > 0 ? 1 : 0;  // a developed grey's channel 0 is colour, not alpha or depth
-    auto output_channel = [&](int input) {
-        const int c = input + shift;
-        return input >= first_passed && c < image.channels ? c : -1;
-    };
+    std::vector<int> from(image.channels);  // the input channel of each output channel, -1: none
     for (int c = 0; c < image.channels; ++c) {
+        from[c] = shift > 0 && c < 3 ? -1 : c - shift;
         const char* rgb[3] = {"R", "G", "B"};
-        const int from = input_channel(c);
-        spec.channelnames[c] = from >= 0 && from < like.nchannels ? like.channelnames[from] : c < 3 ? rgb[c] : "A";
+        const bool named = from[c] >= 0 && from[c] < like.nchannels;
+        spec.channelnames[c] = named ? like.channelnames[from[c]] : c < 3 ? rgb[c] : "A";
     }
+    auto output_of = [&](int input) {
+        const auto at = std::find(from.begin(), from.end(), input);
+        return input >= 0 && at != from.end() ? int(at - from.begin()) : -1;
+    };
     // A fourth channel the input does not describe is alpha.
-    const bool described = input_channel(image.channels - 1) < like.nchannels;
-    spec.alpha_channel = like.alpha_channel >= 0             ? output_channel(like.alpha_channel)
-                         : !described && image.channels == 4 ? 3
-                                                             : -1;
-    spec.z_channel = like.z_channel >= 0 ? output_channel(like.z_channel) : -1;
+    const bool undescribed_fourth = image.channels == 4 && from.back() >= like.nchannels;
+    spec.alpha_channel = like.alpha_channel >= 0 ? output_of(like.alpha_channel) : undescribed_fourth ? 3 : -1;
+    spec.z_channel = output_of(like.z_channel);
     if (options.colour_space && options.colour_space->empty()) spec.erase_attribute("oiio:ColorSpace");
     if (options.colour_space && !options.colour_space->empty()) spec.attribute("oiio:ColorSpace", *options.colour_space);
     if (!options.compression.empty()) spec.attribute("compression", options.compression);

@@ -37,6 +37,14 @@ double Progress::elapsed_seconds() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
 }
 
+void Progress::warn_once(const std::string& kind, FrameReport& report, const std::string& warning) {
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!warned_kinds_.insert(kind).second) return;
+    }
+    warn(report, warning);
+}
+
 void Progress::warn(FrameReport& report, const std::string& warning) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (terminal_ && !quiet_) std::cerr << "\r\033[K";

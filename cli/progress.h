@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <mutex>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,9 @@ public:
     // Thread-safe, and printed even when quiet. A warning is printed when it arises (a render
     // that will take hours says so before it starts) and kept in the frame's report for the log.
     void warn(FrameReport& report, const std::string& warning);
+    // The same, the first time a warning of this `kind` arises in the run only (a sequence's
+    // frames share their colour tag, their parts, a render's cost).
+    void warn_once(const std::string& kind, FrameReport& report, const std::string& warning);
     // A frame's report, when it is finished (or failed, or skipped).
     void add(FrameReport report);
     // Ends the bar's line.
@@ -48,6 +52,7 @@ private:
     bool sequence_, quiet_, terminal_;
     std::chrono::steady_clock::time_point start_;
     std::vector<FrameReport> reports_;
+    std::set<std::string> warned_kinds_;
 };
 
 // The --log file: every frame's report and a summary, written atomically. A run stopped by

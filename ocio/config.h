@@ -140,7 +140,6 @@ ActiveConfig embedded_active_config(const std::string& reason = "no config was g
 // The embedded config as .ocio YAML, e.g. to start a show config from.
 std::string embedded_config_yaml();
 
-
 // Linear Rec.709 (D65) -> ACES2065-1 from OCIO built-in transforms alone (the inverse
 // of UTILITY - ACES-AP1_to_LINEAR-REC709_BFD, then ACEScg_to_ACES2065-1): valid in any
 // OCIO 2.1 config. A fresh transform each call, so callers may change its direction.
