@@ -62,7 +62,6 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
         progress.warn_once("input tag", report, w);
     if (const std::string w = other_subimages_warning(job.input, in); !w.empty()) progress.warn_once("parts", report, w);
     const int premultiplied_alpha = premultiplied_alpha_channel(in.spec);
-    for (const std::string& w : non_finite_warnings(in.pixels.view(), premultiplied_alpha)) progress.warn(report, w);
 
     start = std::chrono::steady_clock::now();
     LookOptions look = o.look;
@@ -80,6 +79,7 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     // Before the render starts, that a reference render will take long (core/develop.h).
     if (const std::string w = long_reference_render_warning(plan, out_window, "--quality "); !w.empty())
         progress.warn_once("long reference render", report, w);
+    for (const std::string& w : non_finite_warnings(plan, view, out_window, premultiplied_alpha)) progress.warn(report, w);
     Image out = develop_image(look, colour, plan, view, out_window, premultiplied_alpha);
     out.window = out.window.moved(-dx, -dy);  // write_image takes the data window's coordinates
     report.develop_seconds = seconds_since(start);

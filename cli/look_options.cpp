@@ -164,11 +164,13 @@ Plan PlanCache::plan_for(const FrameGeometry& frame, int frame_number) {
     return it->second.in_image(frame).for_frame(frame_number);
 }
 
-std::vector<std::string> non_finite_warnings(const ConstImageView& in, int premultiplied_alpha) {
+std::vector<std::string> non_finite_warnings(const Plan& plan, const ConstImageView& in, const Window& out_window,
+                                             int premultiplied_alpha) {
     const int colour_channels = colour_channel_count(in.channels);
+    const Window read = plan.input_window(out_window).intersected(in.window);
     size_t colour = 0, alpha = 0;
-    for (int y = in.window.y0; y < in.window.y1; ++y)
-        for (int x = in.window.x0; x < in.window.x1; ++x) {
+    for (int y = read.y0; y < read.y1; ++y)
+        for (int x = read.x0; x < read.x1; ++x) {
             const float* px = in.at(x, y);
             for (int c = 0; c < colour_channels; ++c) colour += !std::isfinite(px[c]);
             if (premultiplied_alpha >= 0) alpha += !std::isfinite(px[premultiplied_alpha]);

@@ -93,10 +93,12 @@ private:
 Image develop_image(const LookOptions& look, const ColourIO& colour, const Plan& plan, const ConstImageView& in,
                     const Window& out_window, int premultiplied_alpha = -1);
 
-// What to warn of for the values of `in` that film reads and that are not finite, with how it
-// takes them: the colour's, and those of the alpha it is premultiplied by (-1: none). Depth,
-// mattes and a straight alpha pass through untouched (a depth of +Inf is a render's
-// background), so they are not counted. Empty when every such value is finite.
-std::vector<std::string> non_finite_warnings(const ConstImageView& in, int premultiplied_alpha);
+// What to warn of for the values that film reads and that are not finite, with how it takes
+// them: in the pixels of `in` that the plan reads for `out_window` (the window and its halo),
+// the colour's, and those of the alpha it is premultiplied by (-1: none). Depth, mattes and a
+// straight alpha pass through untouched (a depth of +Inf is a render's background), so they
+// are not counted. Empty when every such value is finite.
+std::vector<std::string> non_finite_warnings(const Plan& plan, const ConstImageView& in, const Window& out_window,
+                                             int premultiplied_alpha);
 
 }  // namespace darkroom::cli

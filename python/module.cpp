@@ -77,7 +77,7 @@ py::array_t<float> develop(py::array_t<float, py::array::c_style | py::array::fo
     const int premultiplied_alpha = premultiplied && alpha < channels ? alpha : -1;
     // Before a render that will take hours (a filter set to "error" refuses it), and of
     // non-finite input, as the program warns.
-    std::vector<std::string> warnings = darkroom::cli::non_finite_warnings(in, premultiplied_alpha);
+    std::vector<std::string> warnings = darkroom::cli::non_finite_warnings(*plan, in, full, premultiplied_alpha);
     warnings.push_back(darkroom::long_reference_render_warning(*plan, full, "quality="));
     for (const std::string& warning : warnings)
         if (!warning.empty() && PyErr_WarnEx(PyExc_RuntimeWarning, ("darkroom: " + warning).c_str(), 1) < 0)

@@ -690,6 +690,27 @@ TEST_CASE("non-finite values are counted in the colour and the alpha, not in the
     }
 }
 
+// With --window, only the pixels the render reads are counted: the window and its halo (here
+// none: no MTF, no halation), not a bad pixel elsewhere in the file that cannot reach it.
+TEST_CASE("non-finite values are counted where a window's render reads them", "[cli][batch][bad-input]") {
+    fs::path dir = fresh_dir("non-finite-window");
+    OIIO::ImageBuf plate(OIIO::ImageSpec(16, 12, 3, OIIO::TypeDesc::FLOAT));
+    const float grey[3] = {0.18f, 0.18f, 0.18f}, nan[3] = {NAN, 0.18f, 0.18f};
+    OIIO::ImageBufAlgo::fill(plate, grey);
+    plate.setpixel(3, 4, nan);
+    const std::string in = (dir / "nan.exr").string();
+    REQUIRE(plate.write(in));
+    const std::string flags = " --no-mtf --halation 0 --no-grain --window ";
+    Result r = darkroom("develop " + in + " -o " + (dir / "away.exr").string() + flags + "8,0,8,12");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.output.find("non-finite") == std::string::npos);
+    r = darkroom("develop " + in + " -o " + (dir / "over.exr").string() + flags + "3,4,2,2");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.output.find("1 non-finite colour values") != std::string::npos);
+}
+
 // A multi-part EXR: its first part is developed (as oiiotool reads a file without -a), and the
 // run says the others are not in the output rather than dropping them silently.
 TEST_CASE("a file's parts past the first are named as left out", "[cli][batch][metadata]") {
