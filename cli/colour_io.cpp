@@ -120,9 +120,10 @@ std::string ColourIO::integer_output_warning(const std::string& path, bool integ
            "picture to view, or write a float format such as .exr";
 }
 
-void ColourIO::apply(const ocio::Conversion& conversion, Image& image, int threads) {
-    conversion.apply(ocio::PixelBuffer::packed(image.pixels.data(), image.window.width(), image.window.height(),
-                                               image.channels),
+void ColourIO::apply(const ocio::Conversion& conversion, const ImageView& image, int threads) {
+    // (A buffer of one channel is converted as grey, whatever its stride steps over.)
+    conversion.apply({image.data, image.window.width(), image.window.height(), colour_channel_count(image),
+                      image.pixel_stride, image.row_stride},
                      threads);
 }
 

@@ -36,10 +36,10 @@ public:
     // conversion (or that it is skipped as a no-op) to stderr.
     ColourIO(const ColourOptions& options, OutputMode output, bool verbose);
 
-    // In place, on the first three channels (further channels, e.g. alpha, unchanged), on
-    // `threads` threads (0: all cores).
-    void input_to_working(Image& image, int threads) const { apply(*input_, image, threads); }
-    void result_to_output(Image& image, int threads) const { apply(*output_, image, threads); }
+    // In place, on the colour channels (the first three, or a grey image's one: further
+    // channels, e.g. alpha, unchanged), on `threads` threads (0: all cores).
+    void input_to_working(const ImageView& image, int threads) const { apply(*input_, image, threads); }
+    void result_to_output(Image& image, int threads) const { apply(*output_, image.view(), threads); }
 
     const ocio::ColorConverter& converter() const { return converter_; }
     // The input colour space as given; empty for the working space.
@@ -62,7 +62,7 @@ public:
     const std::string& output_space() const { return output_space_; }
 
 private:
-    static void apply(const ocio::Conversion& conversion, Image& image, int threads);
+    static void apply(const ocio::Conversion& conversion, const ImageView& image, int threads);
 
     ocio::ColorConverter converter_;
     std::string input_space_, output_space_;

@@ -74,6 +74,7 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     const int dx = in.spec.x - in.spec.full_x, dy = in.spec.y - in.spec.full_y;
     ConstImageView view = in.pixels.view();
     view.window = view.window.moved(dx, dy);
+    view.colour_channels = colour_channel_count(in.spec);
     const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width), job.frame);
     const Window out_window = window_flag(o.window, in.pixels.window, "--window").moved(dx, dy);
     // Before the render starts, that a reference render will take long (core/develop.h).

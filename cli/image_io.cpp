@@ -48,6 +48,18 @@ Window window_flag(const std::vector<int>& xywh, const Window& image, const std:
     return w;
 }
 
+int colour_channel_count(const OIIO::ImageSpec& spec) {
+    auto named = [&](int c, const char* name) {
+        const std::string& n = spec.channelnames[size_t(c)];
+        const size_t dot = n.rfind('.');
+        return n.compare(dot == std::string::npos ? 0 : dot + 1, std::string::npos, name) == 0;
+    };
+    const int count = int(spec.channelnames.size());
+    bool chroma = false;
+    for (int c = 0; c < count; ++c) chroma = chroma || named(c, "RY") || named(c, "BY");
+    return count > 0 && named(0, "Y") && !chroma ? 1 : darkroom::colour_channel_count(spec.nchannels);
+}
+
 int premultiplied_alpha_channel(const OIIO::ImageSpec& spec) {
     return spec.alpha_channel >= 0 && spec.get_int_attribute("oiio:UnassociatedAlpha", 0) == 0 ? spec.alpha_channel : -1;
 }
@@ -97,7 +109,7 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
     // The input's channels under their names and roles (a layer's "diffuse.R" stays so). A grey
     // input developed (develop_image's layout) has R, G, B for its one channel of colour, and
     // the channels past it two places on: its depth stays "Z", the z channel, not alpha.
-    const int shift = colour_channel_count(like.nchannels) == 1 && image.channels == like.nchannels + 2 ? 2 : 0;
+    const int shift = colour_channel_count(like) == 1 && image.channels == like.nchannels + 2 ? 2 : 0;
     std::vector<int> from(image.channels);  // the input channel of each output channel, -1: none
     for (int c = 0; c < image.channels; ++c) {
         from[c] = shift > 0 && c < 3 ? -1 : c - shift;

@@ -30,6 +30,11 @@ LoadedImage read_image(const std::string& path);
 // processed nor written (empty when it has one).
 std::string other_subimages_warning(const std::string& path, const LoadedImage& image);
 
+// How many of a file's first channels are colour: one (grey) where the first is named
+// luminance, "Y" or a layer's "<layer>.Y" (a grey plate with alpha and depth: Y, A, Z),
+// unless the file is luminance-chroma (RY, BY); otherwise by the count (core/image.h).
+int colour_channel_count(const OIIO::ImageSpec& spec);
+
 // The channel of an alpha the colour is premultiplied by, -1 for none: OpenImageIO's readers
 // give premultiplied colour (a PNG's or TIFF's straight alpha converted as it is read) unless
 // the spec says "oiio:UnassociatedAlpha".

@@ -150,7 +150,7 @@ void add_plate_grain(const LookOptions& look, Image& out) {
 }  // namespace
 
 FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px) {
-    return FrameGeometry{in.window.width(), in.window.height(), in.channels < 3, in.window.x0, in.window.y0, film_width_px};
+    return FrameGeometry{in.window.width(), in.window.height(), colour_channel_count(in) == 1, in.window.x0, in.window.y0, film_width_px};
 }
 
 Plan PlanCache::plan_for(const FrameGeometry& frame, int frame_number) {
@@ -166,7 +166,7 @@ Plan PlanCache::plan_for(const FrameGeometry& frame, int frame_number) {
 
 std::vector<std::string> non_finite_warnings(const Plan& plan, const ConstImageView& in, const Window& out_window,
                                              int premultiplied_alpha) {
-    const int colour_channels = colour_channel_count(in.channels);
+    const int colour_channels = colour_channel_count(in);
     const Window read = plan.input_window(out_window).intersected(in.window);
     size_t colour = 0, alpha = 0;
     for (int y = read.y0; y < read.y1; ++y)
@@ -189,7 +189,7 @@ Image develop_image(const LookOptions& look, const ColourIO& colour, const Plan&
                     const Window& out_window, int premultiplied_alpha) {
     // RGB, then what the input has past its colour: alpha (grey and alpha input: RGBA) and
     // any further channels.
-    const int colour_channels = colour_channel_count(in.channels);
+    const int colour_channels = colour_channel_count(in);
     const bool premultiplied = premultiplied_alpha >= colour_channels && premultiplied_alpha < in.channels;
     Image out(out_window, 3 + in.channels - colour_channels);
     if (colour.input_conversion().is_noop() && !premultiplied) {
@@ -199,14 +199,16 @@ Image develop_image(const LookOptions& look, const ColourIO& colour, const Plan&
         // full render.
         const Window needed = plan.input_window(out_window);
         Image working(needed, in.channels);
+        ImageView working_view = working.view();
+        working_view.colour_channels = in.colour_channels;
         for (int y = needed.y0; y < needed.y1; ++y)
             for (int x = needed.x0; x < needed.x1; ++x) {
                 float* px = working.at(x, y);
                 std::copy_n(in.at(x, y), in.channels, px);
                 if (premultiplied) unpremultiply(px, colour_channels, px[premultiplied_alpha]);
             }
-        colour.input_to_working(working, look.threads);
-        plan.run(working.view(), out.view(), look.threads);
+        colour.input_to_working(working_view, look.threads);
+        plan.run(working_view, out.view(), look.threads);
     }
     colour.result_to_output(out, look.threads);
     if (!look.grain_profile.empty()) add_plate_grain(look, out);

@@ -198,7 +198,7 @@ struct ExposureRow {
 
 }  // namespace
 
-int colour_channel(const ConstImageView& in, int c) { return colour_channel_count(in.channels) == 3 ? c : 0; }
+int colour_channel(const ConstImageView& in, int c) { return colour_channel_count(in) == 3 ? c : 0; }
 
 double sanitize(float v) {
     simd::Double1 lane{double(v)};
@@ -216,7 +216,7 @@ FilmExposure::FilmExposure(const ConstImageView& in, const std::vector<std::arra
 }
 
 void FilmExposure::row(int y, int x0, int width, float* const* exposure) const {
-    simd::dispatch<ExposureRow>(in_.at(x0, y), int(in_.pixel_stride), colour_channel_count(in_.channels) == 1,
+    simd::dispatch<ExposureRow>(in_.at(x0, y), int(in_.pixel_stride), colour_channel_count(in_) == 1,
                                 colours_, weights_.data(), grey_scale_.data(), layers_, scale_, width, exposure);
 }
 
@@ -241,7 +241,7 @@ void xyz_table_to_rgb(const Table3D& table, const float* const* d, float* const*
 
 void write_row(const float* const* result, size_t planes, const ConstImageView& in, const ImageView& out, int y, int x0,
                int width) {
-    const int alpha = colour_channel_count(in.channels);  // the channel after the colour
+    const int alpha = colour_channel_count(in);  // the channel after the colour
     const bool copy_alpha = alpha < in.channels && out.channels >= 4;
     const float* rows[3];
     for (size_t c = 0; c < 3; ++c) rows[c] = result[std::min(c, planes - 1)];

@@ -67,9 +67,13 @@ struct BasicImageView {
     int channels = 0;
     std::ptrdiff_t pixel_stride = 0;  // floats between horizontally adjacent pixels
     std::ptrdiff_t row_stride = 0;    // floats between vertically adjacent pixels
+    // How many of the first channels are colour, 1 (grey) or 3 (RGB); 0: by the channel
+    // count (colour_channel_count). A file's channel names can say otherwise: a grey plate
+    // with alpha and depth (Y, A, Z) has one.
+    int colour_channels = 0;
 
     // A view of mutable pixels is also a view of constant ones.
-    operator BasicImageView<const T>() const { return {data, window, channels, pixel_stride, row_stride}; }
+    operator BasicImageView<const T>() const { return {data, window, channels, pixel_stride, row_stride, colour_channels}; }
 
     // Pointer to pixel (x, y) in absolute coordinates.
     T* at(int x, int y) const {
@@ -78,6 +82,11 @@ struct BasicImageView {
 };
 using ImageView = BasicImageView<float>;
 using ConstImageView = BasicImageView<const float>;
+
+// How many of a view's first channels are colour; the channel after them is alpha.
+inline int colour_channel_count(const ConstImageView& view) {
+    return view.colour_channels > 0 ? view.colour_channels : colour_channel_count(view.channels);
+}
 
 // Storage whose resize() leaves new floats unset: a stage that writes every pixel of its
 // output plane need not pay for zeroing it first (about a copy pass per plane). Large

@@ -244,15 +244,20 @@ TEST_CASE("a reference render that will take hours says so before it starts", "[
 }
 
 // Alpha (OpenImageIO's convention: premultiplied) is not read as colour: the grey, divided by
-// it, develops as the grey alone would, and is multiplied by it again.
+// it, develops as the grey alone would, and is multiplied by it again. A grey plate with
+// alpha and depth (Y, A, Z: three channels, which by their count alone would be RGB) is grey
+// by its names: the same pixels as Y, A, its depth passed through.
 TEST_CASE("grey and alpha input develops as grey and keeps its alpha, as RGBA", "[cli][batch][metadata]") {
     fs::path dir = fresh_dir("grey-alpha");
     auto alpha_at = [](int x, int y) { return float((x * 7 + y * 3) % 11) / 10.0f; };  // unrelated to the grey, 0 to 1
     auto grey_at = [](int x, int y) { return 0.02f * float(1 + x + y); };
-    auto write_grey = [&](const std::string& path, bool with_alpha) {
-        OIIO::ImageSpec spec(24, 16, with_alpha ? 2 : 1, OIIO::TypeDesc::FLOAT);
-        spec.channelnames = with_alpha ? std::vector<std::string>{"Y", "A"} : std::vector<std::string>{"Y"};
+    auto depth_at = [](int x, int y) { return 100.0f + float(x * 16 + y); };
+    auto write_grey = [&](const std::string& path, const std::vector<std::string>& names) {
+        const bool with_alpha = names.size() > 1;
+        OIIO::ImageSpec spec(24, 16, int(names.size()), OIIO::TypeDesc::FLOAT);
+        spec.channelnames = names;
         spec.alpha_channel = with_alpha ? 1 : -1;
+        spec.z_channel = names.size() > 2 ? 2 : -1;
         OIIO::ImageBuf buf(spec);
         for (OIIO::ImageBuf::Iterator<float> p(buf); !p.done(); ++p) {
             const float a = alpha_at(p.x(), p.y());
@@ -260,14 +265,17 @@ TEST_CASE("grey and alpha input develops as grey and keeps its alpha, as RGBA", 
             // is not: undivided, then multiplied by 0).
             p[0] = with_alpha ? grey_at(p.x(), p.y()) * (a > 0 ? a : 1.0f) : grey_at(p.x(), p.y());
             if (with_alpha) p[1] = a;
+            if (names.size() > 2) p[2] = depth_at(p.x(), p.y());
         }
         REQUIRE(buf.write(path));
     };
-    const std::string ya = (dir / "ya.exr").string(), y = (dir / "y.exr").string();
-    write_grey(ya, true);
-    write_grey(y, false);
-    const std::string out_ya = (dir / "out-ya.exr").string(), out_y = (dir / "out-y.exr").string();
-    for (const auto& [in, out] : {std::make_pair(ya, out_ya), std::make_pair(y, out_y)}) {
+    const std::string ya = (dir / "ya.exr").string(), y = (dir / "y.exr").string(), yaz = (dir / "yaz.exr").string();
+    write_grey(ya, {"Y", "A"});
+    write_grey(y, {"Y"});
+    write_grey(yaz, {"Y", "A", "Z"});
+    const std::string out_ya = (dir / "out-ya.exr").string(), out_y = (dir / "out-y.exr").string(),
+                      out_yaz = (dir / "out-yaz.exr").string();
+    for (const auto& [in, out] : {std::make_pair(ya, out_ya), std::make_pair(y, out_y), std::make_pair(yaz, out_yaz)}) {
         Result r = darkroom("develop " + in + " -o " + out + kLook);
         INFO(r.output);
         REQUIRE(r.exit_code == 0);
@@ -285,6 +293,17 @@ TEST_CASE("grey and alpha input develops as grey and keeps its alpha, as RGBA", 
         // (c a) / a may differ from c in the last bit, and the film carries that through.
         for (int c = 0; c < 3; ++c) REQUIRE(rgba[i * 4 + c] == Approx(rgb[i * 3 + c] * a).epsilon(1e-5).margin(1e-7));
         if (a == 0) REQUIRE(rgba[i * 4] == 0.0f);
+    }
+    file = OIIO::ImageInput::open(out_yaz);
+    REQUIRE(file);
+    CHECK(file->spec().channelnames == std::vector<std::string>{"R", "G", "B", "A", "Z"});
+    CHECK(file->spec().alpha_channel == 3);
+    CHECK(file->spec().z_channel == 4);
+    const std::vector<float> rgbaz = pixels(out_yaz);
+    REQUIRE(rgbaz.size() == 24 * 16 * 5);
+    for (int i = 0; i < 24 * 16; ++i) {
+        for (int c = 0; c < 4; ++c) REQUIRE(rgbaz[i * 5 + c] == rgba[i * 4 + c]);
+        REQUIRE(rgbaz[i * 5 + 4] == depth_at(i % 24, i / 24));
     }
 }
 
@@ -384,7 +403,8 @@ TEST_CASE("the output's channels keep the input's names", "[cli][batch][metadata
                           Case{{"R", "G", "B", "A", "diffuse.R", "diffuse.G", "diffuse.B"},
                                {"R", "G", "B", "A", "diffuse.R", "diffuse.G", "diffuse.B"}, 3, -1},
                           Case{{"Y", "Z"}, {"R", "G", "B", "Z"}, -1, 3},
-                          Case{{"Y", "A"}, {"R", "G", "B", "A"}, 3, -1}}) {
+                          Case{{"Y", "A"}, {"R", "G", "B", "A"}, 3, -1},
+                          Case{{"Y", "A", "Z"}, {"R", "G", "B", "A", "Z"}, 3, 4}}) {
         const Names& names = c.in;
         OIIO::ImageSpec spec(12, 8, int(names.size()), OIIO::TypeDesc::FLOAT);
         spec.channelnames = names;
