@@ -49,15 +49,12 @@ Window window_flag(const std::vector<int>& xywh, const Window& image, const std:
 }
 
 int colour_channel_count(const OIIO::ImageSpec& spec) {
-    auto named = [&](int c, const char* name) {
-        const std::string& n = spec.channelnames[size_t(c)];
-        const size_t dot = n.rfind('.');
-        return n.compare(dot == std::string::npos ? 0 : dot + 1, std::string::npos, name) == 0;
-    };
-    const int count = int(spec.channelnames.size());
-    bool chroma = false;
-    for (int c = 0; c < count; ++c) chroma = chroma || named(c, "RY") || named(c, "BY");
-    return count > 0 && named(0, "Y") && !chroma ? 1 : darkroom::colour_channel_count(spec.nchannels);
+    // A channel's name without its layer ("diffuse.Y": "Y"; npos + 1 is 0).
+    auto base = [](const std::string& name) { return name.substr(name.rfind('.') + 1); };
+    const std::vector<std::string>& names = spec.channelnames;
+    const bool chroma = std::any_of(names.begin(), names.end(),
+                                    [&](const std::string& n) { return base(n) == "RY" || base(n) == "BY"; });
+    return !names.empty() && base(names[0]) == "Y" && !chroma ? 1 : darkroom::colour_channel_count(spec.nchannels);
 }
 
 int premultiplied_alpha_channel(const OIIO::ImageSpec& spec) {
