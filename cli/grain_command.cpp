@@ -10,6 +10,7 @@
 #include "cli/commands.h"
 #include "cli/atomic_file.h"
 #include "cli/image_io.h"
+#include "cli/look_options.h"
 #include "core/plate/grain_analysis.h"
 #include "core/plate/grain_compare.h"
 #include "core/plate/grain_prediction.h"
@@ -129,9 +130,8 @@ GrainProfile analyze_files(const std::vector<std::string>& paths, const AnalyzeO
     settings.colorspace = o.colorspace;
     for (const std::string& p : paths) images.push_back(read_plate(p));
     const OIIO::ImageSpec& first = images.front().spec;
-    // Colour channels only: alpha carries no grain.
-    settings.channels = first.alpha_channel >= 0 ? std::min(first.alpha_channel, first.nchannels) : first.nchannels;
-    if (settings.channels == 0) settings.channels = first.nchannels;
+    // The colour channels only (as develop reads them): alpha and depth carry no grain.
+    settings.channels = colour_channel_count(first);
     for (int c = 0; c < settings.channels && c < (int)first.channelnames.size(); ++c)
         settings.channel_names.push_back(first.channelnames[c]);
     // The encoding: as given, else as --iscolorspace names it, else as the file's own tag does
@@ -262,19 +262,18 @@ void run_apply(const ApplyOptions& o) {
     LoadedImage in = read_plate(o.input);
     if (const std::string w = other_subimages_warning(o.input, in); !w.empty())
         std::cerr << "darkroom: warning: " << w << "\n";
-    if (in.pixels.channels < (int)profile.channels.size())
-        throw UserError("'" + o.profile + "' has " + std::to_string(profile.channels.size()) + " channels, '" + o.input +
-                        "' only " + std::to_string(in.pixels.channels));
     // Grain on the light, not on light times coverage: premultiplied colour is divided by its
     // alpha first and multiplied back after, so where an element is transparent it adds no
     // grain over the plate it is comped onto (as develop does).
-    const int colours = int(profile.channels.size()), alpha = premultiplied_alpha_channel(in.spec);
+    ImageView view = in.pixels.view();
+    view.colour_channels = colour_channel_count(in.spec);
+    const int colours = view.colour_channels, alpha = premultiplied_alpha_channel(in.spec);
     const bool premultiplied = alpha >= colours && alpha < in.pixels.channels;
     auto each_pixel = [&](auto&& f) {
         for (size_t i = 0; i < in.pixels.pixels.size(); i += in.pixels.channels) f(&in.pixels.pixels[i]);
     };
     if (premultiplied) each_pixel([&](float* px) { unpremultiply(px, colours, px[alpha]); });
-    apply_grain_profile(profile, in.pixels.view(), o.seed, o.frame, o.threads);
+    apply_plate_grain(profile, o.profile, view, o.seed, o.frame, o.threads);
     if (premultiplied) each_pixel([&](float* px) { premultiply(px, colours, px[alpha]); });
     write_image(o.output, in.pixels, in.spec, o.input);
 }

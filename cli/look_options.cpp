@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <stdexcept>
 
 #include "cli/user_error.h"
 #include "core/plate/grain_synthesis.h"
@@ -125,6 +126,15 @@ Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {
     }
 }
 
+void apply_plate_grain(const GrainProfile& profile, const std::string& profile_path, const ImageView& image,
+                       uint64_t seed, int frame, int threads) {
+    try {
+        apply_grain_profile(profile, image, seed, frame, threads);
+    } catch (const std::invalid_argument& e) {
+        throw UserError("'" + profile_path + "': " + e.what());
+    }
+}
+
 namespace {
 
 // The plate's grain on the result, keyed like the film grain (seed, frame, absolute pixel).
@@ -142,9 +152,7 @@ void add_plate_grain(const LookOptions& look, Image& out) {
     if (look.verbose)
         std::cerr << "grain: plate profile " << look.grain_profile << " (" << encoding_name(profile.encoding)
                   << (profile.colorspace.empty() ? "" : ", " + profile.colorspace) << ") replaces the stock's grain\n";
-    if (int(profile.channels.size()) > out.channels)
-        throw UserError("the grain profile '" + look.grain_profile + "' has more channels than the image");
-    apply_grain_profile(profile, out.view(), look.settings.seed, look.settings.frame, look.threads);
+    apply_plate_grain(profile, look.grain_profile, out.view(), look.settings.seed, look.settings.frame, look.threads);
 }
 
 }  // namespace

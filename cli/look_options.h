@@ -19,6 +19,7 @@
 
 #include "cli/colour_io.h"
 #include "core/develop.h"
+#include "core/plate/grain_profile.h"
 
 namespace darkroom::cli {
 
@@ -92,6 +93,11 @@ private:
 // The one path for the program and the Python module.
 Image develop_image(const LookOptions& look, const ColourIO& colour, const Plan& plan, const ConstImageView& in,
                     const Window& out_window, int premultiplied_alpha = -1);
+
+// A plate's grain profile (read from `profile_path`) on the colour channels of `image`
+// (apply_grain_profile); a profile of other channels is the user's error, naming the file.
+void apply_plate_grain(const GrainProfile& profile, const std::string& profile_path, const ImageView& image,
+                       uint64_t seed, int frame, int threads);
 
 // What to warn of for the values that film reads and that are not finite, with how it takes
 // them: in the pixels of `in` that the plan reads for `out_window` (the window and its halo),

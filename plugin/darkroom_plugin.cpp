@@ -28,6 +28,7 @@
 #include <new>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/develop.h"
 #include "core/plane_memory.h"
@@ -489,8 +490,11 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     if (!settings.grain_profile.empty()) {
         try {
             plate_grain = plan_grain_synthesis(load_grain_profile_file(settings.grain_profile));
+            require_profile_fits(int(plate_grain->profile.channels.size()), 3);  // (the output's RGB)
         } catch (const GrainProfileError& e) {
             throw ParameterError(std::string("Grain profile: ") + e.what());
+        } catch (const std::invalid_argument& e) {
+            throw ParameterError(std::string("Grain profile '") + settings.grain_profile + "': " + e.what());
         }
     }
     job.plate_grain = plate_grain ? &*plate_grain : nullptr;

@@ -64,12 +64,17 @@ GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile) {
     return plan;
 }
 
+void require_profile_fits(int profile_channels, int colour_channels) {
+    if (profile_channels != colour_channels && profile_channels != 1)
+        throw std::invalid_argument("the grain profile has " + std::to_string(profile_channels) + " channels, the image " +
+                                    std::to_string(colour_channels) + " colour channel" + (colour_channels == 1 ? "" : "s") +
+                                    " (a profile of the same channels, or a grey one, is needed)");
+}
+
 void apply_grain_profile(const GrainSynthesisPlan& plan, const ImageView& image, uint64_t seed, int frame,
                          int threads) {
-    const int n = (int)plan.profile.channels.size();
-    if (image.channels < n)
-        throw std::invalid_argument("the grain profile has " + std::to_string(n) + " channels, the image only " +
-                                    std::to_string(image.channels));
+    const int n = (int)plan.profile.channels.size(), colours = colour_channel_count(image);
+    require_profile_fits(n, colours);
     const Window w = image.window;
     if (w.empty()) return;
     const Window noise_window = w.grown(plan.halo_px);
@@ -88,20 +93,23 @@ void apply_grain_profile(const GrainSynthesisPlan& plan, const ImageView& image,
                 }
             }
     });
+    // A grey profile on a colour image: its one field on every colour channel (a black-and-white
+    // plate's grain is the same silver in each), scaled at each channel's own level.
+    const int channels_per_field = colours / n;
     parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
         for (int y = y_begin; y < y_end; ++y)
             for (int x = w.x0; x < w.x1; ++x) {
                 float* px = image.at(x, y);
-                for (int c = 0; c < n; ++c) {
-                    if (!std::isfinite(px[c])) continue;
-                    const GrainKernel& k = plan.kernels[c];
+                for (int f = 0; f < n; ++f) {
+                    const GrainKernel& k = plan.kernels[f];
                     double g = 0;
                     for (int dy = -k.radius; dy <= k.radius; ++dy) {
-                        const float* row = mixed[c].row(y + dy) + (x - noise_window.x0);
+                        const float* row = mixed[f].row(y + dy) + (x - noise_window.x0);
                         const double* taps = &k.taps[(size_t)(dy + k.radius) * (2 * k.radius + 1) + k.radius];
                         for (int dx = -k.radius; dx <= k.radius; ++dx) g += taps[dx] * row[dx];
                     }
-                    px[c] = float(px[c] + plan.profile.channels[c].sigma_at(px[c]) * g);
+                    for (int c = f * channels_per_field; c < (f + 1) * channels_per_field; ++c)
+                        if (std::isfinite(px[c])) px[c] = float(px[c] + plan.profile.channels[f].sigma_at(px[c]) * g);
                 }
             }
     });

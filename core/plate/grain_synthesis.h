@@ -31,10 +31,15 @@ struct GrainSynthesisPlan {
 
 GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile);
 
-// Adds grain to the first profile.channels.size() channels of `image` in place (further
-// channels, e.g. alpha, are left alone). `image.window` is its place in the frame. Pixels
-// are read only at their own position, so the caller needs no image halo; non-finite
-// pixels are left unchanged. Throws std::invalid_argument if the image has fewer channels.
+// Throws std::invalid_argument naming both counts unless a profile of `profile_channels`
+// channels can grain an image of `colour_channels` colour channels (as many, or one).
+void require_profile_fits(int profile_channels, int colour_channels);
+
+// Adds grain to the colour channels of `image` in place (colour_channel_count: further
+// channels, e.g. alpha and depth, are left alone): a profile of as many channels, one per
+// channel, or a grey profile (one channel), its one field on each. `image.window` is its
+// place in the frame. Pixels are read only at their own position, so the caller needs no
+// image halo; non-finite pixels are left unchanged. Throws as require_profile_fits.
 void apply_grain_profile(const GrainSynthesisPlan& plan, const ImageView& image, uint64_t seed, int frame,
                          int threads);
 void apply_grain_profile(const GrainProfile& profile, const ImageView& image, uint64_t seed, int frame, int threads);

@@ -257,6 +257,74 @@ TEST_CASE("grain apply to a grey plate keeps its channel", "[cli][grain][metadat
     CHECK(after != before);  // grained
 }
 
+// Only the colour channels carry grain: a plate's depth is neither analysed (an RGB plate
+// with Z gives the RGB plate's profile, a grey one with Z the grey one's) nor grained; a grey
+// profile grains each channel of a colour result; a profile of other channels is refused.
+TEST_CASE("grain analyze and apply take a plate's colour channels, not its depth", "[cli][grain]") {
+    const std::string clean = make_patches("grain-depth-clean.exr"), rgb_profile = (kTmp / "depth-rgb.json").string(),
+                      rgb_plate = (kTmp / "grain-depth-plate.exr").string();
+    REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + rgb_profile).exit_code == 0);
+    REQUIRE(darkroom("grain apply " + clean + " --profile " + rgb_profile + " -o " + rgb_plate + " --seed 8").exit_code == 0);
+    // The plate's channels, with a depth ramp appended as Z.
+    auto with_depth = [](const std::string& from, std::vector<int> channels, std::vector<std::string> names,
+                         const std::string& name) {
+        OIIO::ImageBuf colour = OIIO::ImageBufAlgo::channels(OIIO::ImageBuf(from), int(channels.size()), channels, {}, names);
+        OIIO::ImageBuf depth(OIIO::ImageSpec(colour.spec().width, colour.spec().height, 1, OIIO::TypeDesc::FLOAT));
+        OIIO::ImageBufAlgo::fill(depth, {1.0f}, {1e4f}, {1.0f}, {1e4f});
+        depth.specmod().channelnames = {"Z"};
+        const std::string plain = (kTmp / ("plain-" + name)).string(), deep = (kTmp / name).string();
+        REQUIRE(colour.write(plain));
+        REQUIRE(OIIO::ImageBufAlgo::channel_append(colour, depth).write(deep));
+        return std::make_pair(plain, deep);
+    };
+    auto channels_of = [](const std::string& profile) {
+        std::ifstream f(profile);
+        return nlohmann::json::parse(f)["channels"];
+    };
+    for (const auto& [channels, names] :
+         {std::make_pair(std::vector<int>{0, 1, 2}, std::vector<std::string>{"R", "G", "B"}),
+          std::make_pair(std::vector<int>{1}, std::vector<std::string>{"Y"})}) {
+        const auto [plain, deep] = with_depth(rgb_plate, channels, names, "grain-depth-" + names[0] + ".exr");
+        const std::string plain_profile = plain + ".json", deep_profile = deep + ".json";
+        REQUIRE(darkroom("grain analyze " + plain + " -o " + plain_profile).exit_code == 0);
+        Result r = darkroom("grain analyze " + deep + " -o " + deep_profile);
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+        CHECK(channels_of(deep_profile).size() == names.size());
+        CHECK(channels_of(deep_profile) == channels_of(plain_profile));
+    }
+
+    // A colour profile on a grey element: refused, naming the profile; nothing written.
+    const std::string grey_element = with_depth(clean, {1}, {"Y"}, "grain-depth-grey-element.exr").second,
+                      never = (kTmp / "never-grained.exr").string();
+    fs::remove(never);
+    Result r = darkroom("grain apply " + grey_element + " --profile " + rgb_profile + " -o " + never);
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains(rgb_profile) && Catch::Contains("1 colour channel"));
+    CHECK_FALSE(fs::exists(never));
+    // A grey profile on it grains Y alone, its depth untouched.
+    const std::string grey_profile = (kTmp / "grain-depth-Y.exr.json").string(), grained = (kTmp / "grain-depth-grey-out.exr").string();
+    REQUIRE(darkroom("grain apply " + grey_element + " --profile " + grey_profile + " -o " + grained).exit_code == 0);
+    const std::vector<float> before = pixels(grey_element), after = pixels(grained);
+    REQUIRE(after.size() == before.size());
+    size_t grained_y = 0;
+    for (size_t i = 0; i < after.size(); i += 2) {
+        grained_y += after[i] != before[i];
+        REQUIRE(after[i + 1] == before[i + 1]);
+    }
+    CHECK(grained_y > before.size() / 4);
+    // And on the program's RGB print, on each of its channels (not the first alone).
+    const std::string in = make_input("grain-depth-develop.exr"), print = (kTmp / "grain-depth-print.exr").string(),
+                      print_grained = (kTmp / "grain-depth-print-grained.exr").string();
+    REQUIRE(darkroom("develop " + in + " -o " + print + " --no-grain").exit_code == 0);
+    REQUIRE(darkroom("develop " + in + " -o " + print_grained + " --grain-profile " + grey_profile).exit_code == 0);
+    const std::vector<float> plain_print = pixels(print), grained_print = pixels(print_grained);
+    REQUIRE(plain_print.size() == grained_print.size());
+    size_t changed[3] = {0, 0, 0};
+    for (size_t i = 0; i < plain_print.size(); ++i) changed[i % 3] += plain_print[i] != grained_print[i];
+    for (size_t c : changed) CHECK(c > plain_print.size() / 3 / 2);
+}
+
 // Without --encoding or --iscolorspace, the plate's own tag decides its encoding: a log DPX
 // scan (OpenImageIO's "KodakLog") is log, where an untagged integer file is display.
 TEST_CASE("grain analyze takes a plate's encoding from its colour-space tag", "[cli][grain]") {

@@ -83,7 +83,8 @@ TEST_CASE("synthesised grain is a function of seed, frame and absolute pixel onl
     CHECK(other_seed.pixels != full.pixels);
 }
 
-TEST_CASE("synthesis leaves non-finite pixels alone and refuses too few channels", "[plate][synthesis][bad-input]") {
+TEST_CASE("synthesis leaves non-finite pixels alone and refuses a profile of other channels",
+          "[plate][synthesis][bad-input]") {
     GrainProfile p = known_profile({{0.01, 0.0, 1.0, 0.0}}, {1}, SignalEncoding::linear, 0.0, 1.0);
     Image img(8, 8, 1, 0.5f);
     img.at(3, 3)[0] = NAN;
@@ -93,4 +94,46 @@ TEST_CASE("synthesis leaves non-finite pixels alone and refuses too few channels
     GrainProfile rgb = known_profile({{0.01, 0, 1, 0}, {0.01, 0, 1, 0}, {0.01, 0, 1, 0}}, {1, 0, 0, 0, 1, 0, 0, 0, 1},
                                      SignalEncoding::linear, 0.0, 1.0);
     CHECK_THROWS_AS(apply_grain_profile(rgb, img.view(), 1, 0, 1), std::invalid_argument);
+    // Grey with alpha and depth (Y, A, Z): one colour channel, whatever the count.
+    Image grey_alpha_depth(8, 8, 3, 0.5f);
+    ImageView view = grey_alpha_depth.view();
+    view.colour_channels = 1;
+    CHECK_THROWS_AS(apply_grain_profile(rgb, view, 1, 0, 1), std::invalid_argument);
+    GrainProfile two = known_profile({{0.01, 0, 1, 0}, {0.01, 0, 1, 0}}, {1, 0, 0, 1}, SignalEncoding::linear, 0.0, 1.0);
+    Image colour(8, 8, 3, 0.5f);
+    CHECK_THROWS_AS(apply_grain_profile(two, colour.view(), 1, 0, 1), std::invalid_argument);
+}
+
+// A black-and-white plate's grain on a colour element (a CG render comped into a black-and-
+// white plate, or the program's RGB print): the one field on each colour channel, at each
+// channel's level; the channels past the colour untouched.
+TEST_CASE("a grey profile grains every colour channel with its one field", "[plate][synthesis]") {
+    GrainProfile grey = known_profile({{0.01, 0.02, 1.0, 0.5}}, {1}, SignalEncoding::linear, 0.0, 1.0);
+    Image one(48, 40, 1, 0.3f);
+    apply_grain_profile(grey, one.view(), 9, 2, 2);
+    Image rgba(48, 40, 4, 0.3f);
+    for (int y = 0; y < 40; ++y)
+        for (int x = 0; x < 48; ++x) rgba.at(x, y)[2] = 0.6f;  // blue at another level
+    apply_grain_profile(grey, rgba.view(), 9, 2, 2);
+    Image grey_alpha_depth(48, 40, 3, 0.3f);
+    ImageView view = grey_alpha_depth.view();
+    view.colour_channels = 1;
+    apply_grain_profile(grey, view, 9, 2, 2);
+    const GrainChannel& ch = grey.channels[0];
+    int differing_sigma = 0;
+    for (int y = 0; y < 40; ++y)
+        for (int x = 0; x < 48; ++x) {
+            const float* px = rgba.at(x, y);
+            REQUIRE(px[0] == one.at(x, y)[0]);  // red and green: the grey image's pixel, bit for bit
+            REQUIRE(px[1] == one.at(x, y)[0]);
+            CHECK(px[3] == 0.3f);  // alpha untouched
+            // Blue: the same unit field, at its own level's sigma.
+            const double field = (one.at(x, y)[0] - 0.3) / ch.sigma_at(0.3);
+            CHECK(px[2] - 0.6 == Approx(ch.sigma_at(0.6) * field).margin(1e-6));
+            differing_sigma += px[2] - 0.6f != px[0] - 0.3f;
+            REQUIRE(grey_alpha_depth.at(x, y)[0] == one.at(x, y)[0]);
+            CHECK(grey_alpha_depth.at(x, y)[1] == 0.3f);
+            CHECK(grey_alpha_depth.at(x, y)[2] == 0.3f);
+        }
+    CHECK(differing_sigma > 1000);
 }

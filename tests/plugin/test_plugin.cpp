@@ -1,6 +1,7 @@
 // The OpenFX bundle, loaded by a test host exactly as a compositing host loads it.
 #include <OpenImageIO/imagebuf.h>
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 #include <algorithm>
 
 #include <cmath>
@@ -695,4 +696,19 @@ TEST_CASE("a grain profile replaces the stock's grain as darkroom develop --grai
     RenderResult bad = inst->render(9, {0, 0, w, h});
     CHECK(bad.status == kOfxStatFailed);
     CHECK_THAT(inst->effect().persistent_message, Catch::Contains("nonexistent-profile.json"));
+    // A profile of two channels fits neither the output's RGB nor a grey image: refused at
+    // once, naming it (not applied to red and green).
+    nlohmann::json two;
+    {
+        std::ifstream f(profile);
+        two = nlohmann::json::parse(f);
+    }
+    two["channels"].erase(2);
+    two["channel_correlation"] = {{1.0, 1.0}, {1.0, 1.0}};
+    const std::string two_path = (fs::path(DARKROOM_TEST_TMP) / "plugin-profile-two.json").string();
+    std::ofstream(two_path) << two.dump();
+    inst->set_string("grainProfile", two_path);
+    bad = inst->render(9, {0, 0, w, h});
+    CHECK(bad.status == kOfxStatFailed);
+    CHECK_THAT(inst->effect().persistent_message, Catch::Contains(two_path) && Catch::Contains("2 channels"));
 }
