@@ -180,6 +180,7 @@ std::string failure_summary(const std::vector<FrameReport>& reports, size_t tota
 }
 
 void check_output_format(const DevelopOptions& o) {
+    require_known_compression(o.output, o.write.compression);
     // Densities run past 1 D: a file of integers (PNG whatever -d says, -d uint16) clips them.
     if (o.look.settings.output == OutputMode::density && writes_integers(o.output, o.write))
         throw UserError("--output density writes float densities: give a float format such as .exr or .tif (and -d "

@@ -3,6 +3,7 @@
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/strutil.h>
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 
 #include "cli/atomic_file.h"
@@ -66,10 +67,52 @@ static bool same_file(const std::string& a, const std::string& b) {
     return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
 }
 
-bool is_float_format(const std::string& path) {
+namespace {
+
+std::string lower_extension(const std::string& path) {
     std::string ext = fs::path(path).extension().string();
     for (char& c : ext) c = char(std::tolower((unsigned char)c));
+    return ext;
+}
+
+}  // namespace
+
+bool is_float_format(const std::string& path) {
+    const std::string ext = lower_extension(path);
     return ext == ".exr" || ext == ".tif" || ext == ".tiff" || ext == ".hdr";
+}
+
+void require_known_compression(const std::string& path, const std::string& compression) {
+    if (compression.empty()) return;
+    // The names OpenImageIO's writers take (its documentation, "Bundled ImageIO Plugins"),
+    // and those that take a :level (zip's 1-9, DWA's, JPEG's quality); an unknown name
+    // would be written as zip without a word. TIFF's ccittrle is for 1-bit images only.
+    struct Format {
+        const char* name;
+        std::vector<std::string> names, with_level;
+    };
+    static const Format exr{"OpenEXR", {"none", "rle", "zip", "zips", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab"},
+                            {"zip", "zips", "dwaa", "dwab"}};
+    static const Format tiff{"TIFF", {"none", "lzw", "zip", "deflate", "packbits", "jpeg"}, {"zip", "deflate", "jpeg"}};
+    const std::string ext = lower_extension(path);
+    const Format* format = ext == ".exr" ? &exr : ext == ".tif" || ext == ".tiff" ? &tiff : nullptr;
+    if (!format) return;  // (other formats' writers take their own names, or none)
+    const size_t colon = compression.find(':');
+    const std::string name = compression.substr(0, colon), level = colon == std::string::npos ? "" : compression.substr(colon + 1);
+    auto listed = [](const std::vector<std::string>& names, const std::string& n) {
+        return std::find(names.begin(), names.end(), n) != names.end();
+    };
+    auto join = [](const std::vector<std::string>& names) { return OIIO::Strutil::join(names, ", "); };
+    if (!listed(format->names, name))
+        throw UserError("--compression '" + compression + "' is not one of " + format->name + "'s: " + join(format->names));
+    if (colon == std::string::npos) return;
+    char* end = nullptr;
+    const double value = std::strtod(level.c_str(), &end);
+    if (!listed(format->with_level, name) || level.empty() || *end != '\0' || !(value > 0))
+        throw UserError("--compression '" + compression + "': " +
+                        (listed(format->with_level, name) ? "the level after ':' must be a number above 0"
+                                                          : "'" + name + "' takes no level (" + join(format->with_level) +
+                                                                " do)"));
 }
 
 void require_writable(const std::string& path) {

@@ -43,6 +43,11 @@ int premultiplied_alpha_channel(const OIIO::ImageSpec& spec);
 // Whether the file's format (by its extension) stores float pixels: .exr, .tif, .hdr.
 bool is_float_format(const std::string& path);
 
+// Throws UserError for a --compression that the output's format (OpenEXR or TIFF, by the
+// extension) has no such name for, or a level where it takes none: OpenImageIO would write
+// its default instead. Other formats' names are left to their writers.
+void require_known_compression(const std::string& path, const std::string& compression);
+
 // How an output is encoded and what it says about itself.
 struct WriteOptions {
     std::string data_type;     // -d: uint8, uint16, half, float; empty: float for float formats, else uint16

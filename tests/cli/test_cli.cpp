@@ -63,6 +63,42 @@ TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[c
     CHECK_FALSE(fs::exists(out));
 }
 
+// OpenImageIO writes an unknown compression name as zip without a word: the names of the
+// output's format are checked before any work (and a level only where one is taken), and
+// each named one is what the file gets.
+TEST_CASE("--compression takes the output format's names and is written as given", "[cli][bad-input][metadata]") {
+    const std::string in = make_input("compression-in.exr"), never = (kTmp / "never-compressed.exr").string();
+    fs::remove(never);
+    for (const auto& [flag, message] : std::vector<std::pair<std::string, std::string>>{
+             {"bogus", "--compression 'bogus' is not one of OpenEXR's: none, rle, zip"},
+             {"lzw", "is not one of OpenEXR's"},
+             {"piz:3", "'piz' takes no level"},
+             {"dwaa:fast", "the level after ':' must be a number above 0"},
+             {"zip:", "the level after ':' must be a number above 0"}}) {
+        Result r = darkroom("develop " + in + " -o " + never + " --compression " + flag);
+        INFO(flag << "\n" << r.output);
+        CHECK(r.exit_code == 1);
+        CHECK_THAT(r.output, Catch::Contains(message));
+        CHECK_FALSE(fs::exists(never));
+    }
+    Result r = darkroom("develop " + in + " -o " + (kTmp / "never.tif").string() + " --compression b44");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("is not one of TIFF's"));
+    for (const auto& [name, flag, written] :
+         {std::tuple<std::string, std::string, std::string>{"compressed.exr", "dwab:60", "dwab"},
+          {"compressed.exr", "zips", "zips"},
+          {"compressed.tif", "lzw", "lzw"},
+          {"compressed.tif", "deflate:6", "zip"}}) {
+        const std::string out = (kTmp / name).string();
+        r = darkroom("develop " + in + " -o " + out + " --compression " + flag);
+        INFO(flag << "\n" << r.output);
+        REQUIRE(r.exit_code == 0);
+        auto file = OIIO::ImageInput::open(out);
+        REQUIRE(file);
+        CHECK(file->spec().get_string_attribute("compression") == written);
+    }
+}
+
 // An output that cannot be written is found before any frame is read or developed (a frame's
 // failure is reported as "frame N ... failed"), so a farm job fails at once, not after a frame.
 TEST_CASE("an unwritable output is refused before any frame is developed", "[cli][bad-input]") {
