@@ -66,7 +66,7 @@ TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[c
 // OpenImageIO writes an unknown compression name as zip without a word: the names of the
 // output's format are checked before any work (and a level only where one is taken), and
 // each named one is what the file gets.
-TEST_CASE("--compression takes the output format's names and is written as given", "[cli][bad-input][metadata]") {
+TEST_CASE("a compression is one of the output format's names and is written as given", "[cli][bad-input][metadata]") {
     const std::string in = make_input("compression-in.exr"), never = (kTmp / "never-compressed.exr").string();
     fs::remove(never);
     for (const auto& [flag, message] : std::vector<std::pair<std::string, std::string>>{
