@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <type_traits>
 #include <utility>
 
@@ -24,12 +25,13 @@ constexpr double kScanBaseCode = 95.0, kScanDensityPerCode = 0.002, kScanFullCod
 // (core/simd.h), one piece of code for the vector blocks and the scalar tails, so every
 // machine gets the same exposures.
 
-// NaN is 0; the rest is held within +-kMaxInput (floats or doubles).
+// NaN and -Inf are 0 (no light in their channel, not a layer driven to none by the mix);
+// the rest is held within +-kMaxInput (floats or doubles).
 template <typename V>
 __attribute__((always_inline)) inline void sanitize_lanes(V& v) {
     using T = std::remove_reference_t<decltype(v[0])>;
     constexpr T max = T(kMaxInput);
-    v = v == v ? v : V{};
+    v = v == v && v != -std::numeric_limits<T>::infinity() ? v : V{};
     v = v < -max ? V{} - max : v;
     v = max < v ? V{} + max : v;
 }

@@ -12,14 +12,14 @@
 
 namespace darkroom {
 
-// Input values beyond this magnitude (and +-Inf) are held at it; NaN counts as 0.
+// Input values beyond this magnitude (and +Inf) are held at it; NaN and -Inf count as 0.
 constexpr double kMaxInput = 1e30;
 
 // The input channel that holds colour channel c (R, G, B): grey input (one channel, or grey
 // and alpha) holds all three in its first.
 int colour_channel(const ConstImageView& in, int c);
 
-// An input value as the film sees it: NaN is 0, the rest held within +-kMaxInput.
+// An input value as the film sees it: NaN and -Inf are 0, the rest held within +-kMaxInput.
 double sanitize(float v);
 
 // Each film layer's exposure from rows of the input: the row's colour channels sanitised,

@@ -53,10 +53,10 @@ std::vector<float> bad_values(int decade_step = 1) {
     return v;
 }
 
-// What the documented treatment makes of an input value: NaN is 0 and values beyond
-// +-1e30 (the infinities too) are +-1e30. A negative value is kept, as part of an
-// out-of-gamut colour; the layer exposure it gives is then held at 0.
-float treated(float v) { return std::isnan(v) ? 0.0f : std::clamp(v, -1e30f, 1e30f); }
+// What the documented treatment makes of an input value: NaN and -Inf are 0 (no light in
+// their channel) and values beyond +-1e30 (+Inf too) are +-1e30. A negative value is kept,
+// as part of an out-of-gamut colour; the layer exposure it gives is then held at 0.
+float treated(float v) { return std::isnan(v) || v == -kInf ? 0.0f : std::clamp(v, -1e30f, 1e30f); }
 
 // Column i holds values[i]; row 0 in every channel, rows 1-3 in channel row-1 only, the
 // other channels a mid grey. The alpha channel (when there is one) holds the value too.
