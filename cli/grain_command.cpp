@@ -2,6 +2,7 @@
 // plate's grain per channel (core/plate/grain_analysis.h), puts grain with those
 // statistics on clean images (grain_synthesis.h), checks how well two grains match
 // (grain_compare.h), and predicts a profile from a stock and a scan (grain_prediction.h).
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -9,6 +10,7 @@
 #include "cli/chart.h"
 #include "cli/commands.h"
 #include "cli/atomic_file.h"
+#include "cli/batch.h"
 #include "cli/image_io.h"
 #include "cli/look_options.h"
 #include "core/plate/grain_analysis.h"
@@ -244,12 +246,41 @@ void run_analyze(const AnalyzeOptions& o) {
 }
 
 struct ApplyOptions {
-    std::string input, output, profile, colorspace;
+    BatchOptions batch;
+    std::string profile, colorspace;
     uint64_t seed = 0;
     int frame = 0, threads = 0;
 };
 
-void run_apply(const ApplyOptions& o) {
+// Grain on the light, not on light times coverage: premultiplied colour is divided by its
+// alpha first and multiplied back after, so where an element is transparent it adds no grain
+// over the plate it is comped onto (as develop does).
+void apply_frame(const ApplyOptions& o, const GrainProfile& profile, const FrameJob& job, int threads,
+                 FrameReport& report, Progress& progress) {
+    auto start = std::chrono::steady_clock::now();
+    LoadedImage in = read_plate(job.input);
+    report.read_seconds = seconds_since(start);
+    if (const std::string w = other_subimages_warning(job.input, in); !w.empty()) progress.warn_once("parts", report, w);
+    start = std::chrono::steady_clock::now();
+    ImageView view = in.pixels.view();
+    view.colour_channels = colour_channel_count(in.spec);
+    const int colours = view.colour_channels, alpha = premultiplied_alpha_channel(in.spec);
+    const bool premultiplied = alpha >= colours && alpha < in.pixels.channels;
+    auto each_pixel = [&](auto&& f) {
+        for (size_t i = 0; i < in.pixels.pixels.size(); i += in.pixels.channels) f(&in.pixels.pixels[i]);
+    };
+    if (premultiplied) each_pixel([&](float* px) { unpremultiply(px, colours, px[alpha]); });
+    apply_plate_grain(profile, o.profile, view, o.seed, job.frame, threads);
+    if (premultiplied) each_pixel([&](float* px) { premultiply(px, colours, px[alpha]); });
+    report.develop_seconds = seconds_since(start);
+    start = std::chrono::steady_clock::now();
+    write_image(job.output, in.pixels, in.spec, o.batch.run.in_place ? "" : job.input, o.batch.write, [&] {
+        report.write_seconds = seconds_since(start);
+        progress.add(report);
+    });
+}
+
+void run_apply(ApplyOptions& o, const CLI::App& cmd) {
     GrainProfile profile;
     try {
         profile = load_grain_profile_file(o.profile);
@@ -259,23 +290,11 @@ void run_apply(const ApplyOptions& o) {
     if (!o.colorspace.empty() && !profile.colorspace.empty() && lower(o.colorspace) != lower(profile.colorspace))
         throw UserError("'" + o.profile + "' was measured in " + profile.colorspace + ", the input is " + o.colorspace +
                         ": convert the input to " + profile.colorspace + " first (grain levels are in its encoding)");
-    LoadedImage in = read_plate(o.input);
-    if (const std::string w = other_subimages_warning(o.input, in); !w.empty())
-        std::cerr << "darkroom: warning: " << w << "\n";
-    // Grain on the light, not on light times coverage: premultiplied colour is divided by its
-    // alpha first and multiplied back after, so where an element is transparent it adds no
-    // grain over the plate it is comped onto (as develop does).
-    ImageView view = in.pixels.view();
-    view.colour_channels = colour_channel_count(in.spec);
-    const int colours = view.colour_channels, alpha = premultiplied_alpha_channel(in.spec);
-    const bool premultiplied = alpha >= colours && alpha < in.pixels.channels;
-    auto each_pixel = [&](auto&& f) {
-        for (size_t i = 0; i < in.pixels.pixels.size(); i += in.pixels.channels) f(&in.pixels.pixels[i]);
-    };
-    if (premultiplied) each_pixel([&](float* px) { unpremultiply(px, colours, px[alpha]); });
-    apply_plate_grain(profile, o.profile, view, o.seed, o.frame, o.threads);
-    if (premultiplied) each_pixel([&](float* px) { premultiply(px, colours, px[alpha]); });
-    write_image(o.output, in.pixels, in.spec, o.input);
+    run_batch(o.batch, o.frame, cmd.get_option("--frame")->count() > 0, o.threads, false, [&](int) -> FrameWork {
+        return [&](const FrameJob& job, int threads, bool, FrameReport& report, Progress& progress) {
+            apply_frame(o, profile, job, threads, report, progress);
+        };
+    });
 }
 
 struct CompareOptions {
@@ -359,15 +378,19 @@ void add_grain_command(CLI::App& app) {
     analyze->callback([a] { run_analyze(*a); });
 
     auto p = std::make_shared<ApplyOptions>();
-    CLI::App* apply = grain->add_subcommand("apply", "Add grain with a profile's statistics to a clean image");
-    apply->add_option("input", p->input, "Clean image, in the encoding of the profile")->required();
+    CLI::App* apply = grain->add_subcommand(
+        "apply", "Add grain with a profile's statistics to a clean image or sequence (each frame its own grain)");
+    add_batch_flags(*apply, p->batch, "Clean image or sequence, in the encoding of the profile",
+                    "Output image or sequence");
+    apply->get_option("input")->required();
+    apply->get_option("-o")->required();
     apply->add_option("--profile", p->profile, "Grain profile (.json)")->required();
-    apply->add_option("-o,--out", p->output, "Output image")->required();
     apply->add_option("--seed", p->seed, "Grain seed");
-    apply->add_option("--frame", p->frame, "Frame number (the grain changes with it)");
+    apply->add_option("--frame", p->frame, "Frame number of a single image (the grain changes with it; a sequence's "
+                                           "frames use their own)");
     apply->add_option("--iscolorspace", p->colorspace, "The input's colour space (must be the profile's)");
     apply->add_option("--threads", p->threads, "Worker threads, 0 = all cores; the result does not depend on it");
-    apply->callback([p] { run_apply(*p); });
+    apply->callback([p, apply] { run_apply(*p, *apply); });
 
     auto c = std::make_shared<CompareOptions>();
     CLI::App* compare = grain->add_subcommand(

@@ -361,6 +361,53 @@ TEST_CASE("grain analyze and apply take a plate's colour channels, not its depth
     for (size_t c : changed) CHECK(c > plain_print.size() / 3 / 2);
 }
 
+// A CG element's sequence takes its plate grain in one run, each frame keyed by its own
+// number (as `--frame N` gives a single image, bit for bit), so the grain moves from frame
+// to frame; a still with an output sequence gets moving grain; the batch flags of develop
+// hold (a dry run writes nothing, --frame is for a single image, a missing frame is named).
+TEST_CASE("grain apply runs a sequence, each frame with its own grain", "[cli][grain][batch]") {
+    const fs::path dir = kTmp / "grain-apply-sequence";
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const std::string clean = make_patches("grain-apply-sequence-clean.exr", 96), profile = (dir / "grain.json").string();
+    REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + profile).exit_code == 0);
+    for (int frame : {1001, 1002, 1003}) fs::copy_file(clean, dir / ("cg." + std::to_string(frame) + ".exr"));
+    const std::string look = " --profile " + profile + " --seed 4";
+    Result r = darkroom("grain apply " + (dir / "cg.####.exr").string() + " -o " + (dir / "out.####.exr").string() + look +
+                        " -n");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK_FALSE(fs::exists(dir / "out.1001.exr"));
+    r = darkroom("grain apply " + (dir / "cg.####.exr").string() + " -o " + (dir / "out.####.exr").string() + look +
+                 " --frame 3");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("--frame is for a single image"));
+    r = darkroom("grain apply " + (dir / "cg.####.exr").string() + " -o " + (dir / "out.####.exr").string() + look +
+                 " -q --threads 2");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    // A still through an output sequence: the same grain as the sequence's frames.
+    REQUIRE(darkroom("grain apply " + clean + " -o " + (dir / "still.####.exr").string() + " --frames 1001-1003" + look +
+                     " -q")
+                .exit_code == 0);
+    std::vector<std::vector<float>> frames;
+    for (int frame : {1001, 1002, 1003}) {
+        const std::string single = (dir / ("single." + std::to_string(frame) + ".exr")).string();
+        REQUIRE(darkroom("grain apply " + clean + " -o " + single + look + " --frame " + std::to_string(frame)).exit_code == 0);
+        const std::vector<float> out = pixels((dir / ("out." + std::to_string(frame) + ".exr")).string());
+        CHECK(out == pixels(single));
+        CHECK(out == pixels((dir / ("still." + std::to_string(frame) + ".exr")).string()));
+        frames.push_back(out);
+    }
+    CHECK(frames[0] != frames[1]);
+    CHECK(frames[1] != frames[2]);
+    CHECK(frames[0] != pixels(clean));
+    r = darkroom("grain apply " + (dir / "cg.####.exr").string() + " -o " + (dir / "out.####.exr").string() + look +
+                 " --frames 1003-1004 -q");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("frame 1004") && Catch::Contains("does not exist"));
+}
+
 // Without --encoding or --iscolorspace, the plate's own tag decides its encoding: a log DPX
 // scan (OpenImageIO's "KodakLog") is log, where an untagged integer file is display.
 TEST_CASE("grain analyze takes a plate's encoding from its colour-space tag", "[cli][grain]") {

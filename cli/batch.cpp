@@ -1,0 +1,172 @@
+#include "cli/batch.h"
+
+#include <OpenImageIO/imageio.h>
+#include <algorithm>
+#include <atomic>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <thread>
+#include <unistd.h>
+
+#include "cli/atomic_file.h"
+#include "cli/commands.h"
+
+namespace darkroom::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Frames at once by default: each holds its input, output and working planes, so the count
+// is capped to bound memory on 4K plates.
+constexpr int kDefaultMaxFramesAtOnce = 8;
+
+// One frame, its report added to `progress`; returns its status.
+FrameReport::Status process_frame(const RunOptions& run, const FrameWork& work, const FrameJob& job, int threads,
+                                  bool first, Progress& progress) {
+    FrameReport report;
+    report.frame = job.frame;
+    report.input = job.input;
+    report.output = job.output;
+    if (run.no_clobber && fs::exists(job.output)) {
+        report.status = FrameReport::Status::skipped_existing;
+    } else if (run.dry_run) {
+        report.status = FrameReport::Status::dry_run;
+        if (!fs::exists(job.input)) progress.warn(report, "input '" + job.input + "' does not exist");
+    } else {
+        try {
+            work(job, threads, first, report, progress);
+            return report.status;  // added as its output took its name
+        } catch (const std::exception& e) {
+            report.status = FrameReport::Status::failed;
+            report.error = e.what();
+        }
+    }
+    progress.add(report);
+    return report.status;
+}
+
+// Frames run in parallel, each with its share of the threads: whole frames scale better
+// than one frame's rows (reading and writing overlap with the work). Without
+// --skip-bad-frames the first failure stops new frames from starting.
+void run_frames(const RunOptions& run, const std::vector<FrameJob>& jobs, int threads, bool verbose,
+                const PrepareFrames& prepare, Progress& progress) {
+    const int most = run.frames_at_once > 0 ? run.frames_at_once : std::min(threads, kDefaultMaxFramesAtOnce);
+    const int workers = std::max(1, std::min(int(jobs.size()), most));
+    const int threads_per_frame = std::max(1, threads / workers);
+    if (verbose)
+        std::cerr << "threads: " << threads << " (" << workers << " frame" << (workers > 1 ? "s" : "")
+                  << " at once, " << threads_per_frame << " per frame)\n";
+    const FrameWork work = prepare(threads_per_frame);
+    std::atomic<size_t> next{0};
+    std::atomic<bool> stop{false};
+    auto worker = [&] {
+        for (size_t i = next++; i < jobs.size() && !stop; i = next++) {
+            const FrameReport::Status status = process_frame(run, work, jobs[i], threads_per_frame, i == 0, progress);
+            if (status == FrameReport::Status::failed && !run.skip_bad_frames) stop = true;
+        }
+    };
+    std::vector<std::thread> pool;
+    for (int w = 1; w < workers; ++w) pool.emplace_back(worker);
+    worker();
+    for (std::thread& t : pool) t.join();
+}
+
+int resolve_threads(int requested) {
+    if (requested > 0) return requested;
+    return std::max(1u, std::thread::hardware_concurrency());
+}
+
+// The folders the outputs go to, each with the first output there.
+std::map<fs::path, std::string> output_folders(const std::vector<FrameJob>& jobs) {
+    std::map<fs::path, std::string> folders;
+    for (const FrameJob& job : jobs) folders.emplace(fs::path(job.output).parent_path(), job.output);
+    return folders;
+}
+
+void remove_stale_outputs_temps(const std::map<fs::path, std::string>& folders, bool quiet) {
+    for (const auto& [dir, output] : folders)
+        if (int removed = remove_stale_temps(dir); removed > 0 && !quiet)
+            std::cerr << "darkroom: removed " << removed << " partial output(s) left in '"
+                      << (dir.empty() ? "." : dir.string()) << "' by an interrupted run\n";
+}
+
+std::string failure_summary(const std::vector<FrameReport>& reports, size_t total) {
+    std::string text;
+    size_t failed = 0;
+    for (const FrameReport& r : reports)
+        if (r.status == FrameReport::Status::failed) {
+            ++failed;
+            text += "\n  frame " + std::to_string(r.frame) + " (" + r.input + "): " + r.error;
+        }
+    if (failed == 0) return "";
+    return std::to_string(failed) + " of " + std::to_string(total) + " frames failed, " +
+           std::to_string(reports.size() - failed) + " finished" + (reports.size() < total ? ", the rest not started" : "") +
+           ":" + text;
+}
+
+}  // namespace
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_help, const std::string& output_help) {
+    auto run_option = [](CLI::Option* opt) { return opt->configurable(false); };
+    run_option(cmd.add_option("input", o.input, input_help + " (plate.####.exr, plate.%04d.exr, plate.@@@@.exr)"));
+    run_option(cmd.add_option("-o,--out", o.output, output_help));
+    run_option(cmd.add_option("--frames", o.sequence.frames, "Frames of a sequence: 1-100, 1-100x2, 1,5,9-12"));
+    run_option(cmd.add_option("--framepadding", o.sequence.framepadding, "Digits of the frame number for '#' wildcards")
+                   ->check(CLI::Range(1, 16)));
+    run_option(cmd.add_option("-d", o.write.data_type, "Output data type")->check(CLI::IsMember(output_data_types())));
+    run_option(cmd.add_option("--compression", o.write.compression, "Output compression (e.g. zip, piz, dwaa:45)"));
+    run_option(cmd.add_flag("-n", o.run.dry_run, "Dry run: say what would be done, write nothing"));
+    run_option(cmd.add_flag("-q", o.run.quiet, "Quiet: only errors and warnings"));
+    run_option(cmd.add_flag("--no-clobber", o.run.no_clobber, "Do not overwrite existing outputs (resumes a stopped run)"));
+    run_option(cmd.add_flag("--skip-bad-frames", o.run.skip_bad_frames,
+                            "Go on past frames that fail (the exit status still reports them)"));
+    run_option(cmd.add_option("--frames-at-once", o.run.frames_at_once,
+                              "Frames run in parallel, sharing --threads (0: as many as threads, up to 8)")
+                   ->check(CLI::Range(0, 1024)));
+    run_option(cmd.add_option("--log", o.run.log_path, "Write per-frame timings, warnings and errors to this JSON file"));
+}
+
+void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int threads, bool verbose,
+               const PrepareFrames& prepare) {
+    const bool sequence = is_sequence_pattern(o.input) || is_sequence_pattern(o.output);
+    if (sequence && frame_flag_given)
+        throw UserError("--frame is for a single image: each frame of a sequence uses its own frame number");
+    const std::vector<FrameJob> jobs = expand_frames(o.input, o.output, o.sequence, single_frame);
+    require_known_compression(o.output, o.write.compression);
+    const std::map<fs::path, std::string> folders = output_folders(jobs);
+    for (const auto& [folder, output] : folders) require_writable(output);  // a sequence's frames share theirs
+    // Only an output named as the input itself replaces it; an output that merely resolves
+    // to an input (another spelling of a pattern, a link) is refused frame by frame.
+    o.run.in_place = fs::absolute(o.input).lexically_normal() == fs::absolute(o.output).lexically_normal();
+    o.write.command_line = command_line();
+    if (!o.run.dry_run) remove_stale_outputs_temps(folders, o.run.quiet);
+
+    // A single image is made silently, as oiiotool does, unless asked (-v, -n).
+    const bool quiet = o.run.quiet || (!sequence && !o.run.dry_run && !verbose);
+    Progress progress(jobs.size(), sequence, quiet, isatty(STDERR_FILENO) && sequence && !o.run.dry_run);
+    threads = resolve_threads(threads);
+    OIIO::attribute("threads", threads);  // OpenImageIO's own pool (EXR decoding) keeps to --threads too
+    {
+        // Interrupted (Ctrl-C, a farm's kill), the log still tells which frames were finished.
+        InterruptHookScope log_on_interrupt([&](int signal_number) {
+            if (!o.run.log_path.empty())
+                write_run_log(o.run.log_path, progress.reports(), progress.elapsed_seconds(), command_line(),
+                              signal_number);
+        });
+        run_frames(o.run, jobs, threads, verbose, prepare, progress);
+    }
+    progress.finish();
+    const std::vector<FrameReport> reports = progress.reports();
+    if (!o.run.log_path.empty()) write_run_log(o.run.log_path, reports, progress.elapsed_seconds(), command_line());
+
+    if (!sequence && reports.front().status == FrameReport::Status::failed) throw UserError(reports.front().error);
+    if (std::string summary = failure_summary(reports, jobs.size()); !summary.empty()) throw UserError(summary);
+}
+
+}  // namespace darkroom::cli

@@ -1,0 +1,53 @@
+// A command's images or frame sequences run as a batch, in oiiotool's conventions, for the
+// commands that turn input images into output images one frame at a time (develop, grain
+// apply): the input and output names and their sequences, how each output is written, and
+// the run's flags (dry run, quiet, no clobber, skip bad frames, frames at once, log); each
+// frame reported as it ends (a bar on a terminal, a line per frame otherwise), a failure
+// naming its frame, an interrupted run logging what was finished.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <functional>
+#include <string>
+
+#include "cli/image_io.h"
+#include "cli/progress.h"
+#include "cli/sequence.h"
+
+namespace darkroom::cli {
+
+struct RunOptions {
+    bool dry_run = false, quiet = false, no_clobber = false, skip_bad_frames = false;
+    bool in_place = false;   // -o names the input itself: each frame replaces its input
+    int frames_at_once = 0;  // 0: min(threads, frames, kDefaultMaxFramesAtOnce)
+    std::string log_path;
+};
+
+struct BatchOptions {
+    std::string input, output;
+    SequenceOptions sequence;
+    WriteOptions write;
+    RunOptions run;
+};
+
+// The flags above on `cmd` (not read from look files: they are the run's, not the look's).
+void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_help, const std::string& output_help);
+
+double seconds_since(std::chrono::steady_clock::time_point start);
+
+// One frame's work: read job.input, write job.output (through write_image, whose `committed`
+// adds `report` to `progress`: a run interrupted then logs every finished output), with
+// `threads`; `first` for the run's first frame (where -v prints what a run's frames share).
+using FrameWork = std::function<void(const FrameJob& job, int threads, bool first, FrameReport& report, Progress& progress)>;
+// What the frames share, made once the threads each frame gets are known.
+using PrepareFrames = std::function<FrameWork(int threads_per_frame)>;
+
+// Expands o's names into frames (a single image is frame `single_frame`; `frame_flag_given`:
+// --frame was given, which a sequence refuses), checks every output can be written before any
+// frame is read, runs the frames (in parallel, sharing `threads`, 0 = all cores) and throws
+// UserError naming each frame that failed. `verbose` prints how the threads are split.
+void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int threads, bool verbose,
+               const PrepareFrames& prepare);
+
+}  // namespace darkroom::cli
