@@ -119,7 +119,10 @@ void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_he
     run_option(cmd.add_option("--frames", o.sequence.frames, "Frames of a sequence: 1-100, 1-100x2, 1,5,9-12"));
     run_option(cmd.add_option("--framepadding", o.sequence.framepadding, "Digits of the frame number for '#' wildcards")
                    ->check(CLI::Range(1, 16)));
-    run_option(cmd.add_option("-d", o.write.data_type, "Output data type")->check(CLI::IsMember(output_data_types())));
+    run_option(cmd.add_option("-d", o.write.data_type,
+                              "Output data type (uint10, uint12: that many bits where the format stores them, DPX "
+                              "and TIFF, else 16)")
+                   ->check(CLI::IsMember(output_data_types())));
     run_option(cmd.add_option("--compression", o.write.compression, "Output compression (e.g. zip, piz, dwaa:45)"));
     run_option(cmd.add_flag("-n", o.run.dry_run, "Dry run: say what would be done, write nothing"));
     run_option(cmd.add_flag("-q", o.run.quiet, "Quiet: only errors and warnings"));

@@ -60,6 +60,9 @@ public:
     // "oiio:ColorSpace"; empty where the result is data (density) or in no space the config
     // names (a scan without a Cineon log space, a working space reached through ACES).
     const std::string& output_space() const { return output_space_; }
+    // Whether the written result is the scan's Cineon log code values, unconverted: printing
+    // density, as a film scanner's DPX says in its header.
+    bool writes_printing_density() const { return output_mode_ == OutputMode::scan && output_->is_noop(); }
 
 private:
     static void apply(const ocio::Conversion& conversion, const ImageView& image, int threads);

@@ -85,6 +85,7 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
     b.write.look_json = look_json(cmd).dump();
     const ColourIO colour(o.look.colour, o.look.settings.output, o.look.verbose);
     b.write.colour_space = colour.output_space();
+    b.write.printing_density = colour.writes_printing_density();
     if (const std::string w = colour.integer_output_warning(b.output, writes_integers(b.output, b.write)); !w.empty())
         std::cerr << "darkroom: warning: " << w << "\n";
     run_batch(b, o.look.settings.frame, cmd.get_option("--frame")->count() > 0, o.look.threads, o.look.verbose,

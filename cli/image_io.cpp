@@ -121,14 +121,21 @@ void require_writable(const std::string& path) {
 }
 
 const std::vector<std::string>& output_data_types() {
-    static const std::vector<std::string> types{"uint8", "uint16", "half", "float"};
+    static const std::vector<std::string> types{"uint8", "uint10", "uint12", "uint16", "half", "float"};
     return types;
 }
 
 namespace {
 
+// -d uint10 and uint12: 16-bit integers of which the file stores that many bits, where its
+// format can (DPX, TIFF; as oiiotool's -d); 0 for the other types.
+int packed_bits(const WriteOptions& options) {
+    return options.data_type == "uint10" ? 10 : options.data_type == "uint12" ? 12 : 0;
+}
+
 // The pixels' type asked of the writer: -d, else float for float formats and uint16 for others.
 OIIO::TypeDesc output_type(const std::string& path, const WriteOptions& options) {
+    if (packed_bits(options) > 0) return OIIO::TypeDesc::UINT16;
     if (!options.data_type.empty()) return OIIO::TypeDesc(options.data_type);
     return is_float_format(path) ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT16;
 }
@@ -140,6 +147,17 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
     spec.extra_attribs = like.extra_attribs;
     // The input's bit depth describes the input's encoding, not a new data type's (as oiiotool).
     if (type != like.format) spec.erase_attribute("oiio:BitsPerSample");
+    if (packed_bits(options) > 0) spec.attribute("oiio:BitsPerSample", packed_bits(options));
+    // A DPX header's transfer and colorimetric describe the pixels' encoding: the input's hold
+    // only while its colour space does, and a scan's code values are printing density, log.
+    if (options.colour_space) {
+        spec.erase_attribute("dpx:Transfer");
+        spec.erase_attribute("dpx:Colorimetric");
+    }
+    if (options.printing_density) {
+        spec.attribute("dpx:Transfer", "Logarithmic");
+        spec.attribute("dpx:Colorimetric", "Printing density");
+    }
     spec.x = like.x + image.window.x0;
     spec.y = like.y + image.window.y0;
     spec.full_x = like.full_x;

@@ -50,13 +50,15 @@ void require_known_compression(const std::string& path, const std::string& compr
 
 // How an output is encoded and what it says about itself.
 struct WriteOptions {
-    std::string data_type;     // -d: uint8, uint16, half, float; empty: float for float formats, else uint16
+    std::string data_type;     // -d: uint8, uint10, uint12, uint16, half, float; empty: float for float formats, else uint16
     std::string compression;   // --compression, as OpenImageIO names it (e.g. "zip", "dwaa:45")
     std::string command_line;  // appended to Exif:ImageHistory and named in Software, as oiiotool does
     std::string look_json;     // the settings used, stored as "darkroom:look"
     // "oiio:ColorSpace": unset keeps the input's (its pixels' space is kept); empty removes
     // it (the pixels are data); otherwise the space the written pixels are in.
     std::optional<std::string> colour_space;
+    // The pixels are Cineon printing density code values (a scan): a DPX says so in its header.
+    bool printing_density = false;
 };
 
 // Throws UserError, before any work, when `path` cannot be written: OpenImageIO has no writer

@@ -183,7 +183,7 @@ OCIO::ConstConfigRcPtr build_embedded_config() {
                      {"ADX16", {"adx16"}, "Film", "log", "Academy Density Exchange, 16-bit scaling (film scans)"},
                      "ADX16_to_ACES2065-1");
     config->addColorSpace(scene_space(
-        {"Cineon Log", {"cineon", "lg10"}, "Film", "log",
+        {"Cineon Log", {"cineon", "lg10", "KodakLog"}, "Film", "log",  // (KodakLog: OpenImageIO's tag of a log DPX)
          "Kodak Cineon printing-density log (white 685, black 95, 0.002 D/code, gamma 0.6), Rec.709 primaries assumed"},
         group({cineon_log_to_lin_rec709(), lin_rec709_to_aces2065_1()})));
 

@@ -45,7 +45,7 @@
 // | Canon Log 2 / Canon Log 3 - Cinema Gamut    | builtin CANON_CLOG2/CLOG3-CGAMUT_to_ACES2065-1   |
 // | Panasonic V-Log - V-Gamut (vlog)            | builtin PANASONIC_VLOG-VGAMUT_to_ACES2065-1      |
 // | ADX10, ADX16 (Academy Density Exchange)     | builtin ADX10/ADX16_to_ACES2065-1                |
-// | Cineon Log (cineon, lg10)                   | Kodak Cineon printing-density log (below), then  |
+// | Cineon Log (cineon, lg10, KodakLog)         | Kodak Cineon printing-density log (below), then  |
 // |                                             |   as lin_rec709                                  |
 // | Raw (raw, data)                             | none: data, never converted                      |
 // | CIE-XYZ-D65 (display-referred)              | the display reference                            |

@@ -99,6 +99,50 @@ TEST_CASE("a compression is one of the output format's names and is written as g
     }
 }
 
+// A film scan's deliverable: 10-bit log DPX whose header says printing density, as a
+// scanner's does (OpenImageIO reads it back as KodakLog, an alias of the config's Cineon
+// Log). A DPX's transfer and colorimetric describe its pixels: a print made from such a scan
+// does not keep them, and grain apply, which keeps the encoding, does.
+TEST_CASE("a scan as 10-bit DPX says printing density, and a DPX's tags follow its encoding", "[cli][metadata]") {
+    const std::string in = make_input("dpx-in.exr"), scan_exr = (kTmp / "scan.exr").string(),
+                      scan_dpx = (kTmp / "scan.dpx").string(), print_dpx = (kTmp / "print-from-scan.dpx").string();
+    REQUIRE(darkroom("develop " + in + " -o " + scan_exr + " --output scan --seed 2").exit_code == 0);
+    Result r = darkroom("develop " + in + " -o " + scan_dpx + " --output scan --seed 2 -d uint10");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    OIIO::ImageSpec spec;
+    const std::vector<float> code = pixels(scan_dpx, &spec), exact = pixels(scan_exr);
+    CHECK(spec.get_int_attribute("oiio:BitsPerSample") == 10);
+    CHECK(spec.get_string_attribute("dpx:Transfer") == "Logarithmic");
+    CHECK(spec.get_string_attribute("dpx:Colorimetric") == "Printing density");
+    CHECK(spec.get_string_attribute("oiio:ColorSpace") == "KodakLog");
+    REQUIRE(code.size() == exact.size());
+    double worst = 0;
+    for (size_t i = 0; i < code.size(); ++i) worst = std::max(worst, double(std::abs(code[i] - exact[i])));
+    CHECK(worst <= 1.0 / 1023);  // within a 10-bit code value (8 bits would be 4)
+
+    // Read without --iscolorspace, the tag says what it is.
+    r = darkroom("develop " + scan_dpx + " -o " + print_dpx);
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("give --iscolorspace \"Cineon Log\""));
+    REQUIRE(darkroom("develop " + scan_dpx + " -o " + print_dpx + " --iscolorspace 'Cineon Log' --ociodisplay '' ''").exit_code == 0);
+    pixels(print_dpx, &spec);
+    CHECK(spec.get_string_attribute("dpx:Transfer") != "Logarithmic");
+    CHECK(spec.get_string_attribute("dpx:Colorimetric") != "Printing density");
+
+    const std::string profile = (kTmp / "dpx-grain.json").string(), grained = (kTmp / "scan-grained.dpx").string();
+    REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + profile).exit_code == 0);
+    REQUIRE(darkroom("grain apply " + scan_dpx + " --profile " + profile + " -o " + grained).exit_code == 0);
+    pixels(grained, &spec);
+    CHECK(spec.get_string_attribute("dpx:Transfer") == "Logarithmic");
+    CHECK(spec.get_int_attribute("oiio:BitsPerSample") == 10);
+
+    const std::string tiff = (kTmp / "scan-12.tif").string();
+    REQUIRE(darkroom("develop " + in + " -o " + tiff + " --output scan -d uint12").exit_code == 0);
+    pixels(tiff, &spec);
+    CHECK(spec.get_int_attribute("oiio:BitsPerSample") == 12);
+}
+
 // An output that cannot be written is found before any frame is read or developed (a frame's
 // failure is reported as "frame N ... failed"), so a farm job fails at once, not after a frame.
 TEST_CASE("an unwritable output is refused before any frame is developed", "[cli][bad-input]") {

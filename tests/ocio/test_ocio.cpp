@@ -276,7 +276,7 @@ TEST_CASE("embedded config is valid, complete and needs no files", "[ocio][confi
                              "sRGB - Display", "Rec.1886 Rec.709 - Display"})
         CHECK(config->getColorSpace(name) != nullptr);
     // Aliases and roles a user would try.
-    for (const char* alias : {"Linear Rec.709 (sRGB)", "lin_srgb", "scene_linear", "srgb", "logc3", "cineon"})
+    for (const char* alias : {"Linear Rec.709 (sRGB)", "lin_srgb", "scene_linear", "srgb", "logc3", "cineon", "KodakLog"})
         CHECK(config->getColorSpace(alias) != nullptr);
     CHECK(std::string(config->getColorSpace("scene_linear")->getName()) == "lin_rec709");
     CHECK(std::string(config->getDefaultDisplay()) == "sRGB");
