@@ -32,6 +32,10 @@ void run_demo(const DemoOptions& o, CLI::App& cmd) {
     if (!o.look.colour.input_space.empty())
         throw UserError("demo renders its built-in scene in the working space: --iscolorspace does not apply");
     if (!o.look_path.empty()) apply_look_file(cmd, o.look_path);
+    // (After the look file, which may name one.) The demo's result is the model's own, with its
+    // stock's grain; a plate's grain goes on an image of the plate's encoding, with develop.
+    if (!o.look.grain_profile.empty())
+        throw UserError("demo renders its built-in scene with the stock's grain: --grain-profile applies to develop");
     if (!o.save_look_path.empty()) save_look_file(cmd, o.save_look_path);
     std::error_code ec;
     fs::create_directories(o.directory, ec);

@@ -82,6 +82,7 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
     if (b.input.empty() || b.output.empty()) throw UserError("develop needs an input image and -o OUTPUT");
 
     check_output_format(o);
+    load_plate_grain(o.look);
     b.write.look_json = look_json(cmd).dump();
     const ColourIO colour(o.look.colour, o.look.settings.output, o.look.verbose);
     b.write.colour_space = colour.output_space();

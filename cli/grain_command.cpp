@@ -255,7 +255,7 @@ struct ApplyOptions {
 // Grain on the light, not on light times coverage: premultiplied colour is divided by its
 // alpha first and multiplied back after, so where an element is transparent it adds no grain
 // over the plate it is comped onto (as develop does).
-void apply_frame(const ApplyOptions& o, const GrainProfile& profile, const FrameJob& job, int threads,
+void apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const FrameJob& job, int threads,
                  FrameReport& report, Progress& progress) {
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_plate(job.input);
@@ -270,7 +270,7 @@ void apply_frame(const ApplyOptions& o, const GrainProfile& profile, const Frame
         for (size_t i = 0; i < in.pixels.pixels.size(); i += in.pixels.channels) f(&in.pixels.pixels[i]);
     };
     if (premultiplied) each_pixel([&](float* px) { unpremultiply(px, colours, px[alpha]); });
-    apply_plate_grain(profile, o.profile, view, o.seed, job.frame, threads);
+    apply_plate_grain(grain, o.profile, view, o.seed, job.frame, threads);
     if (premultiplied) each_pixel([&](float* px) { premultiply(px, colours, px[alpha]); });
     report.develop_seconds = seconds_since(start);
     start = std::chrono::steady_clock::now();
@@ -281,18 +281,19 @@ void apply_frame(const ApplyOptions& o, const GrainProfile& profile, const Frame
 }
 
 void run_apply(ApplyOptions& o, const CLI::App& cmd) {
-    GrainProfile profile;
+    GrainSynthesisPlan grain;
     try {
-        profile = load_grain_profile_file(o.profile);
+        grain = plan_grain_synthesis(load_grain_profile_file(o.profile));
     } catch (const GrainProfileError& e) {
         throw UserError(e.what());
     }
-    if (!o.colorspace.empty() && !profile.colorspace.empty() && lower(o.colorspace) != lower(profile.colorspace))
-        throw UserError("'" + o.profile + "' was measured in " + profile.colorspace + ", the input is " + o.colorspace +
-                        ": convert the input to " + profile.colorspace + " first (grain levels are in its encoding)");
+    const std::string& measured_in = grain.profile.colorspace;
+    if (!o.colorspace.empty() && !measured_in.empty() && lower(o.colorspace) != lower(measured_in))
+        throw UserError("'" + o.profile + "' was measured in " + measured_in + ", the input is " + o.colorspace +
+                        ": convert the input to " + measured_in + " first (grain levels are in its encoding)");
     run_batch(o.batch, o.frame, cmd.get_option("--frame")->count() > 0, o.threads, false, [&](int) -> FrameWork {
         return [&](const FrameJob& job, int threads, bool, FrameReport& report, Progress& progress) {
-            apply_frame(o, profile, job, threads, report, progress);
+            apply_frame(o, grain, job, threads, report, progress);
         };
     });
 }

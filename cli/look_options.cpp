@@ -5,7 +5,6 @@
 #include <stdexcept>
 
 #include "cli/user_error.h"
-#include "core/plate/grain_synthesis.h"
 
 namespace darkroom::cli {
 
@@ -126,25 +125,15 @@ Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {
     }
 }
 
-void apply_plate_grain(const GrainProfile& profile, const std::string& profile_path, const ImageView& image,
-                       uint64_t seed, int frame, int threads) {
+void load_plate_grain(LookOptions& look) {
+    if (look.grain_profile.empty()) return;
     try {
-        apply_grain_profile(profile, image, seed, frame, threads);
-    } catch (const std::invalid_argument& e) {
-        throw UserError("'" + profile_path + "': " + e.what());
-    }
-}
-
-namespace {
-
-// The plate's grain on the result, keyed like the film grain (seed, frame, absolute pixel).
-void add_plate_grain(const LookOptions& look, Image& out) {
-    GrainProfile profile;
-    try {
-        profile = load_grain_profile_file(look.grain_profile);
+        const GrainProfile profile = load_grain_profile_file(look.grain_profile);
+        look.plate_grain = std::make_shared<const GrainSynthesisPlan>(plan_grain_synthesis(profile));
     } catch (const GrainProfileError& e) {
         throw UserError(e.what());
     }
+    const GrainProfile& profile = look.plate_grain->profile;
     const std::string& output_space = look.colour.output_space;
     if (!profile.colorspace.empty() && !output_space.empty() && profile.colorspace != output_space)
         std::cerr << "darkroom: warning: the grain profile was measured in '" << profile.colorspace
@@ -152,10 +141,16 @@ void add_plate_grain(const LookOptions& look, Image& out) {
     if (look.verbose)
         std::cerr << "grain: plate profile " << look.grain_profile << " (" << encoding_name(profile.encoding)
                   << (profile.colorspace.empty() ? "" : ", " + profile.colorspace) << ") replaces the stock's grain\n";
-    apply_plate_grain(profile, look.grain_profile, out.view(), look.settings.seed, look.settings.frame, look.threads);
 }
 
-}  // namespace
+void apply_plate_grain(const GrainSynthesisPlan& grain, const std::string& profile_path, const ImageView& image,
+                       uint64_t seed, int frame, int threads) {
+    try {
+        apply_grain_profile(grain, image, seed, frame, threads);
+    } catch (const std::invalid_argument& e) {
+        throw UserError("'" + profile_path + "': " + e.what());
+    }
+}
 
 FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px) {
     return FrameGeometry{in.window.width(), in.window.height(), colour_channel_count(in) == 1, in.window.x0, in.window.y0, film_width_px};
@@ -219,7 +214,12 @@ Image develop_image(const LookOptions& look, const ColourIO& colour, const Plan&
         plan.run(working_view, out.view(), look.threads);
     }
     colour.result_to_output(out, look.threads);
-    if (!look.grain_profile.empty()) add_plate_grain(look, out);
+    // The plate's grain on the result, keyed like the film grain (seed, frame, absolute pixel).
+    if (!look.grain_profile.empty() && !look.plate_grain)
+        throw std::logic_error("the grain profile '" + look.grain_profile + "' was not read (load_plate_grain)");
+    if (look.plate_grain)
+        apply_plate_grain(*look.plate_grain, look.grain_profile, out.view(), look.settings.seed, look.settings.frame,
+                          look.threads);
     for (int y = out.window.y0; y < out.window.y1; ++y)
         for (int x = out.window.x0; x < out.window.x1; ++x) {
             float* px = out.at(x, y);

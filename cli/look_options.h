@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <tuple>
@@ -19,7 +20,7 @@
 
 #include "cli/colour_io.h"
 #include "core/develop.h"
-#include "core/plate/grain_profile.h"
+#include "core/plate/grain_synthesis.h"
 
 namespace darkroom::cli {
 
@@ -31,6 +32,8 @@ struct LookOptions {
     // A plate's grain profile (darkroom grain analyze/predict): replaces the stock's grain
     // and is added to the result in the output's encoding, which should be the plate's.
     std::string grain_profile;
+    // That profile read and planned once a run (load_plate_grain), shared by its frames.
+    std::shared_ptr<const GrainSynthesisPlan> plate_grain;
     int threads = 0;
     bool verbose = false;
 };
@@ -94,9 +97,14 @@ private:
 Image develop_image(const LookOptions& look, const ColourIO& colour, const Plan& plan, const ConstImageView& in,
                     const Window& out_window, int premultiplied_alpha = -1);
 
-// A plate's grain profile (read from `profile_path`) on the colour channels of `image`
+// Reads look.grain_profile, when given, into look.plate_grain: once a run, before any frame,
+// so that a bad profile is the run's error, not each frame's; says that it replaces the
+// stock's grain (verbose), and warns when it was measured in another space than the output's.
+void load_plate_grain(LookOptions& look);
+
+// A plate's grain (its profile read from `profile_path`) on the colour channels of `image`
 // (apply_grain_profile); a profile of other channels is the user's error, naming the file.
-void apply_plate_grain(const GrainProfile& profile, const std::string& profile_path, const ImageView& image,
+void apply_plate_grain(const GrainSynthesisPlan& grain, const std::string& profile_path, const ImageView& image,
                        uint64_t seed, int frame, int threads);
 
 // What to warn of for the values that film reads and that are not finite, with how it takes

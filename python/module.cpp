@@ -64,6 +64,7 @@ py::array_t<float> develop(py::array_t<float, py::array::c_style | py::array::fo
     ParsedLook parsed(look_file, settings);
     parsed.look.settings.frame = frame;
     parsed.look.threads = threads;
+    darkroom::cli::load_plate_grain(parsed.look);
 
     const darkroom::Window full{0, 0, width, height};
     const darkroom::ConstImageView in{pixels.data(), full, channels, channels, (std::ptrdiff_t)channels * width};

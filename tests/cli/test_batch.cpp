@@ -37,6 +37,13 @@ std::string frame_name(const fs::path& dir, const char* stem, int frame) {
 
 const std::string kLook = " --seed 11 --frame-width-mm 3 --print-width-mm 20";
 
+// How many times `what` occurs in `text`.
+size_t count(const std::string& text, const std::string& what) {
+    size_t n = 0;
+    for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+}
+
 }  // namespace
 
 TEST_CASE("a sequence gives each frame its own grain, the same as a single image of that frame, reproducibly",
@@ -630,15 +637,46 @@ TEST_CASE("a sequence that cannot be made is refused before any work", "[cli][ba
     CHECK_FALSE(fs::exists(frame_name(dir, "out", 1)));
 }
 
+// A plate's grain profile is read once a run, before any frame: a bad one is the run's error
+// (no frame started), and its warning of another colour space is said once, not per frame.
+TEST_CASE("a grain profile is read once a run, before any frame", "[cli][batch][grain][bad-input]") {
+    fs::path dir = fresh_dir("profile-once");
+    make_plates(dir, 1, 3, 16, 12);
+    const std::string seq = (dir / "plate.####.exr").string(), out = (dir / "out.####.exr").string();
+    const std::string corrupt = (dir / "corrupt.json").string();
+    std::ofstream(corrupt) << "{\"format\": \"darkroom-grain-profile\", \"version\": 1, \"channels\": []}";
+    Result r = darkroom("develop " + seq + " -o " + out + kLook + " --grain-profile " + corrupt);
+    INFO(r.output);
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains(corrupt));
+    CHECK(r.output.find("frame 1") == std::string::npos);
+    CHECK_FALSE(fs::exists(frame_name(dir, "out", 1)));
+
+    nlohmann::json profile;
+    {
+        const std::string predicted = (dir / "predicted.json").string();
+        REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + predicted).exit_code == 0);
+        std::ifstream f(predicted);
+        profile = nlohmann::json::parse(f);
+    }
+    profile["colorspace"] = "Cineon Log";
+    const std::string measured = (dir / "measured-in-cineon.json").string();
+    std::ofstream(measured) << profile.dump();
+    r = darkroom("develop " + seq + " -o " + out + kLook + " --grain-profile " + measured + " --tocolorspace ACEScg -q");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(count(r.output, "the grain profile was measured in 'Cineon Log' but the output is in 'ACEScg'") == 1);
+    CHECK(fs::exists(frame_name(dir, "out", 3)));
+    // The demo has no plate to match: refused, not left without grain.
+    r = darkroom("demo -o " + (dir / "demo").string() + " --grain-profile " + measured);
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("--grain-profile applies to develop"));
+}
+
 // A single image's warnings and failure name no frame (the wording is a sequence's) and are
 // printed once each; a sequence's name their frame. Every warning is in the log either way.
 TEST_CASE("a single image's messages name no frame and come once, a sequence's name the frame", "[cli][batch][bad-input]") {
     fs::path dir = fresh_dir("messages");
-    auto count = [](const std::string& text, const std::string& what) {
-        size_t n = 0;
-        for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-        return n;
-    };
     OIIO::ImageBuf with_nan(OIIO::ImageSpec(16, 12, 3, OIIO::TypeDesc::FLOAT));
     const float grey[3] = {0.18f, 0.18f, 0.18f}, nan[3] = {NAN, 0.18f, 0.18f};
     OIIO::ImageBufAlgo::fill(with_nan, grey);
