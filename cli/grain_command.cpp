@@ -2,6 +2,7 @@
 // plate's grain per channel (core/plate/grain_analysis.h), puts grain with those
 // statistics on clean images (grain_synthesis.h), checks how well two grains match
 // (grain_compare.h), and predicts a profile from a stock and a scan (grain_prediction.h).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -274,7 +275,13 @@ void apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const F
     if (premultiplied) each_pixel([&](float* px) { premultiply(px, colours, px[alpha]); });
     report.develop_seconds = seconds_since(start);
     start = std::chrono::steady_clock::now();
-    write_image(job.output, in.pixels, in.spec, o.batch.run.in_place ? "" : job.input, o.batch.write, [&] {
+    // The element's own data type unless -d says otherwise, as oiiotool keeps it: a half
+    // render stays half (develop's results default to float, this is the input regrained).
+    WriteOptions write = o.batch.write;
+    const std::vector<std::string>& types = output_data_types();
+    if (write.data_type.empty() && std::find(types.begin(), types.end(), in.spec.format.c_str()) != types.end())
+        write.data_type = in.spec.format.c_str();
+    write_image(job.output, in.pixels, in.spec, o.batch.run.in_place ? "" : job.input, write, [&] {
         report.write_seconds = seconds_since(start);
         progress.add(report);
     });

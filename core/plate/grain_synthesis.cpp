@@ -7,6 +7,7 @@
 
 #include "core/parallel.h"
 #include "core/random.h"
+#include "core/stages/filters.h"
 
 namespace darkroom {
 
@@ -40,7 +41,9 @@ GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile) {
     const int n = (int)profile.channels.size();
     for (const GrainChannel& ch : profile.channels) {
         plan.kernels.push_back(design_grain_kernel(ch));
-        plan.halo_px = std::max(plan.halo_px, plan.kernels.back().radius);
+        const GrainKernel& k = plan.kernels.back();
+        plan.filters.push_back(separable_approximation(k.taps, k.radius, kGrainKernelResidualEnergy));
+        plan.halo_px = std::max(plan.halo_px, k.radius);
     }
     // Filtering mixed white noise scales the lag-0 correlation of channels a and b by the
     // overlap of their kernels, so mix with target / overlap.
@@ -77,41 +80,35 @@ void apply_grain_profile(const GrainSynthesisPlan& plan, const ImageView& image,
     require_profile_fits(n, colours);
     const Window w = image.window;
     if (w.empty()) return;
-    const Window noise_window = w.grown(plan.halo_px);
-    // Correlated white noise over the window plus the kernels' halo.
-    std::vector<Plane> mixed(n, Plane(noise_window));
-    parallel_for(noise_window.y0, noise_window.y1, threads, [&](int y_begin, int y_end) {
+    // A grey profile on a colour image: its one field on every colour channel (a black-and-white
+    // plate's grain is the same silver in each), scaled at each channel's own level.
+    const int channels_per_field = colours / n, halo = plan.halo_px;
+    parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
+        // Each channel's white noise (Philox at absolute pixels, mixed to the profile's channel
+        // correlation) through its kernel's separable terms, as the rows stream by.
         std::vector<double> white(n);
-        for (int y = y_begin; y < y_end; ++y)
-            for (int x = noise_window.x0; x < noise_window.x1; ++x) {
+        const int x0 = w.x0 - halo, padded_width = w.width() + 2 * halo;
+        SeparableStream noise(w.width(), plan.filters, w.y0 - halo, w.y1 + halo, y_end, [&](int y, float* const* padded) {
+            for (int i = 0; i < padded_width; ++i) {
                 for (int c = 0; c < n; ++c)
-                    white[c] = standard_normal(NoiseKey{seed, frame, kPlateGrainStream + (uint32_t)c}, x, y);
+                    white[c] = standard_normal(NoiseKey{seed, frame, kPlateGrainStream + (uint32_t)c}, x0 + i, y);
                 for (int c = 0; c < n; ++c) {
                     double sum = 0;
                     for (int j = 0; j <= c; ++j) sum += plan.mixing[(size_t)c * n + j] * white[j];
-                    mixed[c].at(x, y) = float(sum);
+                    padded[c][i] = float(sum);
                 }
             }
-    });
-    // A grey profile on a colour image: its one field on every colour channel (a black-and-white
-    // plate's grain is the same silver in each), scaled at each channel's own level.
-    const int channels_per_field = colours / n;
-    parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
-        for (int y = y_begin; y < y_end; ++y)
+        });
+        for (int y = y_begin; y < y_end; ++y) {
+            const float* const* grain = noise.row(y);
             for (int x = w.x0; x < w.x1; ++x) {
                 float* px = image.at(x, y);
-                for (int f = 0; f < n; ++f) {
-                    const GrainKernel& k = plan.kernels[f];
-                    double g = 0;
-                    for (int dy = -k.radius; dy <= k.radius; ++dy) {
-                        const float* row = mixed[f].row(y + dy) + (x - noise_window.x0);
-                        const double* taps = &k.taps[(size_t)(dy + k.radius) * (2 * k.radius + 1) + k.radius];
-                        for (int dx = -k.radius; dx <= k.radius; ++dx) g += taps[dx] * row[dx];
-                    }
+                for (int f = 0; f < n; ++f)
                     for (int c = f * channels_per_field; c < (f + 1) * channels_per_field; ++c)
-                        if (std::isfinite(px[c])) px[c] = float(px[c] + plan.profile.channels[f].sigma_at(px[c]) * g);
-                }
+                        if (std::isfinite(px[c]))
+                            px[c] = float(px[c] + plan.profile.channels[f].sigma_at(px[c]) * grain[f][x - w.x0]);
             }
+        }
     });
 }
 

@@ -14,6 +14,7 @@
 #include "core/image.h"
 #include "core/plate/grain_profile.h"
 #include "core/plate/noise_spectrum.h"
+#include "core/stages/filters.h"
 
 namespace darkroom {
 
@@ -21,10 +22,18 @@ namespace darkroom {
 // film model's layer streams.
 constexpr uint32_t kPlateGrainStream = 0x706c0000u;
 
+// The energy a channel's kernel may leave out of its separable terms: the synthesised field
+// then differs from the exact 2D convolution's by a field of at most 1e-4 of its variance
+// (1 % of its standard deviation, below the analysis' own 2 % error on sigma; tested). The
+// terms stream down the rows in float vectors (SeparableStream), about 4x faster on a 4K
+// frame than the direct 2D sum in double they replace (README, Plate matching).
+constexpr double kGrainKernelResidualEnergy = 1e-4;
+
 // What synthesis precomputes from a profile: reuse it across frames and tiles.
 struct GrainSynthesisPlan {
     GrainProfile profile;
-    std::vector<GrainKernel> kernels;  // per channel
+    std::vector<GrainKernel> kernels;      // per channel: the 2D filter of its autocorrelation
+    std::vector<SeparableFilter> filters;  // per channel: its kernel as separable terms
     std::vector<double> mixing;        // channels x channels, lower triangular, row-major
     int halo_px = 0;                   // the largest kernel radius: noise is drawn this far outside
 };

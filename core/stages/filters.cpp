@@ -137,6 +137,87 @@ void convolve_columns(const float* const* rows, const std::vector<float>& taps, 
         simd::dispatch<ConvolveColumn<2, false>>(rows, taps.data(), int(taps.size()), width, out);
 }
 
+// Eigenvalues and orthonormal eigenvectors of a symmetric n x n matrix `a` (row-major, used
+// as scratch) by cyclic Jacobi rotations: each rotation zeroes one off-diagonal element, and
+// sweeps repeat until the off-diagonal part is negligible. Exact to rounding for the small,
+// nearly opposite eigenvalues of a kernel's residual too, where power iteration stalls.
+// vectors[i * n + k] is component i of eigenvector k.
+void symmetric_eigen(std::vector<double>& a, int n, std::vector<double>& values, std::vector<double>& vectors) {
+    vectors.assign(size_t(n) * n, 0.0);
+    for (int i = 0; i < n; ++i) vectors[size_t(i) * n + i] = 1.0;
+    auto at = [&](int i, int j) -> double& { return a[size_t(i) * n + j]; };
+    for (int sweep = 0; sweep < 100; ++sweep) {
+        double off = 0, diagonal = 0;
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) (i == j ? diagonal : off) += at(i, j) * at(i, j);
+        if (!(off > 1e-30 * diagonal)) break;
+        for (int p = 0; p < n; ++p)
+            for (int q = p + 1; q < n; ++q) {
+                const double apq = at(p, q);
+                if (apq == 0) continue;
+                // The rotation's tangent t = s / c zeroes a'_pq: t^2 + 2 theta t - 1 = 0,
+                // its smaller root (a rotation of at most 45 degrees).
+                const double theta = (at(q, q) - at(p, p)) / (2 * apq);
+                const double t = std::abs(theta) > 1e150 ? 0.5 / theta
+                                                         : std::copysign(1.0, theta) / (std::abs(theta) + std::sqrt(theta * theta + 1));
+                const double c = 1 / std::sqrt(t * t + 1), s = t * c;
+                for (int k = 0; k < n; ++k) {
+                    const double kp = at(k, p), kq = at(k, q);
+                    at(k, p) = c * kp - s * kq;
+                    at(k, q) = s * kp + c * kq;
+                }
+                for (int k = 0; k < n; ++k) {
+                    const double pk = at(p, k), qk = at(q, k);
+                    at(p, k) = c * pk - s * qk;
+                    at(q, k) = s * pk + c * qk;
+                }
+                for (int k = 0; k < n; ++k) {
+                    double& vp = vectors[size_t(k) * n + p];
+                    double& vq = vectors[size_t(k) * n + q];
+                    const double kp = vp, kq = vq;
+                    vp = c * kp - s * kq;
+                    vq = s * kp + c * kq;
+                }
+            }
+    }
+    values.resize(n);
+    for (int i = 0; i < n; ++i) values[i] = at(i, i);
+}
+
+SeparableFilter separable_approximation(const std::vector<double>& taps, int r, double residual_energy) {
+    const int side = 2 * r + 1;
+    auto tap = [&](int row, int column) { return taps[size_t(row) * side + column]; };
+    // K = U S V^T from the eigen-decomposition of K^T K = V S^2 V^T; u_k = K v_k / s_k.
+    std::vector<double> gram(size_t(side) * side, 0.0), squares, v;
+    for (int a = 0; a < side; ++a)
+        for (int b = 0; b < side; ++b)
+            for (int row = 0; row < side; ++row) gram[size_t(a) * side + b] += tap(row, a) * tap(row, b);
+    symmetric_eigen(gram, side, squares, v);
+    std::vector<int> order(side);
+    for (int k = 0; k < side; ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](int i, int j) { return squares[i] > squares[j]; });
+    double energy = 0;
+    for (double t : taps) energy += t * t;
+    SeparableFilter filter;
+    double left = energy;  // the energy of the terms not yet kept: sum of their s_k^2
+    for (int k : order) {
+        if (!(left > residual_energy * energy) || !(squares[k] > 0)) break;
+        const double s = std::sqrt(squares[k]);
+        std::vector<float> along_x(side), along_y(side);
+        for (int i = 0; i < side; ++i) {
+            double u = 0;
+            for (int column = 0; column < side; ++column) u += tap(i, column) * v[size_t(column) * side + k];
+            along_x[i] = float(v[size_t(i) * side + k] * std::sqrt(s));  // each pass carries sqrt(s)
+            along_y[i] = float(u / s * std::sqrt(s));
+        }
+        filter.terms.push_back(std::move(along_x));
+        filter.vertical_terms.push_back(std::move(along_y));
+        filter.signs.push_back(1.0f);
+        left -= squares[k];
+    }
+    return filter;
+}
+
 SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters, int row_begin, int row_end,
                                  int rows_end, Source source)
     : width_(width), radius_(0), row_begin_(row_begin), row_end_(row_end), rows_end_(rows_end),
@@ -151,7 +232,7 @@ SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters
         std::vector<std::vector<float>> vertical;
         for (size_t t = 0; t < f.terms.size(); ++t) {
             vertical.emplace_back();
-            for (float v : f.terms[t]) vertical.back().push_back(f.signs[t] * v);
+            for (float v : f.vertical_terms.empty() ? f.terms[t] : f.vertical_terms[t]) vertical.back().push_back(f.signs[t] * v);
         }
         vertical_.push_back(std::move(vertical));
         centre_.push_back({f.centre});

@@ -34,9 +34,23 @@ struct SeparableFilter {
     std::vector<std::vector<float>> terms;
     std::vector<float> signs;  // +1 or -1 per term
     float centre = 0;
+    // Each term's taps in y where they are not its taps in x (separable_approximation of a
+    // kernel without x-y symmetry); empty: the same.
+    std::vector<std::vector<float>> vertical_terms;
     int radius() const { return terms.empty() ? 0 : int(terms[0].size() / 2); }
     bool is_identity() const { return terms.empty() && centre == 0; }
 };
+
+// Eigenvalues and orthonormal eigenvectors of a symmetric n x n matrix `a` (row-major, used
+// as scratch) by cyclic Jacobi rotations; vectors[i * n + k] is component i of eigenvector k.
+void symmetric_eigen(std::vector<double>& a, int n, std::vector<double>& values, std::vector<double>& vectors);
+
+// Any kernel of (2r + 1)^2 taps (row-major: taps[(dy + r)(2r + 1) + dx + r]) as separable
+// terms, from its singular value decomposition K = sum_k s_k u_k v_k^T (v_k along x, u_k along
+// y), the largest first (the best approximation of each rank) until the terms left out hold at
+// most `residual_energy` of the kernel's energy (the sum of its squared taps: the variance of
+// unit white noise through it). 0: every term the kernel has.
+SeparableFilter separable_approximation(const std::vector<double>& taps, int r, double residual_energy);
 
 // Planes filtered as they stream down the rows, each by its own SeparableFilter, for one
 // thread: output rows in increasing order, each summed from the rows its vertical pass reads

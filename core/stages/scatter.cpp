@@ -116,53 +116,6 @@ void unit_gain(ScatterKernel& kernel) {
         for (float& v : term) v *= scale;
 }
 
-// Eigenvalues and orthonormal eigenvectors of a symmetric n x n matrix `a` (row-major, used
-// as scratch) by cyclic Jacobi rotations: each rotation zeroes one off-diagonal element, and
-// sweeps repeat until the off-diagonal part is negligible. Exact to rounding for the small,
-// nearly opposite eigenvalues of a kernel's residual too, where power iteration stalls.
-// vectors[i * n + k] is component i of eigenvector k.
-void symmetric_eigen(std::vector<double>& a, int n, std::vector<double>& values, std::vector<double>& vectors) {
-    vectors.assign(size_t(n) * n, 0.0);
-    for (int i = 0; i < n; ++i) vectors[size_t(i) * n + i] = 1.0;
-    auto at = [&](int i, int j) -> double& { return a[size_t(i) * n + j]; };
-    for (int sweep = 0; sweep < 100; ++sweep) {
-        double off = 0, diagonal = 0;
-        for (int i = 0; i < n; ++i)
-            for (int j = 0; j < n; ++j) (i == j ? diagonal : off) += at(i, j) * at(i, j);
-        if (!(off > 1e-30 * diagonal)) break;
-        for (int p = 0; p < n; ++p)
-            for (int q = p + 1; q < n; ++q) {
-                const double apq = at(p, q);
-                if (apq == 0) continue;
-                // The rotation's tangent t = s / c zeroes a'_pq: t^2 + 2 theta t - 1 = 0,
-                // its smaller root (a rotation of at most 45 degrees).
-                const double theta = (at(q, q) - at(p, p)) / (2 * apq);
-                const double t = std::abs(theta) > 1e150 ? 0.5 / theta
-                                                         : std::copysign(1.0, theta) / (std::abs(theta) + std::sqrt(theta * theta + 1));
-                const double c = 1 / std::sqrt(t * t + 1), s = t * c;
-                for (int k = 0; k < n; ++k) {
-                    const double kp = at(k, p), kq = at(k, q);
-                    at(k, p) = c * kp - s * kq;
-                    at(k, q) = s * kp + c * kq;
-                }
-                for (int k = 0; k < n; ++k) {
-                    const double pk = at(p, k), qk = at(q, k);
-                    at(p, k) = c * pk - s * qk;
-                    at(q, k) = s * pk + c * qk;
-                }
-                for (int k = 0; k < n; ++k) {
-                    double& vp = vectors[size_t(k) * n + p];
-                    double& vq = vectors[size_t(k) * n + q];
-                    const double kp = vp, kq = vq;
-                    vp = c * kp - s * kq;
-                    vq = s * kp + c * kq;
-                }
-            }
-    }
-    values.resize(n);
-    for (int i = 0; i < n; ++i) values[i] = at(i, i);
-}
-
 // A kernel matrix's eigen-decomposition as separable terms, largest |eigenvalue| first (the
 // best approximation of each rank), until the residual is within `tolerance` everywhere or
 // there are `max_terms` terms; not found where the tolerance needs so many terms that the

@@ -450,6 +450,17 @@ TEST_CASE("grain apply runs a sequence, each frame with its own grain", "[cli][g
                  " --frames 1003-1004 -q");
     CHECK(r.exit_code == 1);
     CHECK_THAT(r.output, Catch::Contains("frame 1004") && Catch::Contains("does not exist"));
+    // The element's data type is kept (a half render stays half) unless -d says otherwise.
+    const std::string half = (dir / "half.exr").string();
+    REQUIRE(OIIO::ImageBuf(clean).write(half, OIIO::TypeDesc::HALF));
+    for (const auto& [flag, type] : {std::pair<std::string, OIIO::TypeDesc>{"", OIIO::TypeDesc::HALF},
+                                     {" -d float", OIIO::TypeDesc::FLOAT}}) {
+        const std::string out = (dir / "half-grained.exr").string();
+        REQUIRE(darkroom("grain apply " + half + " -o " + out + look + flag).exit_code == 0);
+        auto file = OIIO::ImageInput::open(out);
+        REQUIRE(file);
+        CHECK(file->spec().format == type);
+    }
 }
 
 // Without --encoding or --iscolorspace, the plate's own tag decides its encoding: a log DPX

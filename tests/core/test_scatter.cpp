@@ -280,3 +280,55 @@ TEST_CASE("row and column convolutions sum their taps in the documented order, i
         }
     }
 }
+
+// Any kernel, without symmetry in x and y, as singular-value terms: every term the kernel has
+// gives its taps back; fewer leave out at most the energy asked; a separable kernel is one term.
+TEST_CASE("separable_approximation: a kernel's singular-value terms, largest first, within the energy asked",
+          "[filters]") {
+    const int r = 3, side = 2 * r + 1;
+    std::vector<double> taps(side * side);
+    uint32_t state = 12345;
+    for (double& t : taps) {
+        state = state * 1664525u + 1013904223u;  // (a fixed pseudo-random kernel)
+        t = double(state >> 8) / double(1 << 24) - 0.3;
+    }
+    auto applied = [&](const SeparableFilter& f) {  // the taps the terms sum to
+        std::vector<double> sum(side * side, 0.0);
+        for (size_t t = 0; t < f.terms.size(); ++t)
+            for (int y = 0; y < side; ++y)
+                for (int x = 0; x < side; ++x)
+                    sum[y * side + x] += f.signs[t] * double(f.vertical_terms[t][y]) * f.terms[t][x];
+        return sum;
+    };
+    double energy = 0;
+    for (double t : taps) energy += t * t;
+    const SeparableFilter every = separable_approximation(taps, r, 0.0);
+    CHECK(every.terms.size() == size_t(side));
+    const std::vector<double> back = applied(every);
+    for (int i = 0; i < side * side; ++i) CHECK(back[i] == Approx(taps[i]).margin(1e-5));
+    for (double fraction : {0.3, 0.05, 1e-3}) {
+        const SeparableFilter some = separable_approximation(taps, r, fraction);
+        const std::vector<double> sum = applied(some);
+        double left = 0;
+        for (int i = 0; i < side * side; ++i) left += (sum[i] - taps[i]) * (sum[i] - taps[i]);
+        INFO(fraction << ": " << some.terms.size() << " terms");
+        CHECK(left <= fraction * energy * (1 + 1e-4));
+        CHECK(some.terms.size() < size_t(side));
+        // One term fewer would not do: the largest terms but the last kept leave out more.
+        SeparableFilter fewer = every;
+        fewer.terms.resize(some.terms.size() - 1);
+        fewer.vertical_terms.resize(some.terms.size() - 1);
+        fewer.signs.resize(some.terms.size() - 1);
+        const std::vector<double> fewer_sum = applied(fewer);
+        double fewer_left = 0;
+        for (int i = 0; i < side * side; ++i) fewer_left += (fewer_sum[i] - taps[i]) * (fewer_sum[i] - taps[i]);
+        CHECK(fewer_left > fraction * energy);
+    }
+    std::vector<double> outer(side * side);
+    for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x) outer[y * side + x] = (1.0 + x) * (2.0 - 0.5 * y);
+    const SeparableFilter one = separable_approximation(outer, r, 1e-12);
+    CHECK(one.terms.size() == 1);
+    const std::vector<double> outer_back = applied(one);
+    for (int i = 0; i < side * side; ++i) CHECK(outer_back[i] == Approx(outer[i]).epsilon(1e-5));
+}
