@@ -62,6 +62,16 @@ class ModuleEqualsProgram(unittest.TestCase):
         self.assertTrue(np.array_equal(got, expected))
         self.assertTrue(np.array_equal(got[..., 3], self.plate[..., 3]))  # alpha passes through
 
+    def test_a_plate_grain_profile_replaces_the_stock_grain_as_in_the_program(self):
+        profile = os.path.join(self.dir, "plate-grain.json")
+        run_program("grain", "predict", "--stock", "kodak-vision3-500t", "--width", "512", "-o", profile)
+        expected = self.program("--look", self.look, "--frame", "4", "--grain-profile", profile)
+        got = darkroom.develop(self.plate, look=self.look, frame=4, grain_profile=profile)
+        self.assertTrue(np.array_equal(got, expected))
+        self.assertFalse(np.array_equal(got, darkroom.develop(self.plate, look=self.look, frame=4)))
+        with self.assertRaisesRegex(darkroom.DarkroomError, "nonexistent-profile.json"):
+            darkroom.develop(self.plate, look=self.look, grain_profile="/nonexistent-profile.json")
+
     def test_premultiplied_colour_is_divided_by_alpha_and_multiplied_back(self):
         straight = self.plate.copy()
         straight[..., :3] /= np.where(self.plate[..., 3:] > 0, self.plate[..., 3:], 1)
