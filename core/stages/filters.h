@@ -36,7 +36,7 @@ struct SeparableFilter {
     float centre = 0;
     // Each term's taps in y where they are not its taps in x (separable_approximation of a
     // kernel without x-y symmetry); empty: the same.
-    std::vector<std::vector<float>> vertical_terms;
+    std::vector<std::vector<float>> vertical_terms = {};
     int radius() const { return terms.empty() ? 0 : int(terms[0].size() / 2); }
     bool is_identity() const { return terms.empty() && centre == 0; }
 };
