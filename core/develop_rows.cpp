@@ -31,7 +31,7 @@ template <typename V>
 __attribute__((always_inline)) inline void sanitize_lanes(V& v) {
     using T = std::remove_reference_t<decltype(v[0])>;
     constexpr T max = T(kMaxInput);
-    v = v == v && v != -std::numeric_limits<T>::infinity() ? v : V{};
+    v = v > -std::numeric_limits<T>::infinity() ? v : V{};  // (false for NaN and -Inf alike: one compare)
     v = v < -max ? V{} - max : v;
     v = max < v ? V{} + max : v;
 }
