@@ -168,6 +168,36 @@ struct LevelCurve {
     }
 };
 
+// Picture content only adds variance, and grain's varies smoothly with the level: a bin more
+// than this many times the variance its neighbours give at its level holds edges or texture
+// (a level the picture reaches only in its content, which the block tests cannot tell from
+// grain there, having no grain-only blocks to compare with).
+constexpr double kContentVarianceRatio = 2.0;
+
+// The curve without such bins, the worst first (each judged against the bins left), while
+// three or more remain: their blocks are then judged by their neighbours' grain.
+void drop_content_bins(LevelCurve& curve) {
+    while (curve.level.size() >= 3) {
+        size_t worst = 0;
+        double worst_ratio = 0;
+        for (size_t k = 0; k < curve.level.size(); ++k) {
+            // Its neighbours' line at its level (the nearest neighbour's variance at the ends).
+            double expected;
+            if (k == 0 || k + 1 == curve.level.size()) {
+                expected = curve.variance[k == 0 ? 1 : k - 1];
+            } else {
+                const double t = (curve.level[k] - curve.level[k - 1]) / (curve.level[k + 1] - curve.level[k - 1]);
+                expected = curve.variance[k - 1] + t * (curve.variance[k + 1] - curve.variance[k - 1]);
+            }
+            const double ratio = expected > 0 ? curve.variance[k] / expected : 0;
+            if (ratio > worst_ratio) worst_ratio = ratio, worst = k;
+        }
+        if (!(worst_ratio > kContentVarianceRatio)) return;
+        curve.level.erase(curve.level.begin() + worst);
+        curve.variance.erase(curve.variance.begin() + worst);
+    }
+}
+
 struct ChannelState {
     std::vector<double> rho;        // autocorrelation on the lag grid
     std::vector<char> accepted;     // per block
@@ -327,6 +357,7 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                 curve.level.push_back(level[k] / count[k]);
                 curve.variance.push_back(variance[k] / count[k]);
             }
+        drop_content_bins(curve);
         return curve;
     };
 

@@ -70,13 +70,18 @@ TEST_CASE("null test: two seeds of the same grain match, 20 % more grain or 20 %
     }
 }
 
+// Over several grain realisations: a level the picture reaches only in its edges and texture
+// (no flat block there to compare with) is left out, not measured as grain (it was, at one
+// level or two, for five of the first eight seeds: 12-150 % errors there).
 TEST_CASE("analysis ignores picture content: edges and texture give the profile of flat patches",
           "[plate][analysis]") {
-    GrainProfile flat = measure(flat_patches(512, 512, 3, kLo, kHi), medium_grain(), 1);
-    GrainProfile busy = measure(picture_with_content(512, 512, 3, kLo, kHi), medium_grain(), 1);
-    GrainMatch m = compare_grain_profiles(flat, busy);
-    INFO(describe(m));
-    CHECK(m.passes());
+    for (uint64_t seed = 1; seed <= 6; ++seed) {
+        GrainProfile flat = measure(flat_patches(512, 512, 3, kLo, kHi), medium_grain(), seed);
+        GrainProfile busy = measure(picture_with_content(512, 512, 3, kLo, kHi), medium_grain(), seed);
+        GrainMatch m = compare_grain_profiles(flat, busy);
+        INFO("seed " << seed << ": " << describe(m));
+        CHECK(m.passes());
+    }
 }
 
 TEST_CASE("several frames pool their blocks", "[plate][analysis]") {
