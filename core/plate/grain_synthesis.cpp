@@ -1,6 +1,7 @@
 #include "core/plate/grain_synthesis.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -67,6 +68,16 @@ GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile) {
     return plan;
 }
 
+void plate_grain_white_noise(uint64_t seed, int frame, int channel, int x0, int n, int y, double* out) {
+    const NoiseKey key{seed, frame, kPlateGrainStream + uint32_t(channel)};
+    // Pair k holds pixels 2k and 2k + 1 (k = floor(x / 2): GCC shifts negatives arithmetically).
+    for (int pair = x0 >> 1; 2 * pair < x0 + n; ++pair) {
+        const std::array<double, 2> normals = normal_pair(key, pair, y);
+        for (int b = 0; b < 2; ++b)
+            if (const int i = 2 * pair + b - x0; i >= 0 && i < n) out[i] = normals[b];
+    }
+}
+
 void require_profile_fits(int profile_channels, int colour_channels) {
     if (profile_channels != colour_channels && profile_channels != 1)
         throw std::invalid_argument("the grain profile has " + std::to_string(profile_channels) + " channels, the image " +
@@ -84,20 +95,18 @@ void apply_grain_profile(const GrainSynthesisPlan& plan, const ImageView& image,
     // plate's grain is the same silver in each), scaled at each channel's own level.
     const int channels_per_field = colours / n, halo = plan.halo_px;
     parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
-        // Each channel's white noise (Philox at absolute pixels, mixed to the profile's channel
+        // Each channel's white noise (plate_grain_white_noise, mixed to the profile's channel
         // correlation) through its kernel's separable terms, as the rows stream by.
-        std::vector<double> white(n);
         const int x0 = w.x0 - halo, padded_width = w.width() + 2 * halo;
+        std::vector<std::vector<double>> white(n, std::vector<double>(size_t(padded_width)));
         SeparableStream noise(w.width(), plan.filters, w.y0 - halo, w.y1 + halo, y_end, [&](int y, float* const* padded) {
-            for (int i = 0; i < padded_width; ++i) {
-                for (int c = 0; c < n; ++c)
-                    white[c] = standard_normal(NoiseKey{seed, frame, kPlateGrainStream + (uint32_t)c}, x0 + i, y);
+            for (int c = 0; c < n; ++c) plate_grain_white_noise(seed, frame, c, x0, padded_width, y, white[c].data());
+            for (int i = 0; i < padded_width; ++i)
                 for (int c = 0; c < n; ++c) {
                     double sum = 0;
-                    for (int j = 0; j <= c; ++j) sum += plan.mixing[(size_t)c * n + j] * white[j];
+                    for (int j = 0; j <= c; ++j) sum += plan.mixing[(size_t)c * n + j] * white[j][i];
                     padded[c][i] = float(sum);
                 }
-            }
         });
         for (int y = y_begin; y < y_end; ++y) {
             const float* const* grain = noise.row(y);

@@ -40,6 +40,11 @@ struct GrainSynthesisPlan {
 
 GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile);
 
+// The white noise of a channel's plate grain at pixels x0 ... x0 + n - 1 of row y: standard
+// normal, a pure function of (seed, frame, channel, absolute pixel); Box-Muller's two
+// independent values of one Philox draw serve pixels 2k and 2k + 1 (half the draws).
+void plate_grain_white_noise(uint64_t seed, int frame, int channel, int x0, int n, int y, double* out);
+
 // Throws std::invalid_argument naming both counts unless a profile of `profile_channels`
 // channels can grain an image of `colour_channels` colour channels (as many, or one).
 void require_profile_fits(int profile_channels, int colour_channels);

@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "core/plate/grain_synthesis.h"
-#include "core/random.h"
 #include "tests/core/plate_test_support.h"
 
 using namespace darkroom;
@@ -167,7 +166,7 @@ TEST_CASE("synthesised grain is the exact 2D convolution of its white noise, wit
     for (int y = noise_window.y0; y < noise_window.y1; ++y)
         for (int x = noise_window.x0; x < noise_window.x1; ++x) {
             double white[3];
-            for (int c = 0; c < n; ++c) white[c] = standard_normal(NoiseKey{5, 9, kPlateGrainStream + uint32_t(c)}, x, y);
+            for (int c = 0; c < n; ++c) plate_grain_white_noise(5, 9, c, x, 1, y, &white[c]);  // (pixel by pixel)
             for (int c = 0; c < n; ++c) {
                 double sum = 0;
                 for (int j = 0; j <= c; ++j) sum += plan.mixing[c * n + j] * white[j];
