@@ -253,9 +253,6 @@ struct ApplyOptions {
     int frame = 0, threads = 0;
 };
 
-// Grain on the light, not on light times coverage: premultiplied colour is divided by its
-// alpha first and multiplied back after, so where an element is transparent it adds no grain
-// over the plate it is comped onto (as develop does).
 void apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const FrameJob& job, int threads,
                  FrameReport& report, Progress& progress) {
     auto start = std::chrono::steady_clock::now();
@@ -265,14 +262,7 @@ void apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const F
     start = std::chrono::steady_clock::now();
     ImageView view = in.pixels.view();
     view.colour_channels = colour_channel_count(in.spec);
-    const int colours = view.colour_channels, alpha = premultiplied_alpha_channel(in.spec);
-    const bool premultiplied = alpha >= colours && alpha < in.pixels.channels;
-    auto each_pixel = [&](auto&& f) {
-        for (size_t i = 0; i < in.pixels.pixels.size(); i += in.pixels.channels) f(&in.pixels.pixels[i]);
-    };
-    if (premultiplied) each_pixel([&](float* px) { unpremultiply(px, colours, px[alpha]); });
-    apply_plate_grain(grain, o.profile, view, o.seed, job.frame, threads);
-    if (premultiplied) each_pixel([&](float* px) { premultiply(px, colours, px[alpha]); });
+    apply_plate_grain_to_element(grain, o.profile, view, premultiplied_alpha_channel(in.spec), o.seed, job.frame, threads);
     report.develop_seconds = seconds_since(start);
     start = std::chrono::steady_clock::now();
     // The element's own data type unless -d says otherwise, as oiiotool keeps it: a half

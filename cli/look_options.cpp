@@ -152,6 +152,20 @@ void apply_plate_grain(const GrainSynthesisPlan& grain, const std::string& profi
     }
 }
 
+void apply_plate_grain_to_element(const GrainSynthesisPlan& grain, const std::string& profile_path,
+                                  const ImageView& image, int premultiplied_alpha, uint64_t seed, int frame,
+                                  int threads) {
+    const int colours = colour_channel_count(image);
+    const bool premultiplied = premultiplied_alpha >= colours && premultiplied_alpha < image.channels;
+    auto each_pixel = [&](auto&& f) {
+        for (int y = image.window.y0; y < image.window.y1; ++y)
+            for (int x = image.window.x0; x < image.window.x1; ++x) f(image.at(x, y));
+    };
+    if (premultiplied) each_pixel([&](float* px) { unpremultiply(px, colours, px[premultiplied_alpha]); });
+    apply_plate_grain(grain, profile_path, image, seed, frame, threads);
+    if (premultiplied) each_pixel([&](float* px) { premultiply(px, colours, px[premultiplied_alpha]); });
+}
+
 FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px) {
     return FrameGeometry{in.window.width(), in.window.height(), colour_channel_count(in) == 1, in.window.x0, in.window.y0, film_width_px};
 }

@@ -106,6 +106,13 @@ void load_plate_grain(LookOptions& look);
 // (apply_grain_profile); a profile of other channels is the user's error, naming the file.
 void apply_plate_grain(const GrainSynthesisPlan& grain, const std::string& profile_path, const ImageView& image,
                        uint64_t seed, int frame, int threads);
+// The same on an element whose colour may be premultiplied by the channel `premultiplied_alpha`
+// (-1: none): grain on the light, not on light times coverage, so that where the element is
+// transparent it adds none over the plate it is comped onto (the colour is divided by the
+// alpha first and multiplied back after, as develop does). `image` holds whole pixels, packed.
+void apply_plate_grain_to_element(const GrainSynthesisPlan& grain, const std::string& profile_path,
+                                  const ImageView& image, int premultiplied_alpha, uint64_t seed, int frame,
+                                  int threads);
 
 // What to warn of for the values that film reads and that are not finite, with how it takes
 // them: in the pixels of `in` that the plan reads for `out_window` (the window and its halo),

@@ -99,6 +99,35 @@ py::object look_settings(const std::string& look_file, const py::kwargs& setting
     return py::module_::import("json").attr("loads")(darkroom::cli::look_json(parsed.app).dump());
 }
 
+// A plate's grain on a clean element, as `darkroom grain apply` puts it: the same pixels.
+py::array_t<float> grain_apply(py::array_t<float, py::array::c_style | py::array::forcecast> pixels,
+                               const std::string& profile_path, uint64_t seed, int frame, int threads,
+                               bool premultiplied) {
+    if (pixels.ndim() != 2 && pixels.ndim() != 3)
+        throw py::value_error("darkroom: pixels must be an array of shape (height, width) or (height, width, channels)");
+    const int height = int(pixels.shape(0)), width = int(pixels.shape(1));
+    const int channels = pixels.ndim() == 3 ? int(pixels.shape(2)) : 1;
+    if (width <= 0 || height <= 0 || channels <= 0) throw py::value_error("darkroom: the image has no pixels");
+    darkroom::GrainSynthesisPlan grain;
+    try {
+        grain = darkroom::plan_grain_synthesis(darkroom::load_grain_profile_file(profile_path));
+    } catch (const darkroom::GrainProfileError& e) {
+        throw darkroom::cli::UserError(e.what());
+    }
+    py::array_t<float> result(pixels.request().shape);
+    std::copy_n(pixels.data(), size_t(height) * width * channels, result.mutable_data());
+    const darkroom::ImageView view{result.mutable_data(), {0, 0, width, height}, channels, channels,
+                                   (std::ptrdiff_t)channels * width};
+    // The alpha is the channel after the colour (RGBA, YA), as develop takes it.
+    const int alpha = darkroom::colour_channel_count(channels);
+    {
+        py::gil_scoped_release release;
+        darkroom::cli::apply_plate_grain_to_element(grain, profile_path, view, premultiplied ? alpha : -1, seed, frame,
+                                                    threads);
+    }
+    return result;
+}
+
 void save_look(const std::string& path, const std::string& look_file, const py::kwargs& settings) {
     ParsedLook parsed(look_file, settings);
     darkroom::cli::save_look_file(parsed.app, path);
@@ -116,6 +145,12 @@ PYBIND11_MODULE(darkroom, m) {
           "premultiplied: the colour is premultiplied by the alpha after it (RGBA, YA), as OpenImageIO reads "
           "files: divided out before developing and multiplied back after (False: straight colour); "
           "other keywords: the program's look flags with '_' for '-', overriding the look file.");
+    m.def("grain_apply", &grain_apply, py::arg("pixels"), py::arg("profile"), py::kw_only(), py::arg("seed") = 0,
+          py::arg("frame") = 0, py::arg("threads") = 0, py::arg("premultiplied") = true,
+          "A plate's grain (a profile from darkroom grain analyze or predict) on a clean float image of shape "
+          "(height, width[, channels]) in the profile's encoding, as 'darkroom grain apply' puts it: returns a "
+          "float32 array of the same shape. Grey by the channel count (one or two channels: grey, grey and alpha); "
+          "premultiplied: the colour is premultiplied by the alpha after it, and gets grain on its light.");
     m.def("release_memory", &darkroom::release_plane_memory,
           "Frees the working planes develop keeps for the next image (up to 2 GB; about 0.3 GB after a 4K frame "
           "developed stage by stage: the high and reference tiers and the texture output); "

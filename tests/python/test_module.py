@@ -72,6 +72,19 @@ class ModuleEqualsProgram(unittest.TestCase):
         with self.assertRaisesRegex(darkroom.DarkroomError, "nonexistent-profile.json"):
             darkroom.develop(self.plate, look=self.look, grain_profile="/nonexistent-profile.json")
 
+    def test_grain_apply_gives_the_programs_pixels(self):
+        profile = os.path.join(self.dir, "element-grain.json")
+        run_program("grain", "predict", "--stock", "kodak-vision3-500t", "--width", "512", "-o", profile)
+        out = os.path.join(self.dir, "element-grained.exr")
+        run_program("grain", "apply", self.input, "--profile", profile, "-o", out, "--seed", "3", "--frame", "7")
+        got = darkroom.grain_apply(self.plate, profile, seed=3, frame=7, threads=1)
+        self.assertEqual(got.shape, self.plate.shape)
+        self.assertTrue(np.array_equal(got, read_exr(out)))
+        self.assertTrue(np.array_equal(got[..., 3], self.plate[..., 3]))  # alpha untouched
+        self.assertFalse(np.array_equal(got, self.plate))
+        with self.assertRaisesRegex(darkroom.DarkroomError, "3 channels, the image 1 colour channel"):
+            darkroom.grain_apply(self.plate[..., 0], profile)
+
     def test_premultiplied_colour_is_divided_by_alpha_and_multiplied_back(self):
         straight = self.plate.copy()
         straight[..., :3] /= np.where(self.plate[..., 3:] > 0, self.plate[..., 3:], 1)
