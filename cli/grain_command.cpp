@@ -278,12 +278,7 @@ void apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const F
 }
 
 void run_apply(ApplyOptions& o, const CLI::App& cmd) {
-    GrainSynthesisPlan grain;
-    try {
-        grain = plan_grain_synthesis(load_grain_profile_file(o.profile));
-    } catch (const GrainProfileError& e) {
-        throw UserError(e.what());
-    }
+    const GrainSynthesisPlan grain = read_plate_grain(o.profile);
     const std::string& measured_in = grain.profile.colorspace;
     if (!o.colorspace.empty() && !measured_in.empty() && lower(o.colorspace) != lower(measured_in))
         throw UserError("'" + o.profile + "' was measured in " + measured_in + ", the input is " + o.colorspace +

@@ -125,14 +125,17 @@ Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {
     }
 }
 
-void load_plate_grain(LookOptions& look) {
-    if (look.grain_profile.empty()) return;
+GrainSynthesisPlan read_plate_grain(const std::string& profile_path) {
     try {
-        const GrainProfile profile = load_grain_profile_file(look.grain_profile);
-        look.plate_grain = std::make_shared<const GrainSynthesisPlan>(plan_grain_synthesis(profile));
+        return plan_grain_synthesis(load_grain_profile_file(profile_path));
     } catch (const GrainProfileError& e) {
         throw UserError(e.what());
     }
+}
+
+void load_plate_grain(LookOptions& look) {
+    if (look.grain_profile.empty()) return;
+    look.plate_grain = std::make_shared<const GrainSynthesisPlan>(read_plate_grain(look.grain_profile));
     const GrainProfile& profile = look.plate_grain->profile;
     const std::string& output_space = look.colour.output_space;
     if (!profile.colorspace.empty() && !output_space.empty() && profile.colorspace != output_space)

@@ -97,6 +97,9 @@ private:
 Image develop_image(const LookOptions& look, const ColourIO& colour, const Plan& plan, const ConstImageView& in,
                     const Window& out_window, int premultiplied_alpha = -1);
 
+// A grain profile file read and planned for synthesis; a bad file is the user's error.
+GrainSynthesisPlan read_plate_grain(const std::string& profile_path);
+
 // Reads look.grain_profile, when given, into look.plate_grain: once a run, before any frame,
 // so that a bad profile is the run's error, not each frame's; says that it replaces the
 // stock's grain (verbose), and warns when it was measured in another space than the output's.

@@ -53,14 +53,24 @@ struct ParsedLook {
     }
 };
 
-py::array_t<float> develop(py::array_t<float, py::array::c_style | py::array::forcecast> pixels,
-                           const std::string& look_file, int frame, int threads, bool premultiplied,
-                           const py::kwargs& settings) {
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+
+// An image array's height, width and channels; ValueError for any other shape or none.
+struct ArrayShape {
+    int height, width, channels;
+};
+ArrayShape array_shape(const FloatArray& pixels) {
     if (pixels.ndim() != 3 && pixels.ndim() != 2)
         throw py::value_error("darkroom: pixels must be an array of shape (height, width) or (height, width, channels)");
-    const int height = int(pixels.shape(0)), width = int(pixels.shape(1));
-    const int channels = pixels.ndim() == 3 ? int(pixels.shape(2)) : 1;
-    if (width <= 0 || height <= 0 || channels <= 0) throw py::value_error("darkroom: the image has no pixels");
+    const ArrayShape shape{int(pixels.shape(0)), int(pixels.shape(1)), pixels.ndim() == 3 ? int(pixels.shape(2)) : 1};
+    if (shape.width <= 0 || shape.height <= 0 || shape.channels <= 0)
+        throw py::value_error("darkroom: the image has no pixels");
+    return shape;
+}
+
+py::array_t<float> develop(FloatArray pixels, const std::string& look_file, int frame, int threads, bool premultiplied,
+                           const py::kwargs& settings) {
+    const auto [height, width, channels] = array_shape(pixels);
     ParsedLook parsed(look_file, settings);
     parsed.look.settings.frame = frame;
     parsed.look.threads = threads;
@@ -100,20 +110,10 @@ py::object look_settings(const std::string& look_file, const py::kwargs& setting
 }
 
 // A plate's grain on a clean element, as `darkroom grain apply` puts it: the same pixels.
-py::array_t<float> grain_apply(py::array_t<float, py::array::c_style | py::array::forcecast> pixels,
-                               const std::string& profile_path, uint64_t seed, int frame, int threads,
-                               bool premultiplied) {
-    if (pixels.ndim() != 2 && pixels.ndim() != 3)
-        throw py::value_error("darkroom: pixels must be an array of shape (height, width) or (height, width, channels)");
-    const int height = int(pixels.shape(0)), width = int(pixels.shape(1));
-    const int channels = pixels.ndim() == 3 ? int(pixels.shape(2)) : 1;
-    if (width <= 0 || height <= 0 || channels <= 0) throw py::value_error("darkroom: the image has no pixels");
-    darkroom::GrainSynthesisPlan grain;
-    try {
-        grain = darkroom::plan_grain_synthesis(darkroom::load_grain_profile_file(profile_path));
-    } catch (const darkroom::GrainProfileError& e) {
-        throw darkroom::cli::UserError(e.what());
-    }
+py::array_t<float> grain_apply(FloatArray pixels, const std::string& profile_path, uint64_t seed, int frame,
+                               int threads, bool premultiplied) {
+    const auto [height, width, channels] = array_shape(pixels);
+    const darkroom::GrainSynthesisPlan grain = darkroom::cli::read_plate_grain(profile_path);
     py::array_t<float> result(pixels.request().shape);
     std::copy_n(pixels.data(), size_t(height) * width * channels, result.mutable_data());
     const darkroom::ImageView view{result.mutable_data(), {0, 0, width, height}, channels, channels,

@@ -202,13 +202,13 @@ SeparableFilter separable_approximation(const std::vector<double>& taps, int r, 
     double left = energy;  // the energy of the terms not yet kept: sum of their s_k^2
     for (int k : order) {
         if (!(left > residual_energy * energy) || !(squares[k] > 0)) break;
-        const double s = std::sqrt(squares[k]);
+        const double s = std::sqrt(squares[k]), root = std::sqrt(s);  // each pass carries sqrt(s)
         std::vector<float> along_x(side), along_y(side);
         for (int i = 0; i < side; ++i) {
             double u = 0;
             for (int column = 0; column < side; ++column) u += tap(i, column) * v[size_t(column) * side + k];
-            along_x[i] = float(v[size_t(i) * side + k] * std::sqrt(s));  // each pass carries sqrt(s)
-            along_y[i] = float(u / s * std::sqrt(s));
+            along_x[i] = float(v[size_t(i) * side + k] * root);
+            along_y[i] = float(u / s * root);
         }
         filter.terms.push_back(std::move(along_x));
         filter.vertical_terms.push_back(std::move(along_y));

@@ -37,6 +37,17 @@ std::string frame_name(const fs::path& dir, const char* stem, int frame) {
 
 const std::string kLook = " --seed 11 --frame-width-mm 3 --print-width-mm 20";
 
+// "<dir>/nan.exr": a 16x12 mid-grey RGB plate whose pixel (3, 4) has a NaN in red.
+std::string grey_plate_with_nan(const fs::path& dir) {
+    OIIO::ImageBuf plate(OIIO::ImageSpec(16, 12, 3, OIIO::TypeDesc::FLOAT));
+    const float grey[3] = {0.18f, 0.18f, 0.18f}, nan[3] = {NAN, 0.18f, 0.18f};
+    OIIO::ImageBufAlgo::fill(plate, grey);
+    plate.setpixel(3, 4, nan);
+    const std::string path = (dir / "nan.exr").string();
+    REQUIRE(plate.write(path));
+    return path;
+}
+
 // How many times `what` occurs in `text`.
 size_t count(const std::string& text, const std::string& what) {
     size_t n = 0;
@@ -677,12 +688,7 @@ TEST_CASE("a grain profile is read once a run, before any frame", "[cli][batch][
 // printed once each; a sequence's name their frame. Every warning is in the log either way.
 TEST_CASE("a single image's messages name no frame and come once, a sequence's name the frame", "[cli][batch][bad-input]") {
     fs::path dir = fresh_dir("messages");
-    OIIO::ImageBuf with_nan(OIIO::ImageSpec(16, 12, 3, OIIO::TypeDesc::FLOAT));
-    const float grey[3] = {0.18f, 0.18f, 0.18f}, nan[3] = {NAN, 0.18f, 0.18f};
-    OIIO::ImageBufAlgo::fill(with_nan, grey);
-    with_nan.setpixel(3, 4, nan);
-    const std::string nan_image = (dir / "nan.exr").string(), corrupt = (dir / "corrupt.exr").string();
-    REQUIRE(with_nan.write(nan_image));
+    const std::string nan_image = grey_plate_with_nan(dir), corrupt = (dir / "corrupt.exr").string();
     std::ofstream(corrupt) << "this is not an EXR file";
 
     Result r = darkroom("develop " + nan_image + " -o " + (dir / "out.exr").string() + " --log " +
@@ -752,12 +758,7 @@ TEST_CASE("non-finite values are counted in the colour and the alpha, not in the
 // none: no MTF, no halation), not a bad pixel elsewhere in the file that cannot reach it.
 TEST_CASE("non-finite values are counted where a window's render reads them", "[cli][batch][bad-input]") {
     fs::path dir = fresh_dir("non-finite-window");
-    OIIO::ImageBuf plate(OIIO::ImageSpec(16, 12, 3, OIIO::TypeDesc::FLOAT));
-    const float grey[3] = {0.18f, 0.18f, 0.18f}, nan[3] = {NAN, 0.18f, 0.18f};
-    OIIO::ImageBufAlgo::fill(plate, grey);
-    plate.setpixel(3, 4, nan);
-    const std::string in = (dir / "nan.exr").string();
-    REQUIRE(plate.write(in));
+    const std::string in = grey_plate_with_nan(dir);
     const std::string flags = " --no-mtf --halation 0 --no-grain --window ";
     Result r = darkroom("develop " + in + " -o " + (dir / "away.exr").string() + flags + "8,0,8,12");
     INFO(r.output);
