@@ -121,7 +121,7 @@ void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_he
                    ->check(CLI::Range(1, 16)));
     run_option(cmd.add_option("-d", o.write.data_type,
                               "Output data type (uint10, uint12: that many bits where the format stores them, DPX "
-                              "and TIFF, else 16)")
+                              "and TIFF, else 16; default: the input's, where the format stores it)")
                    ->check(CLI::IsMember(output_data_types())));
     run_option(cmd.add_option("--compression", o.write.compression, "Output compression (e.g. zip, piz, dwaa:45)"));
     run_option(cmd.add_flag("-n", o.run.dry_run, "Dry run: say what would be done, write nothing"));

@@ -57,8 +57,14 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     out.window = out.window.moved(-dx, -dy);  // write_image takes the data window's coordinates
     report.develop_seconds = seconds_since(start);
 
+    // Densities are measurements past 1 D, not a picture in the input's precision: float unless -d.
+    const WriteOptions write = o.look.settings.output == OutputMode::density
+                                   ? o.batch.write
+                                   : with_input_data_type(o.batch.write, in.spec, job.output);
+    if (const std::string w = colour.integer_output_warning(job.output, writes_integers(job.output, write)); !w.empty())
+        progress.warn_once("integer output", report, w);
     start = std::chrono::steady_clock::now();
-    write_image(job.output, out, in.spec, o.batch.run.in_place ? "" : job.input, o.batch.write, [&] {
+    write_image(job.output, out, in.spec, o.batch.run.in_place ? "" : job.input, write, [&] {
         report.write_seconds = seconds_since(start);
         progress.add(report);
     });
@@ -87,8 +93,6 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
     const ColourIO colour(o.look.colour, o.look.settings.output, o.look.verbose);
     b.write.colour_space = colour.output_space();
     b.write.printing_density = colour.writes_printing_density();
-    if (const std::string w = colour.integer_output_warning(b.output, writes_integers(b.output, b.write)); !w.empty())
-        std::cerr << "darkroom: warning: " << w << "\n";
     run_batch(b, o.look.settings.frame, cmd.get_option("--frame")->count() > 0, o.look.threads, o.look.verbose,
               [&](int threads_per_frame) -> FrameWork {
                   LookOptions plan_look = o.look;

@@ -265,13 +265,8 @@ void apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const F
     apply_plate_grain_to_element(grain, o.profile, view, premultiplied_alpha_channel(in.spec), o.seed, job.frame, threads);
     report.develop_seconds = seconds_since(start);
     start = std::chrono::steady_clock::now();
-    // The element's own data type unless -d says otherwise, as oiiotool keeps it: a half
-    // render stays half (develop's results default to float, this is the input regrained).
-    WriteOptions write = o.batch.write;
-    const std::vector<std::string>& types = output_data_types();
-    if (write.data_type.empty() && std::find(types.begin(), types.end(), in.spec.format.c_str()) != types.end())
-        write.data_type = in.spec.format.c_str();
-    write_image(job.output, in.pixels, in.spec, o.batch.run.in_place ? "" : job.input, write, [&] {
+    write_image(job.output, in.pixels, in.spec, o.batch.run.in_place ? "" : job.input,
+                with_input_data_type(o.batch.write, in.spec, job.output), [&] {
         report.write_seconds = seconds_since(start);
         progress.add(report);
     });

@@ -125,6 +125,25 @@ const std::vector<std::string>& output_data_types() {
     return types;
 }
 
+WriteOptions with_input_data_type(WriteOptions options, const OIIO::ImageSpec& input, const std::string& path) {
+    if (!options.data_type.empty()) return options;
+    const OIIO::TypeDesc type = input.format;
+    if (type == OIIO::TypeDesc::HALF || type == OIIO::TypeDesc::FLOAT) {
+        if (is_float_format(path)) options.data_type = type.c_str();
+        return options;
+    }
+    if (type != OIIO::TypeDesc::UINT8 && type != OIIO::TypeDesc::UINT16) return options;
+    const std::string ext = lower_extension(path);
+    if (ext == ".exr" || ext == ".hdr") {
+        options.data_type = "half";
+        return options;
+    }
+    const int bits = input.get_int_attribute("oiio:BitsPerSample", 0);
+    options.data_type = type == OIIO::TypeDesc::UINT16 && (bits == 10 || bits == 12) ? "uint" + std::to_string(bits)
+                                                                                     : type.c_str();
+    return options;
+}
+
 namespace {
 
 // -d uint10 and uint12: 16-bit integers of which the file stores that many bits, where its

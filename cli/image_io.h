@@ -51,6 +51,7 @@ void require_known_compression(const std::string& path, const std::string& compr
 // How an output is encoded and what it says about itself.
 struct WriteOptions {
     std::string data_type;     // -d: uint8, uint10, uint12, uint16, half, float; empty: float for float formats, else uint16
+                               // (develop and grain apply fill it from the input: with_input_data_type)
     std::string compression;   // --compression, as OpenImageIO names it (e.g. "zip", "dwaa:45")
     std::string command_line;  // appended to Exif:ImageHistory and named in Software, as oiiotool does
     std::string look_json;     // the settings used, stored as "darkroom:look"
@@ -71,6 +72,13 @@ bool writes_integers(const std::string& path, const WriteOptions& options);
 
 // The data types -d accepts.
 const std::vector<std::string>& output_data_types();
+
+// -d's default for an output made from `input`, as oiiotool's: the input's own data type (a
+// half render's result stays half; an 8- or 16-bit, or 10- or 12-bit DPX, input's stays so),
+// where the output's format stores it: a half or float input in a format without floats (PNG,
+// DPX) gets the writer's default (uint16), an integer one in OpenEXR or Radiance HDR (no
+// integers) half. `options` unchanged where -d was given.
+WriteOptions with_input_data_type(WriteOptions options, const OIIO::ImageSpec& input, const std::string& path);
 
 // Writes through a TempFile (cli/atomic_file.h): a failed or interrupted write never leaves
 // a partial file; `committed` runs as the finished file takes its name (TempFile::commit).

@@ -143,6 +143,50 @@ TEST_CASE("a scan as 10-bit DPX says printing density, and a DPX's tags follow i
     CHECK(spec.get_int_attribute("oiio:BitsPerSample") == 12);
 }
 
+// With no -d, a result keeps its input's data type as oiiotool's outputs do, where the format
+// stores it: a half render's print is half (a float one would be twice the file), a 16-bit
+// TIFF's a 16-bit TIFF, a 10-bit DPX's a 10-bit DPX; densities stay float.
+TEST_CASE("develop writes its input's data type unless -d says otherwise, and densities as float", "[cli][metadata]") {
+    const std::string in = make_input("type-in.exr");
+    auto input_as = [&](const std::string& name, OIIO::TypeDesc type, int bits = 0) {
+        OIIO::ImageBuf buf(in);
+        REQUIRE(buf.read(0, 0, true, OIIO::TypeDesc::FLOAT));
+        if (bits) buf.specmod().attribute("oiio:BitsPerSample", bits);
+        buf.set_write_format(type);
+        const std::string path = (kTmp / name).string();
+        REQUIRE(buf.write(path));
+        return path;
+    };
+    const std::string half = input_as("type-half.exr", OIIO::TypeDesc::HALF),
+                      tiff16 = input_as("type-16.tif", OIIO::TypeDesc::UINT16),
+                      dpx10 = input_as("type-10.dpx", OIIO::TypeDesc::UINT16, 10);
+    struct Case {
+        std::string input, output, flags;
+        OIIO::TypeDesc type;
+        int bits;
+    };
+    const Case cases[] = {{half, "type-print.exr", "", OIIO::TypeDesc::HALF, 0},
+                          {half, "type-print-float.exr", " -d float", OIIO::TypeDesc::FLOAT, 0},
+                          {half, "type-density.exr", " --output density", OIIO::TypeDesc::FLOAT, 0},
+                          {in, "type-print-from-float.exr", "", OIIO::TypeDesc::FLOAT, 0},
+                          {tiff16, "type-print.tif", "", OIIO::TypeDesc::UINT16, 16},
+                          {tiff16, "type-print-16.exr", "", OIIO::TypeDesc::HALF, 0},
+                          {tiff16, "type-density.tif", " --output density", OIIO::TypeDesc::FLOAT, 32},
+                          {dpx10, "type-print.dpx", "", OIIO::TypeDesc::UINT16, 10}};
+    for (const Case& c : cases) {
+        const std::string out = (kTmp / c.output).string();
+        const Result r = darkroom("develop " + c.input + " -o " + out + c.flags);
+        INFO(c.input << " -> " << c.output << c.flags << ": " << r.output);
+        REQUIRE(r.exit_code == 0);
+        auto file = OIIO::ImageInput::open(out);
+        REQUIRE(file);
+        CHECK(file->spec().format == c.type);
+        if (c.bits) CHECK(file->spec().get_int_attribute("oiio:BitsPerSample") == c.bits);
+        // Linear values in integers: said, now that the input decides the file's type.
+        CHECK((r.output.find("as integers") != std::string::npos) == (c.output == "type-print.tif" || c.output == "type-print.dpx"));
+    }
+}
+
 // An output that cannot be written is found before any frame is read or developed (a frame's
 // failure is reported as "frame N ... failed"), so a farm job fails at once, not after a frame.
 TEST_CASE("an unwritable output is refused before any frame is developed", "[cli][bad-input]") {
