@@ -52,12 +52,22 @@ GrainSpec layer_grain(const GrainSpec& stock, const DevelopSettings& s, size_t c
     return g;
 }
 
+// The finest pixel pitch a plan is made for: below the wavelength of light a film's MTF,
+// grain and halation describe nothing a pixel could show, and their kernels' radii in pixels
+// (halation's hundreds of um) grow past what memory holds.
+constexpr double kMinPixelPitchUm = 0.1;
+
 MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width_px, const DevelopSettings& s,
                             uint32_t stream_base, const char* role, std::vector<std::string>& skipped) {
     const QualityTier& tier = quality_tier(s.quality);
     MaterialStages m;
     m.stock = stock;
     m.pixel_pitch_um = width_mm * 1000.0 / frame_width_px;
+    if (!(m.pixel_pitch_um >= kMinPixelPitchUm))
+        throw std::invalid_argument(std::string("the ") + role + "'s pixel pitch, " + fmt(m.pixel_pitch_um) + " um (" +
+                                    fmt(width_mm) + " mm across " + std::to_string(frame_width_px) +
+                                    " px), is below " + fmt(kMinPixelPitchUm) + " um: give a " + (std::string(role) == "film" ? "frame" : "print") +
+                                    " width of at least " + fmt(kMinPixelPitchUm * frame_width_px / 1000.0) + " mm");
     const std::string pitch = " at " + fmt(m.pixel_pitch_um) + " um pitch";
     for (size_t i = 0; i < stock.layers.size(); ++i) {
         const Layer& layer = stock.layers[i];

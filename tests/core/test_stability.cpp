@@ -388,6 +388,12 @@ TEST_CASE("settings just past their limits are refused, naming the setting", "[s
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.frame_width_mm = std::nextafter(1e4, 2e4); }),
                Catch::Contains("frame width must be 0-10000 mm"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.print_width_mm = below_zero; }), Catch::Contains("print width must be 0-10000 mm"));
+    // Pixels finer than 0.1 um (4 px across 0.4 um): a tiny width would size kernels past memory.
+    CHECK_THAT(refusal([&](DevelopSettings& s) { s.frame_width_mm = 0.0004 * (1 - 1e-9); }),
+               Catch::Contains("the film's pixel pitch") && Catch::Contains("give a frame width of at least 0.0004 mm"));
+    CHECK_THAT(refusal([&](DevelopSettings& s) { s.print_width_mm = 1e-300; }),
+               Catch::Contains("the paper's pixel pitch") && Catch::Contains("print width"));
+    CHECK(refusal([&](DevelopSettings& s) { s.frame_width_mm = s.print_width_mm = 0.0004 * (1 + 1e-9); }) == "accepted");
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.printer_lights[1] = std::nextafter(225.0, 300.0); }),
                Catch::Contains("printer lights"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.printer_lights[2] = std::nextafter(-175.0, -300.0); }),
