@@ -93,6 +93,9 @@ struct Instance {
     // compiled plan (Plan::in_image, Plan::for_frame): scrubbing a sequence compiles once.
     std::map<std::string, std::shared_ptr<const Plan>> plans;
     std::map<std::string, std::shared_ptr<const ocio::ColorConverter>> converters;
+    // Planned grain profiles by file and modification time: planning (each kernel's SVD) is
+    // done once, not on every tile a host asks for.
+    std::map<std::string, std::shared_ptr<const GrainSynthesisPlan>> grain_profiles;
 };
 
 Instance& instance_of(OfxImageEffectHandle effect) {
@@ -101,7 +104,7 @@ Instance& instance_of(OfxImageEffectHandle effect) {
     return *inst;
 }
 
-// A stock file's identity includes its modification time, so an edited file is reloaded.
+// A stock or grain profile file's identity includes its modification time, so an edited file is reloaded.
 std::string stock_key(const std::string& path_or_id, bool from_file) {
     if (!from_file) return path_or_id;
     std::error_code ec;
@@ -164,6 +167,30 @@ std::shared_ptr<const ocio::ColorConverter> converter_for(Instance& inst, const 
         ocio::resolve_config(config_path, "the OCIO config parameter"));
     inst.converters.emplace(key, converter);
     return converter;
+}
+
+// The grain profile file's synthesis, planned once per version of the file; a profile that
+// does not load, or is not of RGB, fails the render naming it (and is tried again next time).
+std::shared_ptr<const GrainSynthesisPlan> plate_grain_for(Instance& inst, const std::string& path) {
+    const std::string key = stock_key(path, true);
+    {
+        std::lock_guard<std::mutex> lock(inst.mutex);
+        auto it = inst.grain_profiles.find(key);
+        if (it != inst.grain_profiles.end()) return it->second;
+    }
+    std::shared_ptr<const GrainSynthesisPlan> plan;
+    try {
+        plan = std::make_shared<const GrainSynthesisPlan>(plan_grain_synthesis(load_grain_profile_file(path)));
+        require_profile_fits(int(plan->profile.channels.size()), 3);  // (the output's RGB)
+    } catch (const GrainProfileError& e) {
+        throw ParameterError(std::string("Grain profile: ") + e.what());
+    } catch (const std::invalid_argument& e) {
+        throw ParameterError(std::string("Grain profile '") + path + "': " + e.what());
+    }
+    std::lock_guard<std::mutex> lock(inst.mutex);
+    if (inst.grain_profiles.size() >= 8) inst.grain_profiles.clear();  // (edited files' old versions)
+    inst.grain_profiles[key] = plan;
+    return plan;
 }
 
 // The conversions a render applies: input space -> working space, working -> output space
@@ -486,18 +513,9 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     job.plan = plan.get();
     job.input = in;
     job.output_conversion = colour.out ? colour.out.get() : nullptr;
-    std::optional<GrainSynthesisPlan> plate_grain;
-    if (!settings.grain_profile.empty()) {
-        try {
-            plate_grain = plan_grain_synthesis(load_grain_profile_file(settings.grain_profile));
-            require_profile_fits(int(plate_grain->profile.channels.size()), 3);  // (the output's RGB)
-        } catch (const GrainProfileError& e) {
-            throw ParameterError(std::string("Grain profile: ") + e.what());
-        } catch (const std::invalid_argument& e) {
-            throw ParameterError(std::string("Grain profile '") + settings.grain_profile + "': " + e.what());
-        }
-    }
-    job.plate_grain = plate_grain ? &*plate_grain : nullptr;
+    const std::shared_ptr<const GrainSynthesisPlan> plate_grain =
+        settings.grain_profile.empty() ? nullptr : plate_grain_for(inst, settings.grain_profile);
+    job.plate_grain = plate_grain.get();
     job.seed = settings.develop.seed;
     job.grain_frame = settings.develop.frame;
     job.output = &output;

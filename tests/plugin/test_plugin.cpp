@@ -1,4 +1,5 @@
 // The OpenFX bundle, loaded by a test host exactly as a compositing host loads it.
+#include <chrono>
 #include <OpenImageIO/imagebuf.h>
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -691,6 +692,17 @@ TEST_CASE("a grain profile replaces the stock's grain as darkroom develop --grai
     RenderResult tiles = inst->render_tiles(9, {0, 0, w, h}, 23, 17);
     REQUIRE(tiles.status == kOfxStatOK);
     CHECK(same_bits(full.output, tiles.output));
+    // The planned profile is kept between renders, by the file's version: one edited (another
+    // stock's grain, a later modification time) is read again.
+    const auto written = fs::last_write_time(profile);
+    REQUIRE(std::system((std::string(DARKROOM_EXE) + " grain predict --stock kodak-vision3-500t --width 512 -o " +
+                         profile + " > /dev/null")
+                            .c_str()) == 0);
+    fs::last_write_time(profile, written + std::chrono::seconds(2));
+    RenderResult edited = inst->render(9, {0, 0, w, h});
+    REQUIRE(edited.status == kOfxStatOK);
+    CHECK_FALSE(same_bits(full.output, edited.output));
+    CHECK(edited.output.to_top_down() == develop(input, kCommonFlags + " --frame 9 --grain-profile " + profile));
     set_cpu_count(4);
     inst->set_string("grainProfile", "/nonexistent-profile.json");
     RenderResult bad = inst->render(9, {0, 0, w, h});
