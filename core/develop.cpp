@@ -63,11 +63,13 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
     MaterialStages m;
     m.stock = stock;
     m.pixel_pitch_um = width_mm * 1000.0 / frame_width_px;
-    if (!(m.pixel_pitch_um >= kMinPixelPitchUm))
+    if (!(m.pixel_pitch_um >= kMinPixelPitchUm)) {
+        const char* width = std::string(role) == "film" ? "frame" : "print";  // (the settings' names)
         throw std::invalid_argument(std::string("the ") + role + "'s pixel pitch, " + fmt(m.pixel_pitch_um) + " um (" +
-                                    fmt(width_mm) + " mm across " + std::to_string(frame_width_px) +
-                                    " px), is below " + fmt(kMinPixelPitchUm) + " um: give a " + (std::string(role) == "film" ? "frame" : "print") +
-                                    " width of at least " + fmt(kMinPixelPitchUm * frame_width_px / 1000.0) + " mm");
+                                    fmt(width_mm) + " mm across " + std::to_string(frame_width_px) + " px), is below " +
+                                    fmt(kMinPixelPitchUm) + " um: give a " + width + " width of at least " +
+                                    fmt(kMinPixelPitchUm * frame_width_px / 1000.0) + " mm");
+    }
     const std::string pitch = " at " + fmt(m.pixel_pitch_um) + " um pitch";
     for (size_t i = 0; i < stock.layers.size(); ++i) {
         const Layer& layer = stock.layers[i];
