@@ -76,21 +76,31 @@ Image render(const Plan& plan, const ConstImageView& in, const Window& window, i
     return out;
 }
 
-// One whole-frame develop per tier, the fastest of `runs` after a warm-up.
+// Whole-frame develops, the fastest of `runs` after a warm-up each. Several plans are run in
+// turn, a run of each per round, so that times compared with each other (a stage off against
+// on) are taken in the same moments of a shared machine, not minutes apart.
 struct Timed {
     double seconds = 0;
     std::vector<StageTime> stages;
 };
-Timed time_frame(const Plan& plan, const Image& scene, Image& out, int runs, int threads) {
-    Timed best{INFINITY, {}};
-    for (int r = 0; r <= runs; ++r) {
-        StageTimes times;
-        auto start = Clock::now();
-        plan.run(scene.view(), out.view(), threads, &times);
-        double s = seconds_since(start);
-        if (r > 0 && s < best.seconds) best = {s, stage_list(times)};
-    }
+struct Timing {
+    const Plan& plan;
+    Image& out;
+};
+std::vector<Timed> time_in_turn(const std::vector<Timing>& timings, const Image& scene, int runs, int threads) {
+    std::vector<Timed> best(timings.size(), Timed{INFINITY, {}});
+    for (int r = 0; r <= runs; ++r)
+        for (size_t i = 0; i < timings.size(); ++i) {
+            StageTimes times;
+            auto start = Clock::now();
+            timings[i].plan.run(scene.view(), timings[i].out.view(), threads, &times);
+            double s = seconds_since(start);
+            if (r > 0 && s < best[i].seconds) best[i] = {s, stage_list(times)};
+        }
     return best;
+}
+Timed time_frame(const Plan& plan, const Image& scene, Image& out, int runs, int threads) {
+    return time_in_turn({{plan, out}}, scene, runs, threads)[0];
 }
 
 // Sample windows along the frame's diagonal, window i centred in band i of the demo scene
@@ -334,15 +344,19 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
                                 {"scatter", [](DevelopSettings& d) { d.mtf = false; }},
                                 {"halation", [](DevelopSettings& d) { d.halation = 0; }}};
             for (const Off& off : offs) {
-                say(std::string("fast without ") + off.stage);
+                say(std::string("fast without ") + off.stage + ", in turn with it and with it at neutral");
                 DevelopSettings d = s;
                 off.turn_off(d);
-                Timed timed = time_frame(Plan::compile(film, &paper, d, frame), scene, out, o.runs, o.threads);
+                const Plan off_plan = Plan::compile(film, &paper, d, frame);
                 d.skip_noop_stages = false;
-                Timed neutral = time_frame(Plan::compile(film, &paper, d, frame), scene, out_neutral, o.runs, o.threads);
+                const Plan neutral_plan = Plan::compile(film, &paper, d, frame);
+                Image on_out(o.width, o.height, 3);
+                const std::vector<Timed> t =
+                    time_in_turn({{plan, on_out}, {off_plan, out}, {neutral_plan, out_neutral}}, scene, o.runs, o.threads);
+                const Timed &on = t[0], &timed = t[1], &neutral = t[2];
                 r.disabled.push_back({off.stage, timed.seconds, timed.stages,
-                                      stage_seconds_when_on(fast.stages, timed.stages, off.stage),
-                                      fast.seconds - timed.seconds, neutral.seconds, out.pixels == out_neutral.pixels});
+                                      stage_seconds_when_on(on.stages, timed.stages, off.stage),
+                                      on.seconds - timed.seconds, neutral.seconds, out.pixels == out_neutral.pixels});
             }
             say("fast stage after stage");
             DevelopSettings staged = s;

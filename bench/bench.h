@@ -87,8 +87,10 @@ struct DisabledStage {
     std::string stage;         // as StageTimes names it
     double seconds = 0;
     std::vector<StageTime> stages;
-    double stage_seconds_when_on = 0;  // that stage's time in the fast tier's full run (grain: its share of develop + grain)
-    double saved_seconds = 0;          // the fast tier's full run less this one
+    // The fast tier's full run is timed again in turn with this one (a run of each per round,
+    // and of the neutral one below), so that what is saved is measured in the same moments:
+    double stage_seconds_when_on = 0;  // that stage's time in that full run (grain: its share of develop + grain)
+    double saved_seconds = 0;          // that full run less this one
     // The same settings with the stage kept in the plan at its neutral value
     // (DevelopSettings::skip_noop_stages = false): what leaving it out saves, and whether
     // the two give the same pixels (they must).
