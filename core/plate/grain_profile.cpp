@@ -27,7 +27,10 @@ const char* encoding_name(SignalEncoding e) {
 double GrainChannel::sigma_at(double x) const {
     if (x <= level.front()) return sigma.front();
     if (x >= level.back()) return sigma.back();
-    size_t i = std::upper_bound(level.begin(), level.end(), x) - level.begin();
+    return sigma_in_segment(x, std::upper_bound(level.begin(), level.end(), x) - level.begin());
+}
+
+double GrainChannel::sigma_in_segment(double x, size_t i) const {
     double t = (x - level[i - 1]) / (level[i] - level[i - 1]);
     return sigma[i - 1] + t * (sigma[i] - sigma[i - 1]);
 }

@@ -32,6 +32,8 @@ struct GrainChannel {
 
     // Linear interpolation in level, held constant beyond the measured range.
     double sigma_at(double level) const;
+    // The same within the curve's segment i, level[i - 1] <= x < level[i] (x inside the range).
+    double sigma_in_segment(double level, size_t i) const;
     double acf(int dx, int dy) const;
 };
 

@@ -35,12 +35,42 @@ bool cholesky(const std::vector<double>& m, int n, std::vector<double>& l) {
 
 }  // namespace
 
+// Cells per segment of a response curve on average: a cell then rarely holds a level, so the
+// lookup's walk from the cell's segment is mostly no step.
+constexpr int kResponseCellsPerSegment = 16;
+
+ResponseLookup::ResponseLookup(const GrainChannel& channel) {
+    curve_.level = channel.level;
+    curve_.sigma = channel.sigma;
+    const std::vector<double>& level = curve_.level;
+    if (level.size() < 2 || !(level.back() > level.front())) return;  // (a single level: its sigma everywhere)
+    const size_t cells = kResponseCellsPerSegment * (level.size() - 1);
+    cells_per_level_ = double(cells) / (level.back() - level.front());
+    for (size_t c = 0; c < cells; ++c) {
+        const double start = level.front() + double(c) / cells_per_level_;
+        cell_segment_.push_back(uint32_t(std::upper_bound(level.begin(), level.end(), start) - level.begin()));
+    }
+}
+
+double ResponseLookup::sigma_at(double x) const {
+    const std::vector<double>& level = curve_.level;
+    if (x <= level.front()) return curve_.sigma.front();
+    if (x >= level.back()) return curve_.sigma.back();
+    const double cell = std::min((x - level.front()) * cells_per_level_, double(cell_segment_.size() - 1));
+    size_t i = cell_segment_[size_t(cell)];
+    // To the first level above x, as std::upper_bound (a cell's rounded start may lie past x).
+    while (i > 1 && level[i - 1] > x) --i;
+    while (level[i] <= x) ++i;
+    return curve_.sigma_in_segment(x, i);
+}
+
 GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile) {
     validate_grain_profile(profile, "grain profile");
     GrainSynthesisPlan plan;
     plan.profile = profile;
     const int n = (int)profile.channels.size();
     for (const GrainChannel& ch : profile.channels) {
+        plan.responses.emplace_back(ch);
         plan.kernels.push_back(design_grain_kernel(ch));
         const GrainKernel& k = plan.kernels.back();
         plan.filters.push_back(separable_approximation(k.taps, k.radius, kGrainKernelResidualEnergy));
@@ -115,7 +145,7 @@ void apply_grain_profile(const GrainSynthesisPlan& plan, const ImageView& image,
                 for (int f = 0; f < n; ++f)
                     for (int c = f * channels_per_field; c < (f + 1) * channels_per_field; ++c)
                         if (std::isfinite(px[c]))
-                            px[c] = float(px[c] + plan.profile.channels[f].sigma_at(px[c]) * grain[f][x - w.x0]);
+                            px[c] = float(px[c] + plan.responses[f].sigma_at(px[c]) * grain[f][x - w.x0]);
             }
         }
     });

@@ -63,6 +63,34 @@ TEST_CASE("the grain's amount follows the response curve at each pixel's level",
     }
 }
 
+// The per-pixel lookup of a response curve is its linear interpolation exactly (the same
+// segment, so the same arithmetic), on unevenly spaced levels (an analysis drops bins), at
+// and between every level, across each lookup cell's start, and beyond both ends.
+TEST_CASE("the response lookup gives the curve's sigma bit for bit", "[plate][synthesis]") {
+    GrainChannel uneven, even;  // (even: levels where the lookup's cells start, as a prediction's)
+    uneven.level = {-0.3, -0.29, 0.0, 0.001, 0.4, 0.41, 0.95, 2.0};
+    uneven.sigma = {0.01, 0.012, 0.02, 0.019, 0.03, 0.031, 0.05, 0.04};
+    for (int k = 0; k < 25; ++k) {
+        even.level.push_back(0.0928641 + k * (1.0 - 0.0928641) / 24);
+        even.sigma.push_back(0.02 * std::sqrt(k + 1.0));
+    }
+    for (const GrainChannel& ch : {uneven, even}) {
+        const ResponseLookup lookup(ch);
+        std::vector<double> xs{-1e30, -1.0, 1.0, 3.0, 1e30};
+        for (double l : ch.level)
+            for (double x : {l, std::nextafter(l, -1e9), std::nextafter(l, 1e9)}) xs.push_back(x);
+        for (int k = 0; k <= 20000; ++k) xs.push_back(-0.4 + 2.6 * k / 20000.0);
+        long differing = 0;
+        for (double x : xs) differing += lookup.sigma_at(x) != ch.sigma_at(x);
+        CHECK(differing == 0);
+    }
+    GrainChannel one;  // a single level: its sigma everywhere
+    one.level = {0.5};
+    one.sigma = {0.02};
+    CHECK(ResponseLookup(one).sigma_at(-3.0) == 0.02);
+    CHECK(ResponseLookup(one).sigma_at(7.0) == 0.02);
+}
+
 TEST_CASE("synthesised grain is a function of seed, frame and absolute pixel only", "[plate][synthesis][determinism]") {
     GrainProfile p = known_profile({{0.01, 0.0, 1.0, 1.5}, {0.01, 0.0, 1.0, 0.5}, {0.01, 0.0, 1.0, 0.0}},
                                    {1, 0.5, 0.2, 0.5, 1, 0.3, 0.2, 0.3, 1}, SignalEncoding::log, 0.0, 1.0);
