@@ -29,7 +29,6 @@ constexpr uint32_t kPlateGrainStream = 0x706c0000u;
 // frame than the direct 2D sum in double they replace (README, Plate matching).
 constexpr double kGrainKernelResidualEnergy = 1e-4;
 
-// What synthesis precomputes from a profile: reuse it across frames and tiles.
 // A channel's response curve for per-pixel use: GrainChannel::sigma_at's values exactly, the
 // segment found from a grid over the levels' range (the segment a cell starts in, then the
 // levels past it) where bisection, with its unpredictable branches, took a tenth of grain
@@ -45,6 +44,7 @@ private:
     double cells_per_level_ = 0;
 };
 
+// What synthesis precomputes from a profile: reuse it across frames and tiles.
 struct GrainSynthesisPlan {
     GrainProfile profile;
     std::vector<ResponseLookup> responses;  // per channel
