@@ -334,7 +334,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
 
         if (q == Quality::fast) {
             const TierResult& fast = r.tiers.back();
-            Image fast_pixels(o.width, o.height, 3), out_neutral(o.width, o.height, 3);
+            Image fast_pixels(o.width, o.height, 3), out_neutral(o.width, o.height, 3), on_out(o.width, o.height, 3);
             plan.run(scene.view(), fast_pixels.view(), o.threads);
             struct Off {
                 const char* stage;
@@ -350,7 +350,6 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
                 const Plan off_plan = Plan::compile(film, &paper, d, frame);
                 d.skip_noop_stages = false;
                 const Plan neutral_plan = Plan::compile(film, &paper, d, frame);
-                Image on_out(o.width, o.height, 3);
                 const std::vector<Timed> t =
                     time_in_turn({{plan, on_out}, {off_plan, out}, {neutral_plan, out_neutral}}, scene, o.runs, o.threads);
                 const Timed &on = t[0], &timed = t[1], &neutral = t[2];

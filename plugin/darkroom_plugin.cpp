@@ -104,8 +104,9 @@ Instance& instance_of(OfxImageEffectHandle effect) {
     return *inst;
 }
 
-// A stock or grain profile file's identity includes its modification time, so an edited file is reloaded.
-std::string stock_key(const std::string& path_or_id, bool from_file) {
+// The identity of a built-in stock id, or of a stock or grain profile file with its modification
+// time, so that an edited file is reloaded.
+std::string version_key(const std::string& path_or_id, bool from_file) {
     if (!from_file) return path_or_id;
     std::error_code ec;
     auto t = std::filesystem::last_write_time(path_or_id, ec);
@@ -120,7 +121,7 @@ std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, cons
     const DevelopSettings& s = n.develop;
     std::ostringstream key;
     key.precision(17);
-    key << stock_key(n.film, n.film_from_file) << '|' << stock_key(n.paper, n.paper_from_file) << '|' << frame.film_width
+    key << version_key(n.film, n.film_from_file) << '|' << version_key(n.paper, n.paper_from_file) << '|' << frame.film_width
         << '|' << s.exposure_ev << ',' << s.print_exposure_ev << ',' << int(s.output) << ','
         << int(s.input_units) << ',' << s.grain << ',' << s.mtf << ',' << s.halation << ',' << s.seed << ','
         << s.frame_width_mm << ',' << s.print_width_mm << ',' << quality_name(s.quality) << ','
@@ -172,7 +173,7 @@ std::shared_ptr<const ocio::ColorConverter> converter_for(Instance& inst, const 
 // The grain profile file's synthesis, planned once per version of the file; a profile that
 // does not load, or is not of RGB, fails the render naming it (and is tried again next time).
 std::shared_ptr<const GrainSynthesisPlan> plate_grain_for(Instance& inst, const std::string& path) {
-    const std::string key = stock_key(path, true);
+    const std::string key = version_key(path, true);
     {
         std::lock_guard<std::mutex> lock(inst.mutex);
         auto it = inst.grain_profiles.find(key);
