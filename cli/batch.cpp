@@ -23,8 +23,8 @@ namespace fs = std::filesystem;
 constexpr int kDefaultMaxFramesAtOnce = 8;
 
 // One frame, its report added to `progress`; returns its status.
-FrameReport::Status process_frame(const RunOptions& run, const FrameWork& work, const FrameJob& job, int threads,
-                                  bool first, Progress& progress) {
+FrameReport::Status process_frame(const RunOptions& run, const FrameWork& work, const DryRunCheck& dry_run_check,
+                                  const FrameJob& job, int threads, bool first, Progress& progress) {
     FrameReport report;
     report.frame = job.frame;
     report.input = job.input;
@@ -33,7 +33,13 @@ FrameReport::Status process_frame(const RunOptions& run, const FrameWork& work, 
         report.status = FrameReport::Status::skipped_existing;
     } else if (run.dry_run) {
         report.status = FrameReport::Status::dry_run;
-        if (!fs::exists(job.input)) progress.warn(report, "input '" + job.input + "' does not exist");
+        // The header alone: what the run would refuse or warn of, without reading the pixels.
+        try {
+            const OIIO::ImageSpec spec = read_image_spec(job.input);
+            if (dry_run_check) dry_run_check(job, spec, report, progress);
+        } catch (const UserError& e) {
+            progress.warn(report, e.what());
+        }
     } else {
         try {
             work(job, threads, first, report, progress);
@@ -51,7 +57,7 @@ FrameReport::Status process_frame(const RunOptions& run, const FrameWork& work, 
 // than one frame's rows (reading and writing overlap with the work). Without
 // --skip-bad-frames the first failure stops new frames from starting.
 void run_frames(const RunOptions& run, const std::vector<FrameJob>& jobs, int threads, bool verbose,
-                const PrepareFrames& prepare, Progress& progress) {
+                const PrepareFrames& prepare, const DryRunCheck& dry_run_check, Progress& progress) {
     const int most = run.frames_at_once > 0 ? run.frames_at_once : std::min(threads, kDefaultMaxFramesAtOnce);
     const int workers = std::max(1, std::min(int(jobs.size()), most));
     const int threads_per_frame = std::max(1, threads / workers);
@@ -63,7 +69,7 @@ void run_frames(const RunOptions& run, const std::vector<FrameJob>& jobs, int th
     std::atomic<bool> stop{false};
     auto worker = [&] {
         for (size_t i = next++; i < jobs.size() && !stop; i = next++) {
-            const FrameReport::Status status = process_frame(run, work, jobs[i], threads_per_frame, i == 0, progress);
+            const FrameReport::Status status = process_frame(run, work, dry_run_check, jobs[i], threads_per_frame, i == 0, progress);
             if (status == FrameReport::Status::failed && !run.skip_bad_frames) stop = true;
         }
     };
@@ -136,7 +142,7 @@ void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_he
 }
 
 void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int threads, bool verbose,
-               const PrepareFrames& prepare) {
+               const PrepareFrames& prepare, const DryRunCheck& dry_run_check) {
     const bool sequence = is_sequence_pattern(o.input) || is_sequence_pattern(o.output);
     if (sequence && frame_flag_given)
         throw UserError("--frame is for a single image: each frame of a sequence uses its own frame number");
@@ -162,7 +168,7 @@ void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int thr
                 write_run_log(o.run.log_path, progress.reports(), progress.elapsed_seconds(), command_line(),
                               signal_number);
         });
-        run_frames(o.run, jobs, threads, verbose, prepare, progress);
+        run_frames(o.run, jobs, threads, verbose, prepare, dry_run_check, progress);
     }
     progress.finish();
     const std::vector<FrameReport> reports = progress.reports();

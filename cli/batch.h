@@ -42,12 +42,17 @@ double seconds_since(std::chrono::steady_clock::time_point start);
 using FrameWork = std::function<void(const FrameJob& job, int threads, bool first, FrameReport& report, Progress& progress)>;
 // What the frames share, made once the threads each frame gets are known.
 using PrepareFrames = std::function<FrameWork(int threads_per_frame)>;
+// A dry run's look at a frame whose input header (`input`) was read: the warnings the run
+// would give before its pixels.
+using DryRunCheck =
+    std::function<void(const FrameJob& job, const OIIO::ImageSpec& input, FrameReport& report, Progress& progress)>;
 
 // Expands o's names into frames (a single image is frame `single_frame`; `frame_flag_given`:
 // --frame was given, which a sequence refuses), checks every output can be written before any
 // frame is read, runs the frames (in parallel, sharing `threads`, 0 = all cores) and throws
-// UserError naming each frame that failed. `verbose` prints how the threads are split.
+// UserError naming each frame that failed. `verbose` prints how the threads are split. A dry
+// run (-n) reads each input's header, warns where it cannot, and gives it to `dry_run_check`.
 void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int threads, bool verbose,
-               const PrepareFrames& prepare);
+               const PrepareFrames& prepare, const DryRunCheck& dry_run_check = {});
 
 }  // namespace darkroom::cli

@@ -20,6 +20,19 @@ struct DevelopOptions {
     std::string look_path, save_look_path;
 };
 
+// How the frame's output is written, given its input's header; warns (once a run) where
+// linear values would go into integers.
+WriteOptions frame_write_options(const DevelopOptions& o, const ColourIO& colour, const OIIO::ImageSpec& input,
+                                 const FrameJob& job, FrameReport& report, Progress& progress) {
+    // Densities are measurements past 1 D, not a picture in the input's precision: float unless -d.
+    const WriteOptions write = o.look.settings.output == OutputMode::density
+                                   ? o.batch.write
+                                   : with_input_data_type(o.batch.write, input, job.output);
+    if (const std::string w = colour.integer_output_warning(job.output, writes_integers(job.output, write)); !w.empty())
+        progress.warn_once("integer output", report, w);
+    return write;
+}
+
 // Develops and writes one frame; its report goes to `progress` as its output takes its
 // name (so a run interrupted then logs every finished output).
 void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& plans, const FrameJob& job,
@@ -57,12 +70,7 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     out.window = out.window.moved(-dx, -dy);  // write_image takes the data window's coordinates
     report.develop_seconds = seconds_since(start);
 
-    // Densities are measurements past 1 D, not a picture in the input's precision: float unless -d.
-    const WriteOptions write = o.look.settings.output == OutputMode::density
-                                   ? o.batch.write
-                                   : with_input_data_type(o.batch.write, in.spec, job.output);
-    if (const std::string w = colour.integer_output_warning(job.output, writes_integers(job.output, write)); !w.empty())
-        progress.warn_once("integer output", report, w);
+    const WriteOptions write = frame_write_options(o, colour, in.spec, job, report, progress);
     start = std::chrono::steady_clock::now();
     write_image(job.output, out, in.spec, o.batch.run.in_place ? "" : job.input, write, [&] {
         report.write_seconds = seconds_since(start);
@@ -102,6 +110,9 @@ void run_develop(DevelopOptions& o, CLI::App& cmd) {
                                               Progress& progress) {
                       develop_frame(o, colour, *plans, job, threads, o.look.verbose && first, report, progress);
                   };
+              },
+              [&](const FrameJob& job, const OIIO::ImageSpec& input, FrameReport& report, Progress& progress) {
+                  frame_write_options(o, colour, input, job, report, progress);
               });
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 
 #include "cli/atomic_file.h"
 
@@ -12,16 +13,29 @@ namespace darkroom::cli {
 
 namespace fs = std::filesystem;
 
-LoadedImage read_image(const std::string& path) {
+namespace {
+
+// The file opened at its first subimage, its header checked for pixels we can hold.
+std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
     if (!fs::exists(path)) throw UserError("input '" + path + "' does not exist");
     auto in = OIIO::ImageInput::open(path);
     if (!in) throw UserError("cannot read '" + path + "': " + OIIO::geterror());
-    LoadedImage out;
-    out.spec = in->spec();
-    const OIIO::ImageSpec& s = out.spec;
+    const OIIO::ImageSpec& s = in->spec();
     if (s.width <= 0 || s.height <= 0 || s.nchannels <= 0) throw UserError("'" + path + "' has no pixels");
     if ((long long)s.width * s.height * s.nchannels > (1LL << 32))
         throw UserError("'" + path + "' is too large (" + std::to_string(s.width) + "x" + std::to_string(s.height) + ")");
+    return in;
+}
+
+}  // namespace
+
+OIIO::ImageSpec read_image_spec(const std::string& path) { return open_image(path)->spec(); }
+
+LoadedImage read_image(const std::string& path) {
+    auto in = open_image(path);
+    LoadedImage out;
+    out.spec = in->spec();
+    const OIIO::ImageSpec& s = out.spec;
     out.pixels = Image(s.width, s.height, s.nchannels);
     if (!in->read_image(0, 0, 0, s.nchannels, OIIO::TypeDesc::FLOAT, out.pixels.pixels.data()))
         throw UserError("cannot read pixels of '" + path + "': " + in->geterror());

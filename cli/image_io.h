@@ -26,6 +26,9 @@ Window window_flag(const std::vector<int>& xywh, const Window& image, const std:
 // The file's first subimage (part), as oiiotool reads a file without -a.
 LoadedImage read_image(const std::string& path);
 
+// Its header alone (a dry run's look at an input), with read_image's checks and messages.
+OIIO::ImageSpec read_image_spec(const std::string& path);
+
 // What to warn of when a file read by read_image has parts past its first, which are neither
 // processed nor written (empty when it has one).
 std::string other_subimages_warning(const std::string& path, const LoadedImage& image);

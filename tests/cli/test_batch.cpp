@@ -565,6 +565,14 @@ TEST_CASE("dry run and no-clobber write nothing and an input is replaced only wh
     REQUIRE(r.exit_code == 0);
     CHECK_THAT(r.output, Catch::Contains("plate.0002.exr -> ") && Catch::Contains("dry run"));
     CHECK_FALSE(fs::exists(frame_name(dir, "out", 1)));
+    // A frame the run could not read is named by the dry run, from its header.
+    std::ofstream(frame_name(dir, "plate", 3)) << "not an image";
+    r = darkroom("develop " + seq_in + " -o " + (dir / "out.####.exr").string() + " --frames 1-4 -n");
+    INFO(r.output);
+    CHECK(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::Contains("cannot read '" + frame_name(dir, "plate", 3) + "'") &&
+                             Catch::Contains("input '" + frame_name(dir, "plate", 4) + "' does not exist"));
+    fs::remove(frame_name(dir, "plate", 3));
 
     // An output that only resolves to an input is refused; naming the input itself replaces it.
     const std::string before = file_bytes(frame_name(dir, "plate", 1));

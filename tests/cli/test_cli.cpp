@@ -182,8 +182,16 @@ TEST_CASE("develop writes its input's data type unless -d says otherwise, and de
         REQUIRE(file);
         CHECK(file->spec().format == c.type);
         if (c.bits) CHECK(file->spec().get_int_attribute("oiio:BitsPerSample") == c.bits);
-        // Linear values in integers: said, now that the input decides the file's type.
-        CHECK((r.output.find("as integers") != std::string::npos) == (c.output == "type-print.tif" || c.output == "type-print.dpx"));
+        // Linear values in integers: said, now that the input decides the file's type, and by a
+        // dry run too (from the input's header), which writes nothing.
+        const bool integers = c.output == "type-print.tif" || c.output == "type-print.dpx";
+        CHECK((r.output.find("as integers") != std::string::npos) == integers);
+        const std::string dry_out = (kTmp / ("dry-" + c.output)).string();
+        const Result dry = darkroom("develop " + c.input + " -o " + dry_out + c.flags + " -n");
+        INFO("dry run: " << dry.output);
+        CHECK(dry.exit_code == 0);
+        CHECK((dry.output.find("as integers") != std::string::npos) == integers);
+        CHECK_FALSE(fs::exists(dry_out));
     }
 }
 
