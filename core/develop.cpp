@@ -344,7 +344,7 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
     }
 }
 
-// Printing through one table (QualityTier::print_in_one_table) runs no grain or halation on
+// Printing through one table (QualityTier::print_table_nodes) runs no grain or halation on
 // the paper (nor its tabulated curves, which the table composes): its grain is in the film's
 // where the film layer has grain (fold_paper_grain), and its MTF is applied to the negative's
 // densities (Plan::print).
@@ -412,7 +412,7 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     const QualityTier& tier = quality_tier(settings.quality);
     const bool printing = settings.output == OutputMode::print;
     const bool one_print_table =
-        printing && tier.print_in_one_table && tier.print_table_nodes > 0 && film.is_colour() && paper->is_colour();
+        printing && tier.print_table_nodes > 0 && film.is_colour() && paper->is_colour();
     const double film_width_mm = settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm;
     const double print_width_mm =
         !printing ? 0.0 : settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm;
@@ -429,7 +429,6 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev});
-        const int nodes = tier.print_table_nodes;
         if (one_print_table) {
             fold_paper_grain(p.film_stages_, p.paper_stages_, *p.print_, p.film_exposure_scale_,
                              tier.curve_table_bits);
@@ -438,24 +437,10 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
             table_density_range(film, lo, hi);
             const PrintExposure& enlarger = *p.print_;
             const PrintView view(*paper);
-            p.print_table_ = Table3D(lo, hi, nodes, [&](const double* d, double* log2_xyz) {
+            p.print_table_ = Table3D(lo, hi, tier.print_table_nodes, [&](const double* d, double* log2_xyz) {
                 double paper_density[3];
                 print_densities(enlarger, *paper, d, paper_density);
                 Xyz xyz = view.xyz(paper_density);
-                for (int c = 0; c < 3; ++c) log2_xyz[c] = std::log2(std::max(xyz[c], 1e-30));
-            });
-        } else if (nodes > 0 && film.is_colour() && paper->is_colour()) {
-            std::array<double, 3> lo, hi;
-            table_density_range(film, lo, hi);
-            const PrintExposure& enlarger = *p.print_;
-            p.enlarger_table_ = Table3D(lo, hi, nodes, [&](const double* d, double* log2_h) {
-                enlarger.expose(d, log2_h);
-                for (int j = 0; j < 3; ++j) log2_h[j] = std::log2(std::clamp(log2_h[j], 1e-30, kMaxInput));
-            });
-            table_density_range(*paper, lo, hi);
-            const PrintView view(*paper);
-            p.view_table_ = Table3D(lo, hi, nodes, [&](const double* d, double* log2_xyz) {
-                Xyz xyz = view.xyz(d);
                 for (int c = 0; c < 3; ++c) log2_xyz[c] = std::log2(std::max(xyz[c], 1e-30));
             });
         }
@@ -528,27 +513,15 @@ std::vector<Plane> Plan::print(std::vector<Plane> negative, const Window& out, i
     }
     const PrintExposure& enlarger = *print_;
     StageTimer enlarger_timer(times, "enlarger");
-    std::vector<Plane> paper_exposure;
-    if (enlarger_table_) {
-        paper_exposure = per_row(negative, negative[0].window, 3, threads, [&](const float* const* d, float* const* h,
-                                                                               int width) {
-            enlarger_table_->apply_row_exp2(d, h, width);  // from log2 paper exposures
+    std::vector<Plane> paper_exposure =
+        per_pixel(negative, negative[0].window, enlarger.paper_layers(), threads, [&](const double* d, double* h) {
+            enlarger.expose(d, h);
+            for (int j = 0; j < enlarger.paper_layers(); ++j) h[j] = std::clamp(h[j], 0.0, kMaxInput);
         });
-    } else {
-        paper_exposure =
-            per_pixel(negative, negative[0].window, enlarger.paper_layers(), threads, [&](const double* d, double* h) {
-                enlarger.expose(d, h);
-                for (int j = 0; j < enlarger.paper_layers(); ++j) h[j] = std::clamp(h[j], 0.0, kMaxInput);
-            });
-    }
     enlarger_timer.stop();
     std::vector<Plane> paper_density =
         develop_material(paper_stages_, std::move(paper_exposure), out, frame_, threads, times);
     StageTimer view_timer(times, "view");
-    if (view_table_)
-        return per_row(paper_density, out, 3, threads, [&](const float* const* d, float* const* rgb, int width) {
-            xyz_table_to_rgb(*view_table_, d, rgb, width);
-        });
     const PrintView view(paper_stages_.stock);
     return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view.rgb(d, rgb); });
 }

@@ -174,11 +174,8 @@ private:
     Window frame_;
     MaterialStages film_stages_, paper_stages_;
     std::optional<PrintExposure> print_;     // set when the output is a print
-    // The fast tiers' printing of a colour negative: film densities -> log2 paper exposures,
-    // print densities -> log2 XYZ (stages/tables.h).
-    std::optional<Table3D> enlarger_table_, view_table_;
-    // Or both and the paper's development in one: film densities -> log2 XYZ of the print
-    // (QualityTier::print_in_one_table).
+    // The fast tiers' print of a colour negative on colour paper: the negative's densities
+    // -> log2 XYZ of the print (QualityTier::print_table_nodes, stages/tables.h).
     std::optional<Table3D> print_table_;
     int film_width_px_ = 0;                  // the film frame's width (FrameGeometry)
     bool monochrome_ = false;                // compiled for grey input

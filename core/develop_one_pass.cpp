@@ -120,15 +120,9 @@ bool Plan::runs_in_one_pass() const {
         decimation = film.halation[l]->decimation;
     }
     if (!print_) return true;
-    if (!separable_scatter(paper_stages_)) return false;
-    if (print_table_) return true;  // (the paper's grain and halation folded into the film's or left out)
-    if (!enlarger_table_ || !view_table_ || paper_stages_.curve_tables.empty()) return false;
-    // The paper's halation would need the whole print's exposure before its first row; one
-    // kept in the plan at strength 0 (skip_noop_stages false) adds exactly nothing.
-    for (size_t l = 0; l < paper_stages_.halation.size(); ++l)
-        if ((paper_stages_.halation[l] && paper_stages_.halation[l]->strength != 0) || paper_stages_.boolean_grain[l])
-            return false;
-    return true;
+    // A print through the one table (the paper's grain and halation folded into the film's or
+    // left out, its MTF on the negative's densities).
+    return print_table_.has_value() && separable_scatter(paper_stages_);
 }
 
 void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
@@ -198,39 +192,25 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
             return;
         }
 
-        // Paper: the enlarger's exposure (or, printing through one table, the negative's
-        // densities) -> the paper's scatter, on out_window's columns with the paper's halo.
+        // The print: the negative's densities -> the paper's scatter (its MTF), on out_window's
+        // columns with the paper's halo -> the print table.
         const ScatterFilters& paper = paper_scatter_filters;
         const int paper_x0 = out_window.x0 - paper.radius, paper_x1 = out_window.x1 + paper.radius;
         SeparableStream paper_scatter(out_window.width(), paper.filters, frame_.y0, frame_.y1, band_end,
                                       [&](int y, float* const* padded) {
                                           clock.mark(paper.stage);  // (the filtering of the rows read before)
                                           float* const* density = film_density_row(y);
-                                          float* inside[3];
-                                          for (int j = 0; j < 3; ++j) inside[j] = padded[j] + (film_window.x0 - paper_x0);
-                                          if (print_table_) {
-                                              for (int j = 0; j < 3; ++j)
-                                                  std::copy_n(density[j], film_window.width(), inside[j]);
-                                          } else {
-                                              enlarger_table_->apply_row_exp2(density, inside, film_window.width());
-                                              clock.mark("enlarger");
+                                          for (int j = 0; j < 3; ++j) {
+                                              std::copy_n(density[j], film_window.width(), padded[j] + (film_window.x0 - paper_x0));
+                                              hold_frame_edges(padded[j], paper_x0, paper_x1, frame_);
                                           }
-                                          for (int j = 0; j < 3; ++j) hold_frame_edges(padded[j], paper_x0, paper_x1, frame_);
                                       });
-        std::unique_ptr<LayerDevelop> paper_develop;
-        if (!print_table_) paper_develop = std::make_unique<LayerDevelop>(paper_stages_, out_window);
         Rows result(3, out_window.width());
         for (int y = band_begin; y < band_end; ++y) {
             float* const* spread = paper_scatter.row(y);
             clock.mark(paper.stage);
-            if (print_table_) {
-                xyz_table_to_rgb(*print_table_, spread, result.data(), out_window.width());
-                clock.mark("print table");
-            } else {
-                paper_develop->row(y, spread, out_window.width(), clock);
-                xyz_table_to_rgb(*view_table_, spread, result.data(), out_window.width());
-                clock.mark("view");
-            }
+            xyz_table_to_rgb(*print_table_, spread, result.data(), out_window.width());
+            clock.mark("print table");
             write_row(result.data(), 3, in, out, y, out_window.x0, out_window.width());
             clock.mark("write");
         }

@@ -9,8 +9,8 @@ namespace {
 constexpr QualityTier kTiers[] = {
     {Quality::reference, "reference", {0, 0.0}, 1, GrainMethod::boolean_model, 0, 0},
     {Quality::high, "high", {0, kSeparableTolerance}, 1, GrainMethod::filtered_noise, 0, 0},
-    {Quality::fast, "fast", {3, 1e-3, 2, true}, 4, GrainMethod::hashed_noise, 33, 8},
-    {Quality::preview, "preview", {3, 1e-2, 1, true}, 8, GrainMethod::hashed_noise, 33, 5, true},
+    {Quality::fast, "fast", {3, 1e-3, 2, true}, 8, GrainMethod::hashed_noise, 33, 6},
+    {Quality::preview, "preview", {2, 1e-2, 1, true}, 16, GrainMethod::hashed_noise, 33, 5},
 };
 
 }  // namespace

@@ -7,13 +7,13 @@
 //              Newson et al. 2017) rendered at the film's scale
 //   high       the same spectral printing; the PSF as a sum of separable terms (every tap
 //              within 1e-6 of the largest); grain as filtered Gaussian noise
-//   fast       printing and viewing through 3D tables on layer densities, the PSF tapered
-//              to a compact kernel (a centre delta and separable terms), halation on a 4x
-//              coarser grid, tabulated H&D curves, grain from hashed noise (sums of uniform
-//              bytes: core/random.h) through a kernel without its negligible outer taps
-//   preview    as fast with smaller kernels, and the print as one 3D table from the
-//              negative's densities to the print's colour, the paper's MTF applied to the
-//              negative's densities and its grain folded into the film's
+//   fast       the print of a colour negative as one 3D table from the negative's densities
+//              to the print's colour, the paper's MTF applied to the negative's densities
+//              and its grain folded into the film's; the PSF tapered to a compact kernel (a
+//              centre delta and separable terms), halation on an 8x coarser grid, tabulated
+//              H&D curves, grain from hashed noise (sums of uniform bytes: core/random.h)
+//              through a kernel without its negligible outer taps
+//   preview    as fast with smaller kernels
 //
 // Every tier is measured against the reference by `darkroom bench`.
 #pragma once
@@ -39,21 +39,17 @@ struct QualityTier {
     ScatterDesign scatter;    // the MTF's kernel (stages/scatter.h)
     int halation_decimation;  // halation on a grid this many times coarser (1: the pixels)
     GrainMethod grain;
-    // Printing: 0 = per-pixel spectral integration in double; otherwise the nodes per
-    // axis of 3D tables from the negative's densities to the paper's log exposures and
-    // from the print's densities to its log XYZ.
+    // Printing a colour negative on colour paper: 0 = per-pixel spectral integration in
+    // double; otherwise one 3D table of this many nodes per axis from the negative's densities
+    // to the print's log XYZ: the enlarger, the paper's H&D curves and the viewing composed,
+    // which needs the paper's stages between them to be pointwise. So the paper's MTF is
+    // applied before, to the negative's densities (as accurate as on its transmittance against
+    // the reference, measured, and two passes cheaper), the paper's grain is folded into the
+    // film's (develop.cpp, fold_paper_grain), and its halation is left out.
     int print_table_nodes;
     // H&D curves: 0 = evaluated per pixel; otherwise a table with 2^bits samples per
     // octave of exposure (stages/tables.h).
     int curve_table_bits;
-    // Printing a colour negative on colour paper as one 3D table (print_table_nodes per
-    // axis) from the negative's densities to the print's log XYZ: the enlarger, the paper's
-    // H&D curves and the viewing composed, which needs the paper's stages between them to be
-    // pointwise. So the paper's MTF is applied before, to the negative's densities (as
-    // accurate as on its transmittance against the reference, measured, and two passes
-    // cheaper), the paper's grain is folded into the film's (develop.cpp, fold_paper_grain),
-    // and its halation is left out.
-    bool print_in_one_table = false;
 };
 
 // The default of the command line, the plugin and the Python module: the fastest tier

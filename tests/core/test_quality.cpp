@@ -233,35 +233,38 @@ TEST_CASE("every tier prints within its stated colour error of the reference tie
     }
 }
 
-TEST_CASE("the preview tier prints through one table, the paper's MTF on the negative's densities",
+TEST_CASE("the fast tiers print through one table, the paper's MTF on the negative's densities",
           "[quality][print]") {
     Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     Image scene = demo_scene(96, 64);
-    DevelopSettings s;
-    s.frame_width_mm = 96 * 0.006;
-    s.print_width_mm = 96 * 0.0054;
-    s.quality = Quality::preview;
-    const Plan plan = Plan::compile(film, &paper, s, {96, 64});
-    auto has = [&](const std::string& what) {
-        for (const std::string& line : plan.describe())
-            if (line.find(what) != std::string::npos) return true;
-        return false;
-    };
-    CHECK(has("print: one table of 33 nodes per axis"));
-    CHECK(has("skipped grain (paper layer blue): folded into the film layer's"));
-    // The paper's MTF still acts: a paper without one prints otherwise.
-    Stock sharp = paper;
-    for (Layer& l : sharp.layers) l.mtf = make_curve({0, 1000}, {1, 1}, "flat");
-    const Image whole = test::render(film, &paper, s, scene, 1);
-    CHECK(test::render(film, &sharp, s, scene, 2).pixels != whole.pixels);
-    // Any thread count and window gives the same pixels (the paper's kernel reaches past a
-    // window as in the two-table print).
-    CHECK(test::render(film, &paper, s, scene, 5).pixels == whole.pixels);
-    for (Window w : {Window{0, 0, 37, 29}, Window{50, 41, 96, 64}, Window{77, 3, 78, 4}}) {
-        const Image part = test::render(film, &paper, s, scene, 2, w);
-        for (int y = w.y0; y < w.y1; ++y)
-            for (int x = w.x0; x < w.x1; ++x)
-                for (int c = 0; c < 3; ++c) REQUIRE(part.at(x, y)[c] == whole.at(x, y)[c]);
+    for (Quality quality : {Quality::fast, Quality::preview}) {
+        INFO(quality_name(quality));
+        DevelopSettings s;
+        s.frame_width_mm = 96 * 0.006;
+        s.print_width_mm = 96 * 0.0054;
+        s.quality = quality;
+        const Plan plan = Plan::compile(film, &paper, s, {96, 64});
+        auto has = [&](const std::string& what) {
+            for (const std::string& line : plan.describe())
+                if (line.find(what) != std::string::npos) return true;
+            return false;
+        };
+        CHECK(has("print: one table of 33 nodes per axis"));
+        CHECK(has("skipped grain (paper layer blue): folded into the film layer's"));
+        // The paper's MTF still acts: a paper without one prints otherwise.
+        Stock sharp = paper;
+        for (Layer& l : sharp.layers) l.mtf = make_curve({0, 1000}, {1, 1}, "flat");
+        const Image whole = test::render(film, &paper, s, scene, 1);
+        CHECK(test::render(film, &sharp, s, scene, 2).pixels != whole.pixels);
+        // Any thread count and window gives the same pixels (the paper's kernel reaches past a
+        // window).
+        CHECK(test::render(film, &paper, s, scene, 5).pixels == whole.pixels);
+        for (Window w : {Window{0, 0, 37, 29}, Window{50, 41, 96, 64}, Window{77, 3, 78, 4}}) {
+            const Image part = test::render(film, &paper, s, scene, 2, w);
+            for (int y = w.y0; y < w.y1; ++y)
+                for (int x = w.x0; x < w.x1; ++x)
+                    for (int c = 0; c < 3; ++c) REQUIRE(part.at(x, y)[c] == whole.at(x, y)[c]);
+        }
     }
 }
 
@@ -291,21 +294,24 @@ double print_grain_rms(const Stock& film, const Stock& paper, Quality quality, f
 
 }  // namespace
 
-TEST_CASE("the preview's print has the grain of both film and paper, the paper's folded into the film's",
+TEST_CASE("the fast tiers' print has the grain of both film and paper, the paper's folded into the film's",
           "[quality][print][grain]") {
     Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     Stock grainless = paper;
     for (Layer& l : grainless.layers) l.grain.rms_granularity = 0;
     // From a scene's shadows to its highlights, where the print's contrast carries the
-    // paper's grain back to the negative (at least kMinPrintContrast).
+    // paper's grain back to the negative (at least kMinPrintContrast), against the high tier,
+    // which grains the paper itself.
     for (float level : {0.05f, 0.18f, 0.9f}) {
-        const double fast = print_grain_rms(film, paper, Quality::fast, level);
-        const double preview = print_grain_rms(film, paper, Quality::preview, level);
-        const double film_alone = print_grain_rms(film, grainless, Quality::fast, level);
-        INFO("scene " << level << ": fast " << fast << ", preview " << preview << ", fast without the paper's grain "
-                      << film_alone);
-        CHECK(film_alone < 0.97 * fast);  // the paper's grain is worth folding in
-        CHECK(preview == Approx(fast).epsilon(0.05));
+        const double high = print_grain_rms(film, paper, Quality::high, level);
+        for (Quality quality : {Quality::fast, Quality::preview}) {
+            const double folded = print_grain_rms(film, paper, quality, level);
+            const double film_alone = print_grain_rms(film, grainless, quality, level);
+            INFO("scene " << level << ": high " << high << ", " << quality_name(quality) << " " << folded
+                          << ", without the paper's grain " << film_alone);
+            CHECK(film_alone < 0.97 * folded);  // the paper's grain is worth folding in
+            CHECK(folded == Approx(high).epsilon(0.05));
+        }
     }
 }
 
