@@ -5,7 +5,9 @@
 // wide frame whatever the size, so a smaller frame is a piece of the target), one warm-up run then `runs` timed
 // runs, the fastest kept with its per-stage times (Plan::run's StageTimes). A plain copy
 // of the same float RGB buffer on the same threads is timed in the same run, so every
-// time is also a multiple of the copy (its fastest of 20 runs). The reference tier is too slow for a whole frame:
+// time is also a multiple of the copy (its fastest of 20 runs, timed in turn with the fast
+// tier's frame runs where that tier is benchmarked: in the same moments as the target's
+// frame, on a machine whose speed drifts). The reference tier is too slow for a whole frame:
 // it renders only the sample windows (a window equals that window of the full frame) and
 // its frame time is extrapolated from them by pixel count, between bounds (each window
 // also computes its halo).
@@ -125,6 +127,7 @@ struct BenchReport {
     int runs = 0;
     int copy_runs = 0;  // the copy pass: fastest of this many after a warm-up
     double copy_seconds = 0;
+    bool copy_in_turn_with_fast = false;  // timed in the rounds of the fast tier's frame runs
     std::vector<Window> sample_windows;
     double pixel_pitch_um = 0;
     std::vector<double> mtf_cycles_per_px;

@@ -62,6 +62,7 @@ nlohmann::json report_json(const bench::BenchReport& r) {
         {"warmup_runs", 1},
         {"copy_seconds", r.copy_seconds},
         {"copy_runs", r.copy_runs},
+        {"copy_in_turn_with_fast", r.copy_in_turn_with_fast},
         {"sample_windows", windows},
         {"mtf_cycles_per_px", r.mtf_cycles_per_px},
         {"grain_wedge", {{"patches", r.grain_wedge_patches}, {"patch_px", r.grain_wedge_patch_px}}},
@@ -148,9 +149,10 @@ void print_report(const bench::BenchReport& r) {
                 r.film.c_str(), r.paper.c_str(), r.width, r.height, r.pixel_pitch_um);
     std::printf("machine: %s, %d cores, %d threads used, %s vectors\n", r.machine.cpu.c_str(), r.machine.cores,
                 r.threads, r.isa.c_str());
-    std::printf("copy pass (float RGB, same threads, parallel over rows): %.2f ms, fastest of %d. Develop times: fastest "
-                "of %d runs after 1 warm-up, in ms and x the copy pass\n\n",
-                copy_s * 1e3, r.copy_runs, r.runs);
+    std::printf("copy pass (float RGB, same threads, parallel over rows): %.2f ms, fastest of %d%s. Develop times: "
+                "fastest of %d runs after 1 warm-up, in ms and x the copy pass\n\n",
+                copy_s * 1e3, r.copy_runs, r.copy_in_turn_with_fast ? ", timed in turn with the fast tier's frame" : "",
+                r.runs);
 
     std::vector<std::string> names;
     for (const auto& t : r.tiers) names.push_back(t.name + (t.extrapolated ? " (*)" : ""));

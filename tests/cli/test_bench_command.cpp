@@ -20,6 +20,9 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
     for (const char* key : {"timed_runs", "warmup_runs", "copy_runs", "sample_windows", "mtf_cycles_per_px", "grain_wedge",
                             "grain_tolerance", "target", "disabled_stages"})
         CHECK(doc.contains(key));
+    // Four tiers, fast among them: the copy pass is timed in turn with its frame runs.
+    CHECK(doc["copy_in_turn_with_fast"] == true);
+    CHECK(doc["copy_runs"].get<int>() >= 20);
     REQUIRE(doc["tiers"].size() == 4);
     CHECK(doc["tiers"][0]["name"] == "reference");
     CHECK(doc["tiers"][0]["extrapolated_from_sample_windows"] == true);
