@@ -366,24 +366,31 @@ TEST_CASE("the fast tiers' run a row at a time gives the pixels of the stage-by-
 
 TEST_CASE("a result row is written to RGB and RGBA pixels, with the input's alpha, as its definition says",
           "[develop][write]") {
-    const int width = 16 * 3 + 5;  // vector blocks of every instruction set and a tail
+    const int width = 16 * 5 + 5;  // vector blocks of every instruction set and a tail
     std::vector<float> planes[3];
     for (int c = 0; c < 3; ++c)
         for (int x = 0; x < width; ++x) planes[c].push_back(float(c * 1000 + x));
-    const float* result[3] = {planes[0].data(), planes[1].data(), planes[2].data()};
     for (int in_channels : {1, 2, 3, 4, 5})
         for (int out_channels : {3, 4, 6})
-            for (size_t result_planes : {size_t(1), size_t(3)}) {
-                Image in(width, 1, in_channels), out(width, 1, out_channels, -7.0f);
-                for (size_t i = 0; i < in.pixels.size(); ++i) in.pixels[i] = -float(i);
-                write_row(result, result_planes, in.view(), out.view(), 0, 0, width);
-                const int alpha = colour_channel_count(in_channels);
-                INFO("in " << in_channels << ", out " << out_channels << ", planes " << result_planes);
-                for (int x = 0; x < width; ++x) {
-                    for (int c = 0; c < 3; ++c) REQUIRE(out.at(x, 0)[c] == planes[std::min<size_t>(c, result_planes - 1)][x]);
-                    const bool has_alpha = alpha < in_channels && out_channels >= 4;
-                    if (out_channels >= 4) REQUIRE(out.at(x, 0)[3] == (has_alpha ? in.at(x, 0)[alpha] : -7.0f));
-                    for (int c = 4; c < out_channels; ++c) REQUIRE(out.at(x, 0)[c] == -7.0f);
+            for (size_t result_planes : {size_t(1), size_t(3)})
+                // From every first pixel of a vector block: each alignment of the row in memory
+                // (RGB rows are streamed past the cache from their first 64-byte aligned pixel).
+                for (int first = 0; first <= 16; ++first) {
+                    const float* result[3] = {planes[0].data() + first, planes[1].data() + first,
+                                              planes[2].data() + first};
+                    Image in(width, 1, in_channels), out(width, 1, out_channels, -7.0f);
+                    for (size_t i = 0; i < in.pixels.size(); ++i) in.pixels[i] = -float(i);
+                    write_row(result, result_planes, in.view(), out.view(), 0, first, width - first);
+                    const int alpha = colour_channel_count(in_channels);
+                    INFO("in " << in_channels << ", out " << out_channels << ", planes " << result_planes << ", from "
+                               << first);
+                    for (int x = 0; x < width; ++x) {
+                        for (int c = 0; c < 3; ++c)
+                            REQUIRE(out.at(x, 0)[c] ==
+                                    (x < first ? -7.0f : planes[std::min<size_t>(c, result_planes - 1)][x]));
+                        const bool has_alpha = alpha < in_channels && out_channels >= 4 && x >= first;
+                        if (out_channels >= 4) REQUIRE(out.at(x, 0)[3] == (has_alpha ? in.at(x, 0)[alpha] : -7.0f));
+                        for (int c = 4; c < out_channels; ++c) REQUIRE(out.at(x, 0)[c] == -7.0f);
+                    }
                 }
-            }
 }
