@@ -121,10 +121,21 @@ __attribute__((always_inline)) inline void exposure_lanes(const float* px, int s
     }
 }
 
+// Stores a vector of 16 floats to p, 64-byte aligned, past the caches (a non-temporal store):
+// the pass never reads the result back, and its cache line need not be read from memory
+// before it is written (a frame's result is far larger than the caches). Asm, since the
+// intrinsic needs a target attribute this template (compiled for each instruction set) lacks.
+template <typename V>
+__attribute__((always_inline)) inline void stream_store(float* p, const V& v) {
+    static_assert(sizeof(V) == 64, "a whole cache line");
+    asm("vmovntps %1, %0" : "=m"(*reinterpret_cast<V*>(p)) : "v"(v));
+}
+
 // Pixels x ... of the result's three rows into RGB (out_stride 3) or RGB and alpha (4, the
 // alpha from the input's channel `alpha`, its pixels in_stride apart) in vector registers;
-// other layouts a value at a time: the same values.
-template <typename V>
+// other layouts a value at a time: the same values. `streaming`: RGB pixels at a 64-byte
+// aligned address, stored past the caches.
+template <typename V, bool streaming = false>
 __attribute__((always_inline)) inline void write_lanes(const float* const* result, const float* in_px, int in_stride,
                                                        int alpha, float* out_px, int out_stride, int x) {
     constexpr int lanes = sizeof(V) / sizeof(float);
@@ -136,9 +147,15 @@ __attribute__((always_inline)) inline void write_lanes(const float* const* resul
     if constexpr (lanes >= 4) {
         const auto i = std::make_index_sequence<lanes>();
         if (out_stride == 3 && !in_px) {
-            simd::store(out, shuffled<Interleave<0, 3, lanes>>(c, i));
-            simd::store(out + lanes, shuffled<Interleave<1, 3, lanes>>(c, i));
-            simd::store(out + 2 * lanes, shuffled<Interleave<2, 3, lanes>>(c, i));
+            auto put = [](float* p, const V& v) {
+                if constexpr (streaming)
+                    stream_store(p, v);
+                else
+                    simd::store(p, v);
+            };
+            put(out, shuffled<Interleave<0, 3, lanes>>(c, i));
+            put(out + lanes, shuffled<Interleave<1, 3, lanes>>(c, i));
+            put(out + 2 * lanes, shuffled<Interleave<2, 3, lanes>>(c, i));
             return;
         }
         if (out_stride == 4 && in_px) {
@@ -155,16 +172,6 @@ __attribute__((always_inline)) inline void write_lanes(const float* const* resul
     }
 }
 
-// Stores a vector of 16 floats to p, 64-byte aligned, past the caches (a non-temporal store):
-// the pass never reads the result back, and its cache line need not be read from memory
-// before it is written (a frame's result is far larger than the caches). Asm, since the
-// intrinsic needs a target attribute this template (compiled for each instruction set) lacks.
-template <typename V>
-__attribute__((always_inline)) inline void stream_store(float* p, const V& v) {
-    static_assert(sizeof(V) == 64, "a whole cache line");
-    asm("vmovntps %1, %0" : "=m"(*reinterpret_cast<V*>(p)) : "v"(v));
-}
-
 struct WriteRow {
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* const* result, const float* in_px, int in_stride,
@@ -175,18 +182,10 @@ struct WriteRow {
             // aligned lines, streamed (the same values; 3-4 % of a 4K frame's time here).
             if (out_stride == 3 && !in_px && width >= 4 * lanes) {
                 const uintptr_t offset = reinterpret_cast<uintptr_t>(out_px) % 64;  // (a float's: a multiple of 4)
-                using V = typename simd::Lanes<lanes>::F;
                 const int head = int((64 - offset) / 4 % 16 * 11 % 16);  // 3 head = (64 - offset) / 4 mod 16
                 for (; x < head; ++x) write_lanes<simd::Float1>(result, in_px, in_stride, alpha, out_px, out_stride, x);
-                const auto j = std::make_index_sequence<lanes>();
-                for (; x + lanes <= width; x += lanes) {
-                    V c[3];
-                    for (int i = 0; i < 3; ++i) simd::load(c[i], result[i] + x);
-                    float* out = out_px + size_t(x) * 3;
-                    stream_store(out, shuffled<Interleave<0, 3, lanes>>(c, j));
-                    stream_store(out + lanes, shuffled<Interleave<1, 3, lanes>>(c, j));
-                    stream_store(out + 2 * lanes, shuffled<Interleave<2, 3, lanes>>(c, j));
-                }
+                for (; x + lanes <= width; x += lanes)
+                    write_lanes<typename simd::Lanes<lanes>::F, true>(result, in_px, in_stride, alpha, out_px, 3, x);
                 asm volatile("sfence" ::: "memory");  // (ordered before whatever reads the result)
             }
         }
