@@ -123,12 +123,18 @@ __attribute__((always_inline)) inline void exposure_lanes(const float* px, int s
 
 // Stores a vector of 16 floats to p, 64-byte aligned, past the caches (a non-temporal store):
 // the pass never reads the result back, and its cache line need not be read from memory
-// before it is written (a frame's result is far larger than the caches). Asm, since the
-// intrinsic needs a target attribute this template (compiled for each instruction set) lacks.
+// before it is written (a frame's result is far larger than the caches). Not the intrinsic,
+// which needs a target attribute this template (compiled for each instruction set) lacks:
+// clang's builtin, or for GCC the instruction itself (clang rejects a 512-bit asm operand
+// outside an AVX-512 function).
 template <typename V>
 __attribute__((always_inline)) inline void stream_store(float* p, const V& v) {
     static_assert(sizeof(V) == 64, "a whole cache line");
+#if defined(__clang__)
+    __builtin_nontemporal_store(v, reinterpret_cast<V*>(p));
+#else
     asm("vmovntps %1, %0" : "=m"(*reinterpret_cast<V*>(p)) : "v"(v));
+#endif
 }
 
 // Pixels x ... of the result's three rows into RGB (out_stride 3) or RGB and alpha (4, the
