@@ -70,7 +70,8 @@ bool separable_scatter(const MaterialStages& m) {
     return true;
 }
 
-// Develops the layers' rows in place (exposures to densities), with grain where a layer has it.
+// Develops the layers' rows (exposures to densities, in place or into other rows), with grain
+// where a layer has it.
 class LayerDevelop {
 public:
     LayerDevelop(const MaterialStages& m, const Window& w) : m_(m) {
@@ -79,14 +80,14 @@ public:
             if (g) grains.push_back(&*g);
         if (!grains.empty()) noise_stream_ = std::make_unique<GrainNoiseStream>(grains, w);
     }
-    void row(int y, float* const* rows, int width, RowClock& clock) {
+    void row(int y, const float* const* exposure, float* const* density, int width, RowClock& clock) {
         const float* const* noise = noise_stream_ ? noise_stream_->row(y) : nullptr;
         size_t g = 0;
         for (size_t l = 0; l < m_.curve_tables.size(); ++l) {
             if (m_.grain[l])
-                develop_row_with_grain(m_.curve_tables[l], *m_.grain[l], noise[g++], width, rows[l]);
+                develop_row_with_grain(m_.curve_tables[l], *m_.grain[l], noise[g++], width, exposure[l], density[l]);
             else
-                m_.curve_tables[l].apply_row(rows[l], rows[l], width);
+                m_.curve_tables[l].apply_row(exposure[l], density[l], width);
         }
         clock.mark(kDevelopAndGrainStage);
     }
@@ -172,15 +173,18 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
             for (size_t l = 0; l < layers; ++l) hold_frame_edges(padded[l], padded_x0, padded_x1, frame_);
         });
         LayerDevelop film_develop(film, film_window);
-        auto film_density_row = [&](int y) {  // film_window's row y of each layer, in the scatter's rows
-            float* const* density = film_scatter.row(y);
+        // film_window's row y of each layer's densities, into `density`, or (null) in the scatter's
+        // rows, which it returns.
+        auto film_density_row = [&](int y, float* const* density) {
+            float* const* exposure = film_scatter.row(y);
             clock.mark(film_scatter_filters.stage);
-            film_develop.row(y, density, film_window.width(), clock);
+            if (!density) density = exposure;
+            film_develop.row(y, exposure, density, film_window.width(), clock);
             return density;
         };
         if (!print_) {
             for (int y = band_begin; y < band_end; ++y) {
-                float* const* density = film_density_row(y);
+                float* const* density = film_density_row(y, nullptr);
                 for (size_t l = 0; l < layers; ++l)
                     convert_row(settings_.output, film.stock.layers[l].density_curve.y_min(), density[l],
                                 film_window.width());
@@ -199,11 +203,10 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         SeparableStream paper_scatter(out_window.width(), paper.filters, frame_.y0, frame_.y1, band_end,
                                       [&](int y, float* const* padded) {
                                           clock.mark(paper.stage);  // (the filtering of the rows read before)
-                                          float* const* density = film_density_row(y);
-                                          for (int j = 0; j < 3; ++j) {
-                                              std::copy_n(density[j], film_window.width(), padded[j] + (film_window.x0 - paper_x0));
-                                              hold_frame_edges(padded[j], paper_x0, paper_x1, frame_);
-                                          }
+                                          float* inside[3];
+                                          for (int j = 0; j < 3; ++j) inside[j] = padded[j] + (film_window.x0 - paper_x0);
+                                          film_density_row(y, inside);
+                                          for (int j = 0; j < 3; ++j) hold_frame_edges(padded[j], paper_x0, paper_x1, frame_);
                                       });
         Rows result(3, out_window.width());
         for (int y = band_begin; y < band_end; ++y) {

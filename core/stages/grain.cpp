@@ -211,13 +211,14 @@ void apply_grain(Plane& density, const GrainModel& g, int threads) {
 }
 
 void develop_row_with_grain(const LogAxisTable& develop, const GrainModel& g, const float* noise, int width,
-                            float* row) {
-    develop.apply_row_with_noise(row, noise, g.d_min, row, width);
+                            const float* exposure, float* density) {
+    develop.apply_row_with_noise(exposure, noise, g.d_min, density, width);
 }
 
 void develop_with_grain(Plane& plane, const LogAxisTable& develop, const GrainModel& g, int threads) {
     filter_grain_noise(g, plane.window, threads, [&](int y, const float* n) {
-        develop_row_with_grain(develop, g, n, plane.window.width(), plane.row(y));
+        float* row = plane.row(y);
+        develop_row_with_grain(develop, g, n, plane.window.width(), row, row);
     });
 }
 

@@ -89,9 +89,9 @@ void apply_grain(Plane& density, const GrainModel& grain, int threads);
 // becomes densities, D = curve(H) and its amplitude from one lookup of `develop` (built with
 // the grain's amplitude_at, tables.h), then grain as apply_grain adds it.
 void develop_with_grain(Plane& plane, const LogAxisTable& develop, const GrainModel& grain, int threads);
-// One row of it: `row` (width exposures) becomes densities, with `noise` the grain's filtered
-// noise there.
+// One row of it: width exposures to densities (`density` may be `exposure`), with `noise` the
+// grain's filtered noise there.
 void develop_row_with_grain(const LogAxisTable& develop, const GrainModel& grain, const float* noise, int width,
-                            float* row);
+                            const float* exposure, float* density);
 
 }  // namespace darkroom
