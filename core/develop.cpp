@@ -9,6 +9,7 @@
 
 #include "core/develop_rows.h"
 #include "core/parallel.h"
+#include "core/stages/filters.h"
 #include "core/spectral.h"
 
 namespace darkroom {
@@ -300,43 +301,152 @@ double variance_kept_by_scatter(const GrainModel& grain, const ScatterKernel& sc
     return kept / grain_sum;
 }
 
+// Gauss-Hermite quadrature for the standard normal: E[f(Z)] ~ sum_k weight_k f(node_k), exact
+// for polynomials to degree 2n - 1 (Golub & Welsch 1969: the nodes are the eigenvalues of the
+// probabilists' Hermite recurrence's Jacobi matrix, the weights the squared first components
+// of its unit eigenvectors).
+struct NormalQuadrature {
+    explicit NormalQuadrature(int n) {
+        std::vector<double> jacobi(size_t(n) * n, 0.0), values, vectors;
+        for (int k = 1; k < n; ++k) jacobi[size_t(k - 1) * n + k] = jacobi[size_t(k) * n + k - 1] = std::sqrt(double(k));
+        symmetric_eigen(jacobi, n, values, vectors);
+        for (int k = 0; k < n; ++k) {
+            node.push_back(values[k]);
+            weight.push_back(vectors[k] * vectors[k]);
+        }
+    }
+    std::vector<double> node, weight;
+};
+
+// The x >= 0 that minimises |A x - b| for a 3x3 A, with x_i held at 0 where !free[i]: exact
+// minimisation along one coordinate at a time, projected onto x_i >= 0 (it converges for
+// this convex problem; the sweeps are far more than three unknowns need).
+std::array<double, 3> nonnegative_least_squares(const double (&a)[3][3], const double (&b)[3], const bool (&free)[3]) {
+    std::array<double, 3> x{};
+    for (int sweep = 0; sweep < 300; ++sweep)
+        for (int i = 0; i < 3; ++i) {
+            double column_norm = 0, gradient = 0;  // of |A x - b|^2 / 2 along x_i
+            for (int j = 0; j < 3; ++j) {
+                gradient += a[j][i] * (a[j][0] * x[0] + a[j][1] * x[1] + a[j][2] * x[2] - b[j]);
+                column_norm += a[j][i] * a[j][i];
+            }
+            if (free[i] && column_norm > 0) x[i] = std::max(0.0, x[i] - gradient / column_norm);
+        }
+    return x;
+}
+
+// The x in [lo, hi] where an increasing f reaches `aim` (within `tolerance`), and f there,
+// given f_lo = f(lo); hi and f(hi) where f(hi) < aim. Regula falsi with the Illinois step
+// (Dowell & Jarratt 1971), which keeps the bracket and converges superlinearly: a few
+// evaluations of f.
+template <typename F>
+std::pair<double, double> solve_increasing(const F& f, double lo, double f_lo, double hi, double aim, double tolerance) {
+    double below = f_lo - aim, above = f(hi) - aim;
+    if (above <= 0) return {hi, above + aim};
+    if (below >= 0) return {lo, below + aim};
+    int kept = 0;  // the end kept by the last step: -1 lo, +1 hi
+    for (int step = 0; step < 60; ++step) {
+        const double x = hi - above * (hi - lo) / (above - below), v = f(x) - aim;
+        if (std::abs(v) <= tolerance || !(x > lo && x < hi)) return {x, v + aim};
+        if (v > 0) {
+            hi = x, above = v;
+            if (kept == +1) below /= 2;
+            kept = +1;
+        } else {
+            lo = x, below = v;
+            if (kept == -1) above /= 2;
+            kept = -1;
+        }
+    }
+    return {hi, above + aim};
+}
+
 // Printing through one table leaves no place for the paper's grain, so it is folded into the
-// film's: each film layer's grain amplitude a(D) (its tabulated curve's second function) is
-// raised so that the print's density grain per pixel has the variance of both grains,
-//   a'(D)^2 = a(D)^2 + (sigma_paper(Dp) / (g kappa sqrt(rho)))^2,
-// with Dp the density the paper layer prints from D, g = dDp/dD the print's contrast there,
-// kappa the film grain filter's gain per pixel and rho the share of variance the paper's MTF
-// keeps of the film's grain (it keeps all of the paper's own, which is added after it). Dp
-// and g are taken along the grey scale (scene grey exposed at the plan's exposure) and held
-// at least kMinPrintContrast: in the print's toe and shoulder the negative cannot carry all
-// of the paper's grain (README, "How preview prints", measures what is left).
-constexpr double kMinPrintContrast = 0.5;
+// film's: each film layer's grain amplitude a_i(D) (its tabulated curve's second function) is
+// raised to sqrt(a_i(D)^2 + e_i(D)^2) so that each paper layer's density grain per pixel has
+// the variance of both grains. At the table's input the film layer's grain has the spread
+// s_i = a_i kappa_i sqrt(rho_i), kappa_i the film grain filter's gain per pixel and rho_i the
+// share of variance the paper's MTF keeps of it (it keeps all of the paper's own, which is
+// added after it). Along the grey scale (scene grey exposed at the plan's exposure):
+//  1. The print's curve p_j(D_j) is far from straight over the negative's grain in its toe
+//     and shoulder, so each layer's own extra spread is solved through the curve, not its
+//     slope: Var p_j(D_j + s Z) = Var p_j(D_j + s_j Z) + sigma_paper_j^2 (Z standard normal;
+//     Gauss-Hermite quadrature, s by regula falsi, at most kMaxFoldedGrainD: where the curve is
+//     flat no spread carries the paper's grain). The variance that spread adds over the
+//     film's, per unit of added variance t_j, is the curve's effective squared contrast g_j.
+//  2. Each layer's extra grain also reaches the other paper layers, through the contrasts
+//     J_ji = dp_j/dD_i (the negative's dyes absorb in more than one paper layer's band), so
+//     the t_i >= 0 solve, in the least-squares sense,
+//       g_j t_j + sum_{i != j} J_ji^2 t_i = sigma_paper_j^2   for each paper layer j
+//     (0 where the paper layer has no grain; t_i = 0 where the film layer has none).
+// What the negative cannot carry (README, "How preview prints") is measured there.
+constexpr double kMaxFoldedGrainD = 0.5;
 void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
                       double exposure_scale, int curve_table_bits) {
     if (film.curve_tables.empty()) return;  // (the tiers that print through one table tabulate curves)
+    bool grained[3], any = false;
+    double gain[3] = {0, 0, 0};  // kappa_i sqrt(rho_i)
     for (size_t i = 0; i < 3; ++i) {
-        if (!film.grain[i] || !paper.grain[i]) continue;
-        const GrainModel& film_grain = *film.grain[i];
-        const GrainModel& paper_grain = *paper.grain[i];
-        const double kappa = film_grain.field_sigma();
-        const double rho = variance_kept_by_scatter(film_grain, paper.scatter[i]);
-        std::vector<double> density, extra;
-        for (double stops = -16; stops <= 16; stops += 0.125) {
-            double d[3], dp[3], dp_up[3];
-            for (size_t l = 0; l < 3; ++l) {
-                const auto& w = film.rgb_weights[l];
-                const double h = 0.18 * std::exp2(stops) * exposure_scale * (w[0] + w[1] + w[2]);
-                d[l] = film.stock.layers[l].density_curve(std::log10(std::max(h, 1e-30)));
-            }
-            print_densities(enlarger, paper.stock, d, dp);
-            constexpr double kStep = 0.01;
-            d[i] += kStep;
-            print_densities(enlarger, paper.stock, d, dp_up);
-            const double contrast = std::max(std::abs(dp_up[i] - dp[i]) / kStep, kMinPrintContrast);
-            density.push_back(d[i] - kStep);
-            extra.push_back(grain_sigma_at(paper_grain, dp[i]) / (contrast * kappa * std::sqrt(rho)));
+        if (film.grain[i])
+            gain[i] = film.grain[i]->field_sigma() * std::sqrt(variance_kept_by_scatter(*film.grain[i], paper.scatter[i]));
+        grained[i] = gain[i] > 0;
+        any = any || (grained[i] && paper.grain[i]);
+    }
+    if (!any) return;
+    const NormalQuadrature normal(8);
+    std::vector<double> density[3], extra[3];
+    for (double stops = -16; stops <= 16; stops += 0.25) {
+        double d[3], dp[3];
+        for (size_t l = 0; l < 3; ++l) {
+            const auto& w = film.rgb_weights[l];
+            const double h = 0.18 * std::exp2(stops) * exposure_scale * (w[0] + w[1] + w[2]);
+            d[l] = film.stock.layers[l].density_curve(std::log10(std::max(h, 1e-30)));
         }
-        const Curve extra_at = make_curve(std::move(density), std::move(extra), "paper grain on the film's densities");
+        if (!density[0].empty() && d[0] == density[0].back() && d[1] == density[1].back() && d[2] == density[2].back())
+            continue;  // (beyond the film's curves, where a step changes no density)
+        print_densities(enlarger, paper.stock, d, dp);
+        double contrast[3][3];  // J_ji
+        for (int i = 0; i < 3; ++i) {
+            constexpr double kStep = 0.01;
+            double d_up[3] = {d[0], d[1], d[2]}, dp_up[3];
+            d_up[i] += kStep;
+            print_densities(enlarger, paper.stock, d_up, dp_up);
+            for (int j = 0; j < 3; ++j) contrast[j][i] = (dp_up[j] - dp[j]) / kStep;
+        }
+        double a[3][3], b[3];
+        for (int j = 0; j < 3; ++j) {
+            b[j] = paper.grain[j] ? std::pow(grain_sigma_at(*paper.grain[j], dp[j]), 2) : 0.0;
+            for (int i = 0; i < 3; ++i) a[j][i] = contrast[j][i] * contrast[j][i];
+            if (!grained[j] || b[j] == 0) continue;
+            // Var p_j(D_j + s Z), the other layers' densities held.
+            auto print_variance = [&](double s) {
+                double mean = 0, square = 0;
+                for (size_t k = 0; k < normal.node.size(); ++k) {
+                    double dk[3] = {d[0], d[1], d[2]}, pk[3];
+                    dk[j] += s * normal.node[k];
+                    print_densities(enlarger, paper.stock, dk, pk);
+                    mean += normal.weight[k] * pk[j];
+                    square += normal.weight[k] * pk[j] * pk[j];
+                }
+                return std::max(0.0, square - mean * mean);
+            };
+            const double s_film = film.grain[j]->amplitude_at(d[j]) * gain[j];
+            const double film_variance = print_variance(s_film);
+            const double s_max = std::max(s_film, kMaxFoldedGrainD);
+            const auto [s, variance] = solve_increasing(print_variance, s_film, film_variance, s_max, film_variance + b[j],
+                                                       1e-3 * b[j]);
+            if (s > s_film) a[j][j] = (variance - film_variance) / (s * s - s_film * s_film);
+        }
+        const std::array<double, 3> t = nonnegative_least_squares(a, b, grained);
+        for (int i = 0; i < 3; ++i) {
+            density[i].push_back(d[i]);
+            extra[i].push_back(grained[i] ? std::sqrt(t[i]) / gain[i] : 0.0);
+        }
+    }
+    for (size_t i = 0; i < 3; ++i) {
+        if (!grained[i]) continue;
+        const GrainModel film_grain = *film.grain[i];
+        const Curve extra_at = make_curve(std::move(density[i]), std::move(extra[i]), "paper grain on the film's densities");
         film.curve_tables[i] = LogAxisTable(film.stock.layers[i].density_curve, curve_table_bits,
                                             [film_grain, extra_at](double d) {
                                                 return std::hypot(film_grain.amplitude_at(d), extra_at(d));

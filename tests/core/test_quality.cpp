@@ -299,10 +299,10 @@ TEST_CASE("the fast tiers' print has the grain of both film and paper, the paper
     Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     Stock grainless = paper;
     for (Layer& l : grainless.layers) l.grain.rms_granularity = 0;
-    // From a scene's shadows to its highlights, where the print's contrast carries the
-    // paper's grain back to the negative (at least kMinPrintContrast), against the high tier,
-    // which grains the paper itself.
-    for (float level : {0.05f, 0.18f, 0.9f}) {
+    // From a scene's shadows to highlights four stops over white (0.9), where the print's
+    // toe bends the curve over the negative's grain (what fold_paper_grain solves through),
+    // against the high tier, which grains the paper itself: within 5 % to 0.9 and 8 % above.
+    for (float level : {0.05f, 0.18f, 0.9f, 4.0f, 16.0f}) {
         const double high = print_grain_rms(film, paper, Quality::high, level);
         for (Quality quality : {Quality::fast, Quality::preview}) {
             const double folded = print_grain_rms(film, paper, quality, level);
@@ -310,7 +310,7 @@ TEST_CASE("the fast tiers' print has the grain of both film and paper, the paper
             INFO("scene " << level << ": high " << high << ", " << quality_name(quality) << " " << folded
                           << ", without the paper's grain " << film_alone);
             CHECK(film_alone < 0.97 * folded);  // the paper's grain is worth folding in
-            CHECK(folded == Approx(high).epsilon(0.05));
+            CHECK(folded == Approx(high).epsilon(level > 1 ? 0.08 : 0.05));
         }
     }
 }
