@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <type_traits>
 
 #include "core/parallel.h"
 #include "core/simd.h"
@@ -44,9 +45,12 @@ constexpr int kVecs = 8;
 // clears out first). Symmetric taps (taps[k] == taps[n-1-k], as every filter here has) are
 // folded: the two inputs a tap shares are added before the one multiply, which saves a
 // quarter of the arithmetic.
-template <int lanes, int vecs, int outputs, bool accumulate, typename RowOf>
+// kTaps: n, known when compiled (the taps then symmetric), so that the loops over the taps
+// unroll; 0: n and pairs as given.
+template <int lanes, int vecs, int outputs, bool accumulate, int kTaps, typename RowOf>
 __attribute__((always_inline)) inline int tap_blocks(const float* tap, int n, int pairs, int x, int width,
                                                      float* const* __restrict out, RowOf row_of) {
+    if constexpr (kTaps > 0) n = kTaps, pairs = kTaps / 2;
     using Vec = typename simd::Lanes<lanes>::F;
     constexpr int block = lanes * vecs;
     for (; x + block <= width; x += block) {
@@ -94,9 +98,19 @@ __attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int
                                                     RowOf row_of) {
     const bool symmetric = std::equal(tap, tap + n / 2, std::reverse_iterator<const float*>(tap + n));
     const int pairs = symmetric ? n / 2 : 0;  // taps k and n-1-k for k < pairs; then k in [pairs, n - pairs)
-    int x = tap_blocks<lanes, kVecs / outputs, outputs, accumulate>(tap, n, pairs, 0, width, out, row_of);
-    x = tap_blocks<lanes, 1, outputs, accumulate>(tap, n, pairs, x, width, out, row_of);
-    tap_blocks<1, 1, outputs, accumulate>(tap, n, pairs, x, width, out, row_of);
+    auto run = [&](auto taps) {  // (taps: std::integral_constant, kTaps)
+        constexpr int kTaps = decltype(taps)::value;
+        int x = tap_blocks<lanes, kVecs / outputs, outputs, accumulate, kTaps>(tap, n, pairs, 0, width, out, row_of);
+        x = tap_blocks<lanes, 1, outputs, accumulate, kTaps>(tap, n, pairs, x, width, out, row_of);
+        tap_blocks<1, 1, outputs, accumulate, kTaps>(tap, n, pairs, x, width, out, row_of);
+    };
+    // The fast tiers' kernels: the MTF's 7 taps (radius 3), the grain's 3.
+    if (symmetric && n == 7)
+        run(std::integral_constant<int, 7>());
+    else if (symmetric && n == 3)
+        run(std::integral_constant<int, 3>());
+    else
+        run(std::integral_constant<int, 0>());
 }
 
 struct ConvolveRow {
