@@ -8,6 +8,7 @@
 #include <limits>
 #include <utility>
 
+#include "core/parallel.h"
 #include "core/simd.h"
 
 // GCC warns that a vector value would be passed differently without AVX; the vector
@@ -252,7 +253,8 @@ float fast_exp2(float x) {
 }
 
 
-Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f)
+Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f,
+                 int threads)
     : nodes_(nodes) {
     std::array<double, 3> step;
     for (int a = 0; a < 3; ++a) {
@@ -261,13 +263,16 @@ Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& h
         scale_[a] = float(1.0 / step[a]);
     }
     values_.resize(size_t(nodes) * nodes * nodes);
-    for (int k = 0; k < nodes; ++k)
-        for (int j = 0; j < nodes; ++j)
-            for (int i = 0; i < nodes; ++i) {
-                double in[3] = {lo[0] + i * step[0], lo[1] + j * step[1], lo[2] + k * step[2]}, out[3];
-                f(in, out);
-                values_[(size_t(k) * nodes + j) * nodes + i] = {float(out[0]), float(out[1]), float(out[2]), 0.0f};
-            }
+    // Each node on its own: the planes of nodes along z shared among the threads.
+    parallel_for(0, nodes, threads, [&](int k_begin, int k_end) {
+        for (int k = k_begin; k < k_end; ++k)
+            for (int j = 0; j < nodes; ++j)
+                for (int i = 0; i < nodes; ++i) {
+                    double in[3] = {lo[0] + i * step[0], lo[1] + j * step[1], lo[2] + k * step[2]}, out[3];
+                    f(in, out);
+                    values_[(size_t(k) * nodes + j) * nodes + i] = {float(out[0]), float(out[1]), float(out[2]), 0.0f};
+                }
+    });
 }
 
 namespace {

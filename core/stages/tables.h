@@ -51,7 +51,10 @@ class Table3D {
 public:
     using Function = std::function<void(const double* in, double* out)>;
     Table3D() = default;
-    Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f);
+    // f is evaluated at the nodes on `threads` threads (0: all the processor's), so it must be
+    // safe to call from several at once; the values do not depend on how many.
+    Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f,
+            int threads = 0);
     void operator()(const float* in, float* out) const;
     // The table at n points given as three rows (in[a][i] is axis a of point i), into three
     // rows: operator() at each point, a vector of points at a time, bit for bit the same values.
