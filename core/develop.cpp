@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <memory>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 
@@ -279,6 +281,50 @@ void print_densities(const PrintExposure& enlarger, const Stock& paper, const do
         paper_density[j] = paper.layers[j].density_curve(std::log10(std::clamp(h[j], 1e-30, kMaxInput)));
 }
 
+// The one print table of a colour negative on colour paper: the negative's densities -> log2
+// XYZ of the print. A plan compiled again for another exposure, grain, MTF or halation (a
+// slider dragged in a host) prints the same: its table, a few hundred ms of spectral sums on
+// two cores, is taken from the last few built, found by the bytes of everything it reads.
+std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock& paper, const PrintExposure& enlarger,
+                                                  int nodes) {
+    std::array<double, 3> lo, hi;
+    table_density_range(film, lo, hi);
+    std::string key = enlarger.fingerprint();
+    auto append = [&](const auto* v, size_t count) { key.append(reinterpret_cast<const char*>(v), sizeof *v * count); };
+    append(lo.data(), 3), append(hi.data(), 3), append(&nodes, 1);
+    const size_t layers = paper.layers.size();  // (then what the paper's curves and view read)
+    append(&layers, 1), append(paper.base_density.data(), paper.base_density.size());
+    for (const Layer& l : paper.layers) {
+        append(l.dye_density.data(), l.dye_density.size());
+        for (const std::vector<double>* v : {&l.density_curve.x, &l.density_curve.y}) {
+            const size_t n = v->size();
+            append(&n, 1), append(v->data(), n);
+        }
+    }
+    static std::mutex mutex;
+    static std::vector<std::pair<std::string, std::shared_ptr<const Table3D>>> recent;  // the last used last
+    constexpr size_t kKept = 4;
+    auto find = [&]() -> std::shared_ptr<const Table3D> {
+        std::lock_guard<std::mutex> lock(mutex);
+        auto it = std::find_if(recent.begin(), recent.end(), [&](const auto& e) { return e.first == key; });
+        if (it == recent.end()) return nullptr;
+        std::rotate(it, it + 1, recent.end());
+        return recent.back().second;
+    };
+    if (auto table = find()) return table;
+    const PrintView view(paper);
+    auto table = std::make_shared<const Table3D>(lo, hi, nodes, [&](const double* d, double* log2_xyz) {
+        double paper_density[3];
+        print_densities(enlarger, paper, d, paper_density);
+        Xyz xyz = view.xyz(paper_density);
+        for (int c = 0; c < 3; ++c) log2_xyz[c] = std::log2(std::max(xyz[c], 1e-30));
+    });
+    std::lock_guard<std::mutex> lock(mutex);  // (another compile may have built it meanwhile: either serves)
+    if (recent.size() == kKept) recent.erase(recent.begin());
+    recent.emplace_back(std::move(key), table);
+    return table;
+}
+
 // The share of a grain field's variance that a scatter kernel keeps: sum (K * G)^2 / sum G^2,
 // G the grain's 2D kernel (its 1D kernel's outer product), K the scatter's as applied.
 double variance_kept_by_scatter(const GrainModel& grain, const ScatterKernel& scatter) {
@@ -543,16 +589,7 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
             fold_paper_grain(p.film_stages_, p.paper_stages_, *p.print_, p.film_exposure_scale_,
                              tier.curve_table_bits);
             leave_out_paper_grain(p.paper_stages_, p.film_stages_, p.skipped_);
-            std::array<double, 3> lo, hi;
-            table_density_range(film, lo, hi);
-            const PrintExposure& enlarger = *p.print_;
-            const PrintView view(*paper);
-            p.print_table_ = Table3D(lo, hi, tier.print_table_nodes, [&](const double* d, double* log2_xyz) {
-                double paper_density[3];
-                print_densities(enlarger, *paper, d, paper_density);
-                Xyz xyz = view.xyz(paper_density);
-                for (int c = 0; c < 3; ++c) log2_xyz[c] = std::log2(std::max(xyz[c], 1e-30));
-            });
+            p.print_table_ = shared_print_table(film, *paper, *p.print_, tier.print_table_nodes);
         }
     } else if (paper) {
         p.skipped_.push_back("print: the output stops at the negative");

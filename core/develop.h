@@ -19,6 +19,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -158,6 +159,8 @@ public:
 
     // The stages in order and those left out, one line each, for -v.
     std::vector<std::string> describe() const;
+    // The fast tiers' print table (null where the plan prints otherwise or not at all).
+    const Table3D* print_table() const { return print_table_.get(); }
 
 private:
     std::vector<Plane> develop_film(const ConstImageView& in, const Window& film_out, int threads,
@@ -175,8 +178,10 @@ private:
     MaterialStages film_stages_, paper_stages_;
     std::optional<PrintExposure> print_;     // set when the output is a print
     // The fast tiers' print of a colour negative on colour paper: the negative's densities
-    // -> log2 XYZ of the print (QualityTier::print_table_nodes, stages/tables.h).
-    std::optional<Table3D> print_table_;
+    // -> log2 XYZ of the print (QualityTier::print_table_nodes, stages/tables.h). Shared by
+    // the copies of a plan (one per frame and image window) and by plans whose print is the
+    // same (develop.cpp, shared_print_table).
+    std::shared_ptr<const Table3D> print_table_;
     int film_width_px_ = 0;                  // the film frame's width (FrameGeometry)
     bool monochrome_ = false;                // compiled for grey input
     double film_exposure_scale_ = 1.0;       // lux-seconds per unit of input

@@ -123,7 +123,7 @@ bool Plan::runs_in_one_pass() const {
     if (!print_) return true;
     // A print through the one table (the paper's grain and halation folded into the film's or
     // left out, its MTF on the negative's densities).
-    return print_table_.has_value() && separable_scatter(paper_stages_);
+    return print_table_ && separable_scatter(paper_stages_);
 }
 
 void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,

@@ -149,6 +149,15 @@ void PrintExposure::expose(const double* negative_density, double* paper_exposur
     for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = sum[j];
 }
 
+std::string PrintExposure::fingerprint() const {
+    std::string bytes;
+    auto append = [&](const auto& v) { bytes.append(reinterpret_cast<const char*>(&v), sizeof v); };
+    append(film_base_), append(film_dye_), append(film_d_min_), append(film_layers_), append(paper_layers_);
+    append(neutral_negative_), append(weighted_light_), append(neutral_light_), append(aim_density_),
+        append(light_lux_s_);
+    return bytes;
+}
+
 PrintView::PrintView(const Stock& paper) : paper_(&paper) {
     for (size_t l = 0; l < paper.layers.size() && l < 3; ++l) d_min_[l] = paper.layers[l].density_curve.y_min();
 }

@@ -21,6 +21,7 @@
 #pragma once
 
 #include <array>
+#include <string>
 
 #include "core/spectral.h"
 #include "core/stock.h"
@@ -52,6 +53,9 @@ public:
     // Paper layer densities of the neutral mid-grey print, and the lights that give it.
     const std::array<double, 3>& aim_density() const { return aim_density_; }
     const std::array<double, 3>& light_lux_s() const { return light_lux_s_; }
+    // The bytes of everything expose() reads (the film's dyes and base, the lights, the
+    // filtration): exposures with equal fingerprints expose every negative alike.
+    std::string fingerprint() const;
 
 private:
     // The negative's spectral density: base + sum_i (D_i - d_min_i) dye_i.

@@ -331,6 +331,45 @@ TEST_CASE("the fast tier's print table is fine enough for the print's grain on a
     }
 }
 
+TEST_CASE("plans whose print is the same share one print table, and others do not", "[quality][print]") {
+    Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    DevelopSettings s;
+    s.quality = Quality::fast;
+    const Plan plan = Plan::compile(film, &paper, s, {64, 48});
+    const Table3D* table = plan.print_table();
+    REQUIRE(table);
+    // What the table does not read: the camera exposure, grain, MTF and halation.
+    DevelopSettings other = s;
+    other.exposure_ev = 1.5, other.grain_amount = {0.5, 0.5, 0.5}, other.mtf = false, other.halation = 0;
+    CHECK(Plan::compile(film, &paper, other, {64, 48}).print_table() == table);
+    // What it does read, each on its own: the printer lights, filtration, print exposure,
+    // the paper's dyes and curves, the film's dyes.
+    auto differs = [&](const DevelopSettings& changed, const Stock& changed_paper, const Stock& changed_film) {
+        const Plan changed_plan = Plan::compile(changed_film, &changed_paper, changed, {64, 48});
+        if (changed_plan.print_table() == table) return false;
+        const float density[3] = {1.0f, 1.5f, 1.8f};
+        float a[3], b[3];
+        (*changed_plan.print_table())(density, a);
+        (*table)(density, b);
+        return a[0] != b[0] || a[1] != b[1] || a[2] != b[2];
+    };
+    other = s, other.printer_lights[1] = 27;
+    CHECK(differs(other, paper, film));
+    other = s, other.filtration_ymc[0] = 10;
+    CHECK(differs(other, paper, film));
+    other = s, other.print_exposure_ev = 0.5;
+    CHECK(differs(other, paper, film));
+    Stock paper_dyes = paper;
+    paper_dyes.layers[2].dye_density[40] *= 1.5;
+    CHECK(differs(s, paper_dyes, film));
+    Stock paper_curve = paper;
+    for (double& y : paper_curve.layers[0].density_curve.y) y *= 1.1;
+    CHECK(differs(s, paper_curve, film));
+    Stock film_dyes = film;
+    film_dyes.layers[1].dye_density[30] *= 1.2;
+    CHECK(differs(s, paper, film_dyes));
+}
+
 TEST_CASE("the reference tier's silver grains per pixel grow with the film's area a pixel covers", "[quality][grain]") {
     Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     DevelopSettings s;
