@@ -409,22 +409,26 @@ std::pair<double, double> solve_increasing(const F& f, double lo, double f_lo, d
 
 // Printing through one table leaves no place for the paper's grain, so it is folded into the
 // film's: each film layer's grain amplitude a_i(D) (its tabulated curve's second function) is
-// raised to sqrt(a_i(D)^2 + e_i(D)^2) so that each paper layer's density grain per pixel has
-// the variance of both grains. At the table's input the film layer's grain has the spread
-// s_i = a_i kappa_i sqrt(rho_i), kappa_i the film grain filter's gain per pixel and rho_i the
-// share of variance the paper's MTF keeps of it (it keeps all of the paper's own, which is
-// added after it). Along the grey scale (scene grey exposed at the plan's exposure):
-//  1. The print's curve p_j(D_j) is far from straight over the negative's grain in its toe
-//     and shoulder, so each layer's own extra spread is solved through the curve, not its
-//     slope: Var p_j(D_j + s Z) = Var p_j(D_j + s_j Z) + sigma_paper_j^2 (Z standard normal;
-//     Gauss-Hermite quadrature, s by regula falsi, at most kMaxFoldedGrainD: where the curve is
-//     flat no spread carries the paper's grain). The variance that spread adds over the
-//     film's, per unit of added variance t_j, is the curve's effective squared contrast g_j.
-//  2. Each layer's extra grain also reaches the other paper layers, through the contrasts
-//     J_ji = dp_j/dD_i (the negative's dyes absorb in more than one paper layer's band), so
-//     the t_i >= 0 solve, in the least-squares sense,
-//       g_j t_j + sum_{i != j} J_ji^2 t_i = sigma_paper_j^2   for each paper layer j
-//     (0 where the paper layer has no grain; t_i = 0 where the film layer has none).
+// raised to sqrt(a_i(D)^2 + e_i(D)^2) so that each channel of the viewed print (log10 of its
+// linear Rec.709, as a plate's grain is measured) has the grain variance of both. At the
+// table's input the film layer's grain has the spread s_i = a_i kappa_i sqrt(rho_i), kappa_i
+// the film grain filter's gain per pixel and rho_i the share of variance the paper's MTF keeps
+// of it (it keeps all of the paper's own, which is added after it). Along the grey scale
+// (scene grey exposed at the plan's exposure), each level on its own:
+//  1. The paper layers' grains are independent, so channel c receives
+//     sigma_c^2 = sum_j V_cj^2 sigma_paper_j^2, V_cj = d log rgb_c / d p_j. A film layer's extra
+//     grain moves all three paper layers together (the negative's dyes absorb in more than one
+//     paper layer's band), so matching the paper layers' variances instead would correlate them
+//     and overstate a channel that mixes them (+9 % in 250D on 2383's green five stops under).
+//  2. The print is far from straight over the negative's grain in its toe and shoulder, so each
+//     channel's own layer's extra spread is solved through the print itself, not its slope:
+//     Var v_c(D + s Z e_c) = Var v_c(D + s_c Z e_c) + sigma_c^2 (v_c = log rgb_c of the print, Z
+//     standard normal; Gauss-Hermite quadrature, s by regula falsi, at most kMaxFoldedGrainD:
+//     where the print is flat no spread carries the paper's grain). The variance that spread
+//     adds over the film's, per unit of added variance t_c, is the effective squared contrast g_c.
+//  3. With M_ci = d v_c / d D_i, the t_i >= 0 solve, in the least-squares sense,
+//       g_c t_c + sum_{i != c} M_ci^2 t_i = sigma_c^2   for each channel c
+//     (t_i = 0 where the film layer has no grain).
 // What the negative cannot carry (README, "How preview prints") is measured there.
 constexpr double kMaxFoldedGrainD = 0.5;
 void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
@@ -439,60 +443,84 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
         any = any || (grained[i] && paper.grain[i]);
     }
     if (!any) return;
-    const NormalQuadrature normal(8);
-    std::vector<double> density[3], extra[3];
+    // The grey scale's negative densities every quarter stop (beyond the film's curves, where
+    // a step changes no density, once).
+    std::vector<std::array<double, 3>> levels;
     for (double stops = -16; stops <= 16; stops += 0.25) {
-        double d[3], dp[3];
+        std::array<double, 3> d;
         for (size_t l = 0; l < 3; ++l) {
             const auto& w = film.rgb_weights[l];
             const double h = 0.18 * std::exp2(stops) * exposure_scale * (w[0] + w[1] + w[2]);
             d[l] = film.stock.layers[l].density_curve(std::log10(std::max(h, 1e-30)));
         }
-        if (!density[0].empty() && d[0] == density[0].back() && d[1] == density[1].back() && d[2] == density[2].back())
-            continue;  // (beyond the film's curves, where a step changes no density)
-        print_densities(enlarger, paper.stock, d, dp);
-        double contrast[3][3];  // J_ji
-        for (int i = 0; i < 3; ++i) {
-            constexpr double kStep = 0.01;
-            double d_up[3] = {d[0], d[1], d[2]}, dp_up[3];
-            d_up[i] += kStep;
-            print_densities(enlarger, paper.stock, d_up, dp_up);
-            for (int j = 0; j < 3; ++j) contrast[j][i] = (dp_up[j] - dp[j]) / kStep;
-        }
-        double a[3][3], b[3];
-        for (int j = 0; j < 3; ++j) {
-            b[j] = paper.grain[j] ? std::pow(grain_sigma_at(*paper.grain[j], dp[j]), 2) : 0.0;
-            for (int i = 0; i < 3; ++i) a[j][i] = contrast[j][i] * contrast[j][i];
-            if (!grained[j] || b[j] == 0) continue;
-            // Var p_j(D_j + s Z), the other layers' densities held.
-            auto print_variance = [&](double s) {
-                double mean = 0, square = 0;
-                for (size_t k = 0; k < normal.node.size(); ++k) {
-                    double dk[3] = {d[0], d[1], d[2]}, pk[3];
-                    dk[j] += s * normal.node[k];
-                    print_densities(enlarger, paper.stock, dk, pk);
-                    mean += normal.weight[k] * pk[j];
-                    square += normal.weight[k] * pk[j] * pk[j];
-                }
-                return std::max(0.0, square - mean * mean);
-            };
-            const double s_film = film.grain[j]->amplitude_at(d[j]) * gain[j];
-            const double film_variance = print_variance(s_film);
-            const double s_max = std::max(s_film, kMaxFoldedGrainD);
-            const auto [s, variance] = solve_increasing(print_variance, s_film, film_variance, s_max, film_variance + b[j],
-                                                       1e-3 * b[j]);
-            if (s > s_film) a[j][j] = (variance - film_variance) / (s * s - s_film * s_film);
-        }
-        const std::array<double, 3> t = nonnegative_least_squares(a, b, grained);
-        for (int i = 0; i < 3; ++i) {
-            density[i].push_back(d[i]);
-            extra[i].push_back(grained[i] ? std::sqrt(t[i]) / gain[i] : 0.0);
-        }
+        if (levels.empty() || d != levels.back()) levels.push_back(d);
     }
+    const NormalQuadrature normal(8);
+    const PrintView view(paper.stock);
+    auto log_view = [&](const double* paper_density, double* out) {
+        double rgb[3];
+        view.rgb(paper_density, rgb);
+        for (int c = 0; c < 3; ++c) out[c] = std::log10(std::max(rgb[c], 1e-30));
+    };
+    auto log_print = [&](const double* negative, double* out) {
+        double dp[3];
+        print_densities(enlarger, paper.stock, negative, dp);
+        log_view(dp, out);
+    };
+    std::vector<std::array<double, 3>> extra(levels.size());  // e_i at each level
+    parallel_for(0, int(levels.size()), 0, [&](int begin, int end) {
+        for (int level = begin; level < end; ++level) {
+            const double* d = levels[size_t(level)].data();
+            double dp[3], seen[3], at[3], v[3][3], m[3][3];  // V_cj, M_ci
+            constexpr double kStep = 0.01;
+            print_densities(enlarger, paper.stock, d, dp);
+            log_view(dp, seen);
+            log_print(d, at);
+            for (int k = 0; k < 3; ++k) {
+                double dp_up[3] = {dp[0], dp[1], dp[2]}, d_up[3] = {d[0], d[1], d[2]}, up[3];
+                dp_up[k] += kStep, d_up[k] += kStep;
+                log_view(dp_up, up);
+                for (int c = 0; c < 3; ++c) v[c][k] = (up[c] - seen[c]) / kStep;
+                log_print(d_up, up);
+                for (int c = 0; c < 3; ++c) m[c][k] = (up[c] - at[c]) / kStep;
+            }
+            double a[3][3], b[3];
+            for (int c = 0; c < 3; ++c) {
+                b[c] = 0;
+                for (int j = 0; j < 3; ++j)
+                    if (paper.grain[j]) b[c] += v[c][j] * v[c][j] * std::pow(grain_sigma_at(*paper.grain[j], dp[j]), 2);
+                for (int i = 0; i < 3; ++i) a[c][i] = m[c][i] * m[c][i];
+                if (!grained[c] || b[c] == 0) continue;
+                // Var v_c(D + s Z e_c), the other layers' densities held.
+                auto print_variance = [&](double s) {
+                    double mean = 0, square = 0;
+                    for (size_t k = 0; k < normal.node.size(); ++k) {
+                        double dk[3] = {d[0], d[1], d[2]}, vk[3];
+                        dk[c] += s * normal.node[k];
+                        log_print(dk, vk);
+                        mean += normal.weight[k] * vk[c];
+                        square += normal.weight[k] * vk[c] * vk[c];
+                    }
+                    return std::max(0.0, square - mean * mean);
+                };
+                const double s_film = film.grain[c]->amplitude_at(d[c]) * gain[c];
+                const double film_variance = print_variance(s_film);
+                const double s_max = std::max(s_film, kMaxFoldedGrainD);
+                const auto [s, variance] = solve_increasing(print_variance, s_film, film_variance, s_max,
+                                                           film_variance + b[c], 1e-3 * b[c]);
+                if (s > s_film) a[c][c] = (variance - film_variance) / (s * s - s_film * s_film);
+            }
+            const std::array<double, 3> t = nonnegative_least_squares(a, b, grained);
+            for (int i = 0; i < 3; ++i) extra[size_t(level)][size_t(i)] = grained[i] ? std::sqrt(t[i]) / gain[i] : 0.0;
+        }
+    });
     for (size_t i = 0; i < 3; ++i) {
         if (!grained[i]) continue;
+        std::vector<double> density_i, extra_i;
+        for (size_t level = 0; level < levels.size(); ++level)
+            density_i.push_back(levels[level][i]), extra_i.push_back(extra[level][i]);
         const GrainModel film_grain = *film.grain[i];
-        const Curve extra_at = make_curve(std::move(density[i]), std::move(extra[i]), "paper grain on the film's densities");
+        const Curve extra_at = make_curve(std::move(density_i), std::move(extra_i), "paper grain on the film's densities");
         film.curve_tables[i] = LogAxisTable(film.stock.layers[i].density_curve, curve_table_bits,
                                             [film_grain, extra_at](double d) {
                                                 return std::hypot(film_grain.amplitude_at(d), extra_at(d));
