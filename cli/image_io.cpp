@@ -101,6 +101,9 @@ void require_known_compression(const std::string& path, const std::string& compr
     // The names OpenImageIO's writers take (its documentation, "Bundled ImageIO Plugins"),
     // and those that take a :level (zip's 1-9, DWA's, JPEG's quality); an unknown name
     // would be written as zip without a word. TIFF's ccittrle is for 1-bit images only.
+    // PNG's are zlib's strategies, every one compressed (OpenImageIO 2.4 writes `none`,
+    // `zip` or an unknown name as `default`, and ignores a level); JPEG's quality is its level
+    // (an unknown name gets the writer's default quality).
     struct Format {
         const char* name;
         std::vector<std::string> names, with_level;
@@ -108,8 +111,14 @@ void require_known_compression(const std::string& path, const std::string& compr
     static const Format exr{"OpenEXR", {"none", "rle", "zip", "zips", "piz", "pxr24", "b44", "b44a", "dwaa", "dwab"},
                             {"zip", "zips", "dwaa", "dwab"}};
     static const Format tiff{"TIFF", {"none", "lzw", "zip", "deflate", "packbits", "jpeg"}, {"zip", "deflate", "jpeg"}};
+    static const Format png{"PNG", {"default", "filtered", "huffman", "rle", "fixed"}, {}};
+    static const Format jpeg{"JPEG", {"jpeg"}, {"jpeg"}};
     const std::string ext = lower_extension(path);
-    const Format* format = ext == ".exr" ? &exr : ext == ".tif" || ext == ".tiff" ? &tiff : nullptr;
+    const Format* format = ext == ".exr"                     ? &exr
+                           : ext == ".tif" || ext == ".tiff" ? &tiff
+                           : ext == ".png"                   ? &png
+                           : ext == ".jpg" || ext == ".jpeg" ? &jpeg
+                                                             : nullptr;
     if (!format) return;  // (other formats' writers take their own names, or none)
     const size_t colon = compression.find(':');
     const std::string name = compression.substr(0, colon), level = colon == std::string::npos ? "" : compression.substr(colon + 1);
@@ -125,8 +134,9 @@ void require_known_compression(const std::string& path, const std::string& compr
     if (!listed(format->with_level, name) || level.empty() || *end != '\0' || !(value > 0))
         throw UserError("--compression '" + compression + "': " +
                         (listed(format->with_level, name) ? "the level after ':' must be a number above 0"
-                                                          : "'" + name + "' takes no level (" + join(format->with_level) +
-                                                                " do)"));
+                         : format->with_level.empty()
+                             ? std::string(format->name) + " takes no level"
+                             : "'" + name + "' takes no level (" + join(format->with_level) + " do)"));
 }
 
 void require_writable(const std::string& path) {

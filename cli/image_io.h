@@ -46,9 +46,9 @@ int premultiplied_alpha_channel(const OIIO::ImageSpec& spec);
 // Whether the file's format (by its extension) stores float pixels: .exr, .tif, .hdr.
 bool is_float_format(const std::string& path);
 
-// Throws UserError for a --compression that the output's format (OpenEXR or TIFF, by the
-// extension) has no such name for, or a level where it takes none: OpenImageIO would write
-// its default instead. Other formats' names are left to their writers.
+// Throws UserError for a --compression that the output's format (OpenEXR, TIFF, PNG or
+// JPEG, by the extension) has no such name for, or a level where it takes none: OpenImageIO
+// would write its default instead. Other formats' names are left to their writers.
 void require_known_compression(const std::string& path, const std::string& compression);
 
 // How an output is encoded and what it says about itself.
