@@ -471,18 +471,17 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
     parallel_for(0, int(levels.size()), 0, [&](int begin, int end) {
         for (int level = begin; level < end; ++level) {
             const double* d = levels[size_t(level)].data();
-            double dp[3], seen[3], at[3], v[3][3], m[3][3];  // V_cj, M_ci
+            double dp[3], seen[3], v[3][3], m[3][3];  // V_cj, M_ci
             constexpr double kStep = 0.01;
             print_densities(enlarger, paper.stock, d, dp);
             log_view(dp, seen);
-            log_print(d, at);
             for (int k = 0; k < 3; ++k) {
                 double dp_up[3] = {dp[0], dp[1], dp[2]}, d_up[3] = {d[0], d[1], d[2]}, up[3];
                 dp_up[k] += kStep, d_up[k] += kStep;
                 log_view(dp_up, up);
                 for (int c = 0; c < 3; ++c) v[c][k] = (up[c] - seen[c]) / kStep;
                 log_print(d_up, up);
-                for (int c = 0; c < 3; ++c) m[c][k] = (up[c] - at[c]) / kStep;
+                for (int c = 0; c < 3; ++c) m[c][k] = (up[c] - seen[c]) / kStep;
             }
             double a[3][3], b[3];
             for (int c = 0; c < 3; ++c) {
