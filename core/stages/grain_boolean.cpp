@@ -99,6 +99,7 @@ struct FootprintCdf {
 };
 
 struct CellGrains {
+    double uncovered = 1;  // E[U] = 10^-net at the cell's density
     double radius_um = 0;
     double samples_per_um = 0;
     std::vector<float> x_um, y_um;  // centres from the cell's corner
@@ -117,11 +118,18 @@ public:
         reach_px_ = int(std::ceil(g.footprint_reach_um / g.pixel_pitch_um));
     }
 
-    // Transmittance of pixels [in.x0, in.x1) x [y0, y1), row-major.
+    // Transmittance of pixels [in.x0, in.x1) x [y0, y1), row-major: each pixel's own mean,
+    // 10^-net of its density, times the grain's relative fluctuation over its footprint, the
+    // footprint's integral of U over its expectation. (The footprint reaches into the
+    // neighbouring pixels, whose disks follow their own densities: its integral alone would be
+    // the image blurred by the footprint's Gaussian, which the other tiers' grain does not do,
+    // and which the MTF stage already accounts for. A ratio, not a difference, so that a dark
+    // pixel beside a light one keeps a positive transmittance.)
     std::vector<double> render(int y0, int y1) {
         const Window& w = in_.window;
         band_ = Window{w.x0, y0, w.x1, y1};
         transmittance_.assign(size_t(band_.pixel_count()), 0.0);
+        expected_.assign(size_t(band_.pixel_count()), 0.0);
         const double c = g_.cell_um, p = g_.pixel_pitch_um, reach = g_.footprint_reach_um;
         const int cx0 = int(std::floor((w.x0 * p - reach) / c)), cx1 = int(std::ceil((w.x1 * p + reach) / c));
         const int cy0 = int(std::floor((y0 * p - reach) / c)), cy1 = int(std::ceil((y1 * p + reach) / c));
@@ -133,6 +141,12 @@ public:
             const int sx0 = std::max(cx0, s * strip), sx1 = std::min(cx1, (s + 1) * strip);
             render_strip(sx0, sx1, cy0, cy1);
         }
+        for (int y = y0; y < y1; ++y)
+            for (int x = w.x0; x < w.x1; ++x) {
+                const size_t i = size_t(y - y0) * w.width() + (x - w.x0);
+                const double net = boolean_net(sanitized_density(in_.at(x, y), g_.d_min), g_.d_min);
+                transmittance_[i] *= std::exp(-kLn10 * net) / expected_[i];
+            }
         return std::move(transmittance_);
     }
 
@@ -145,6 +159,7 @@ private:
     int reach_px_ = 0;
     Window band_;
     std::vector<double> transmittance_;
+    std::vector<double> expected_;  // per pixel, E of its footprint's integral of U: sum of weight x uncovered
     // Grains of (2 reach + 1) cell rows, columns [grain_x0_, grain_x0_ + width), by row mod.
     std::vector<std::vector<CellGrains>> ring_;
     int grain_x0_ = 0;
@@ -165,6 +180,7 @@ private:
         const double net = boolean_net(sanitized_density(density_of_cell(cx, cy), g_.d_min), g_.d_min);
         cell.x_um.clear();
         cell.y_um.clear();
+        cell.uncovered = std::exp(-kLn10 * net);
         cell.radius_um = g_.radius_at(net);
         cell.samples_per_um = net > 0 ? table_at(g_.samples_per_um, net) : 0.0;
         const double c = g_.cell_um, r = cell.radius_um;
@@ -305,10 +321,19 @@ private:
                 for (int i = 0; i < columns; ++i) out[i] += wy * row_sum_[size_t(i)];
             }
         }
-        for (int ky = ky0; ky <= ky1; ++ky)
-            for (int kx = kx0; kx <= kx1; ++kx)
-                transmittance_[size_t(py + ky - band_.y0) * band_.width() + (px + kx - band_.x0)] +=
-                    contribution_[size_t(ky - ky0) * columns + (kx - kx0)];
+        // The footprint's weight over the whole cell (separable), at the cell's E[U]: exact
+        // where the neighbouring cells share its density, and within the disks' radius of its
+        // edges otherwise.
+        const double uncovered = grains(cx, cy).uncovered;
+        for (int ky = ky0; ky <= ky1; ++ky) {
+            const double* q_y = qy.data() + size_t(ky + reach_px_) * (m + 1);
+            for (int kx = kx0; kx <= kx1; ++kx) {
+                const double* q_x = qx.data() + size_t(kx + reach_px_) * (m + 1);
+                const size_t at = size_t(py + ky - band_.y0) * band_.width() + (px + kx - band_.x0);
+                transmittance_[at] += contribution_[size_t(ky - ky0) * columns + (kx - kx0)];
+                expected_[at] += (q_x[m] - q_x[0]) * (q_y[m] - q_y[0]) * uncovered;
+            }
+        }
     }
 
     // Marks the samples ((i + 0.5) h, (j + 0.5) h) of the cell's raster that a disk covers;

@@ -10,6 +10,15 @@
 //
 // Mean (Nutting). A point is uncovered when no centre lies within r of it:
 //   E[U] = q = exp(-lambda pi r^2),   lambda pi r^2 = net ln 10,   so E[T] = 10^-net.
+// Each cell's disks follow the density of the pixel it lies in, and the footprint reaches
+// into the neighbouring pixels, so the integral above alone would be the image blurred by the
+// footprint's Gaussian (12 % of a pixel's weight beside it at s = 1.5, p = 5 um), which the
+// other tiers' grain does not do (the MTF stage is the image's blur). So each pixel keeps
+// its own mean and takes the relative fluctuation: T = 10^-net (integral U w) / E, with
+// E = sum over cells of (integral of w over the cell) q_cell, the integral's expectation (a
+// ratio, so that T stays positive beside a lighter pixel; at least 10^-kNetCap times the
+// footprint's weight, never 0). Where the neighbours' densities differ, their disks still
+// reach across a pixel's edge by their radius (a spread at the grains' own scale).
 // Granularity. Two points at distance h are both uncovered when no centre lies in the union
 // of their disks, so the covariance of U is q^2 (exp(lambda gamma_r(h)) - 1), gamma_r the
 // overlap area of two disks of radius r. Its integral is the noise power of U at low

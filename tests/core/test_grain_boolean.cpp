@@ -151,6 +151,36 @@ TEST_CASE("Boolean grain: each pixel integrates the grain over its footprint", "
     CHECK(grain_sigma_at(filtered, kDMin + net) == Approx(expected).epsilon(0.01));
 }
 
+TEST_CASE("Boolean grain leaves each pixel's mean its own: the image is not blurred by the footprint",
+          "[grain][boolean]") {
+    // A step from net 0.5 to 1.5 between columns 7 and 8, grain as large as a third of a pixel:
+    // the footprint's Gaussian puts about 12 % of the pixels beside the step into the other
+    // side, whose disks follow its own density, so the footprint's integral alone would move
+    // their mean transmittance by -11 % and +100 %. Averaged down the columns, each pixel's mean
+    // transmittance is its own 10^-net, but for the disks of the light side that reach across
+    // the step by their radius (a spread at the grains' own scale): 4 % less in column 8.
+    const GrainSpec spec{0.01, 1.5, 0.5};
+    const double pitch_um = 5.0;
+    BooleanGrain g = design_boolean_grain(spec, kDMin, pitch_um, NoiseKey{3, 0, 0});
+    const int kRows = 4096;
+    Plane d(Window{0, 0, 16, kRows});
+    for (int y = 0; y < kRows; ++y)
+        for (int x = 0; x < 16; ++x) d.at(x, y) = float(kDMin + (x < 8 ? 0.5 : 1.5));
+    apply_boolean_grain(d, g, 2);
+    for (int x = 5; x < 11; ++x) {
+        double sum = 0, sum2 = 0;
+        for (int y = 0; y < kRows; ++y) {
+            const double t = net_transmittance(d.at(x, y));
+            sum += t, sum2 += t * t;
+        }
+        const double mean = sum / kRows, standard_error = std::sqrt((sum2 / kRows - mean * mean) / (kRows - 1));
+        const double expected = std::pow(10.0, -(x < 8 ? 0.5 : 1.5));
+        INFO("column " << x << ": mean T " << mean << " +- " << standard_error << ", expected " << expected);
+        CHECK(std::abs(mean - expected) < 4 * standard_error + (x == 8 ? 0.05 : 0.0) * expected);
+        CHECK(standard_error < 0.03 * expected);  // the check has teeth: the blur doubles column 8's
+    }
+}
+
 TEST_CASE("Boolean grain matches the filtered-noise model's plate profile", "[grain][boolean][plate]") {
     // Both models developed over flat patches of net density 0.3-1.5 at a pitch equal to
     // the grain size, analysed as a plate and compared as the benchmark compares tiers.
