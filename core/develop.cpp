@@ -273,12 +273,17 @@ void table_density_range(const Stock& stock, std::array<double, 3>& lo, std::arr
 
 // The paper's layer densities printed from the negative's (colour on colour): the enlarger's
 // exposure developed through the paper's curves.
+void develop_paper(const Stock& paper, const double* paper_exposure_lux_s, double* paper_density) {
+    for (int j = 0; j < 3; ++j)
+        paper_density[j] =
+            paper.layers[j].density_curve(std::log10(std::clamp(paper_exposure_lux_s[j], 1e-30, kMaxInput)));
+}
+
 void print_densities(const PrintExposure& enlarger, const Stock& paper, const double* negative_density,
                      double* paper_density) {
     double h[3];
     enlarger.expose(negative_density, h);
-    for (int j = 0; j < 3; ++j)
-        paper_density[j] = paper.layers[j].density_curve(std::log10(std::clamp(h[j], 1e-30, kMaxInput)));
+    develop_paper(paper, h, paper_density);
 }
 
 // The one print table of a colour negative on colour paper: the negative's densities -> log2
@@ -312,10 +317,19 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
         return recent.back().second;
     };
     if (auto table = find()) return table;
+    // Each axis node's factor of the negative's transmittance, computed once.
+    std::array<std::vector<Spectrum>, 3> transmittance;
+    for (int a = 0; a < 3 && enlarger.spectral(); ++a)
+        for (int i = 0; i < nodes; ++i)
+            transmittance[a].push_back(enlarger.layer_transmittance(a, lo[a] + i * (hi[a] - lo[a]) / (nodes - 1)));
     const PrintView view(paper);
-    auto table = std::make_shared<const Table3D>(lo, hi, nodes, [&](const double* d, double* log2_xyz) {
-        double paper_density[3];
-        print_densities(enlarger, paper, d, paper_density);
+    auto table = std::make_shared<const Table3D>(lo, hi, nodes, [&](const int* node, const double* d, double* log2_xyz) {
+        double h[3], paper_density[3];
+        if (enlarger.spectral())
+            enlarger.expose({&transmittance[0][node[0]], &transmittance[1][node[1]], &transmittance[2][node[2]]}, h);
+        else
+            enlarger.expose(d, h);
+        develop_paper(paper, h, paper_density);
         Xyz xyz = view.xyz(paper_density);
         for (int c = 0; c < 3; ++c) log2_xyz[c] = std::log2(std::max(xyz[c], 1e-30));
     });

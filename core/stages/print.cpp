@@ -149,6 +149,31 @@ void PrintExposure::expose(const double* negative_density, double* paper_exposur
     for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = sum[j];
 }
 
+Spectrum PrintExposure::layer_transmittance(int layer, double density) const {
+    const double net = density - film_d_min_[layer];
+    Spectrum t;
+    for (int i = 0; i < kSpectralSamples; ++i)
+        t[i] = std::exp(-kLn10 * ((layer == 0 ? film_base_[i] : 0.0) + net * film_dye_[layer][i]));
+    return t;
+}
+
+void PrintExposure::expose(const std::array<const Spectrum*, 3>& layer_transmittance, double* paper_exposure) const {
+    Spectrum t = *layer_transmittance[0];
+    for (int l = 1; l < film_layers_; ++l)
+        for (int i = 0; i < kSpectralSamples; ++i) t[i] *= (*layer_transmittance[l])[i];
+    // Each sum in four interleaved parts, so that its additions overlap rather than wait on
+    // one another (a grid has many nodes; the order changes the sum by rounding only).
+    for (int j = 0; j < paper_layers_; ++j) {
+        const Spectrum& w = weighted_light_[j];
+        double p0 = 0, p1 = 0, p2 = 0, p3 = 0;
+        int i = 0;
+        for (; i + 4 <= kSpectralSamples; i += 4)
+            p0 += w[i] * t[i], p1 += w[i + 1] * t[i + 1], p2 += w[i + 2] * t[i + 2], p3 += w[i + 3] * t[i + 3];
+        for (; i < kSpectralSamples; ++i) p0 += w[i] * t[i];
+        paper_exposure[j] = (p0 + p1) + (p2 + p3);
+    }
+}
+
 std::string PrintExposure::fingerprint() const {
     std::string bytes;
     auto append = [&](const auto& v) { bytes.append(reinterpret_cast<const char*>(&v), sizeof v); };

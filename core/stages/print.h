@@ -47,6 +47,13 @@ public:
 
     // Paper layer exposures (lux-seconds) from the negative's layer densities. Per pixel.
     void expose(const double* negative_density, double* paper_exposure_lux_s) const;
+    // The negative's spectral transmittance is a product over its layers, 10^-base times
+    // 10^-(D_l - d_min_l) dye_l for each l: a grid of negatives (the fast tiers' print table)
+    // takes one layer's factor per axis node, where expose() takes an exponential a wavelength
+    // a negative. One layer's factor at its density D_l (layer 0's carries the base):
+    Spectrum layer_transmittance(int layer, double density) const;
+    // and expose() of the negative whose layers' factors these are (spectral() only).
+    void expose(const std::array<const Spectrum*, 3>& layer_transmittance, double* paper_exposure_lux_s) const;
 
     int paper_layers() const { return paper_layers_; }
     bool spectral() const { return !neutral_negative_; }

@@ -253,8 +253,7 @@ float fast_exp2(float x) {
 }
 
 
-Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f,
-                 int threads)
+Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f)
     : nodes_(nodes) {
     std::array<double, 3> step;
     for (int a = 0; a < 3; ++a) {
@@ -264,12 +263,13 @@ Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& h
     }
     values_.resize(size_t(nodes) * nodes * nodes);
     // Each node on its own: the planes of nodes along z shared among the threads.
-    parallel_for(0, nodes, threads, [&](int k_begin, int k_end) {
+    parallel_for(0, nodes, 0, [&](int k_begin, int k_end) {
         for (int k = k_begin; k < k_end; ++k)
             for (int j = 0; j < nodes; ++j)
                 for (int i = 0; i < nodes; ++i) {
+                    const int node[3] = {i, j, k};
                     double in[3] = {lo[0] + i * step[0], lo[1] + j * step[1], lo[2] + k * step[2]}, out[3];
-                    f(in, out);
+                    f(node, in, out);
                     values_[(size_t(k) * nodes + j) * nodes + i] = {float(out[0]), float(out[1]), float(out[2]), 0.0f};
                 }
     });

@@ -49,12 +49,14 @@ float fast_exp2(float x);
 // interpolated tetrahedrally; inputs outside the grid are clamped to its faces.
 class Table3D {
 public:
-    using Function = std::function<void(const double* in, double* out)>;
+    // f(node, in, out): the values at the node whose indices along x, y and z are node[0..3),
+    // at in = lo + node (hi - lo) / (nodes - 1) (the indices let f use what it computed once
+    // per axis node).
+    using Function = std::function<void(const int* node, const double* in, double* out)>;
     Table3D() = default;
-    // f is evaluated at the nodes on `threads` threads (0: all the processor's), so it must be
-    // safe to call from several at once; the values do not depend on how many.
-    Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f,
-            int threads = 0);
+    // f is evaluated at the nodes on every core, so it must be safe to call from several
+    // threads at once; the values do not depend on how many.
+    Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f);
     void operator()(const float* in, float* out) const;
     // The table at n points given as three rows (in[a][i] is axis a of point i), into three
     // rows: operator() at each point, a vector of points at a time, bit for bit the same values.

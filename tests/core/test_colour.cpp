@@ -100,6 +100,25 @@ TEST_CASE("printer lights and filtration move the print's colour the way a lab's
     CHECK(render(film, &paper, s, grey).at(0, 0)[1] < automatic.at(0, 0)[1]);
 }
 
+TEST_CASE("the enlarger's exposure by layer factors of the transmittance equals its exposure", "[colour][print]") {
+    // (The fast tiers' print table exposes its grid this way: PrintExposure::layer_transmittance.)
+    const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    const PrintExposure enlarger =
+        PrintExposure::design(film, paper, {mid_grey_exposure_lux_s(film.iso_speed), {27, 24, 25}, {10, 0, 5}, 0.5});
+    REQUIRE(enlarger.spectral());
+    for (double d0 : {0.1, 0.9, 2.4})
+        for (double d1 : {0.5, 1.6, 3.1})
+            for (double d2 : {0.8, 2.0, 3.5}) {
+                const double d[3] = {d0, d1, d2};
+                const Spectrum t[3] = {enlarger.layer_transmittance(0, d0), enlarger.layer_transmittance(1, d1),
+                                       enlarger.layer_transmittance(2, d2)};
+                double direct[3], factored[3];
+                enlarger.expose(d, direct);
+                enlarger.expose({&t[0], &t[1], &t[2]}, factored);
+                for (int j = 0; j < 3; ++j) CHECK(factored[j] == Approx(direct[j]).epsilon(1e-12));
+            }
+}
+
 TEST_CASE("scan output is Cineon code values of the developed density", "[colour][scan]") {
     Stock film = test::test_colour_film();
     Image scene = demo_scene(48, 32);

@@ -97,7 +97,7 @@ TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions 
     };
     const std::array<double, 3> lo{0, -1, 0.5}, hi{2, 1, 3};
     const int nodes = 9;
-    Table3D table(lo, hi, nodes, f);
+    Table3D table(lo, hi, nodes, [&](const int*, const double* v, double* out) { f(v, out); });
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> u(0, 1);
     for (int i = 0; i < 1000; ++i) {
@@ -124,6 +124,16 @@ TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions 
             CHECK(out[c] == Approx(tetrahedral_by_cases(node, frac[0], frac[1], frac[2])).margin(1e-5));
         }
     }
+    // f is told each node's indices: as values they are the linear function (in - lo) / step.
+    const Table3D indices(lo, hi, nodes, [](const int* node, const double*, double* out) {
+        for (int a = 0; a < 3; ++a) out[a] = node[a];
+    });
+    for (int i = 0; i < 100; ++i) {
+        const float in_f[3] = {float(2 * u(rng)), float(-1 + 2 * u(rng)), float(0.5 + 2.5 * u(rng))};
+        float out[3];
+        indices(in_f, out);
+        for (int a = 0; a < 3; ++a) CHECK(out[a] == Approx((in_f[a] - lo[a]) / (hi[a] - lo[a]) * (nodes - 1)).margin(1e-5));
+    }
     float outside[3] = {-5, 7, 1}, clamped[3] = {0, 1, 1}, a[3], b[3];
     table(outside, a);
     table(clamped, b);
@@ -148,7 +158,7 @@ TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions 
     }
     // Read as log2 values: 2^v of each (values from -200 to 400 on this table's third
     // channel, past exp2's clamps at +-126), then times a matrix, in the same float operations.
-    const Table3D wide({-2, -2, -2}, {4, 4, 4}, 9, [](const double* v, double* out) {
+    const Table3D wide({-2, -2, -2}, {4, 4, 4}, 9, [](const int*, const double* v, double* out) {
         out[0] = v[0] - v[1];
         out[1] = 0.5 * v[2];
         out[2] = 100 * v[0];
