@@ -340,11 +340,16 @@ Spectrum from_log10(const Spectrum& log10_values, double missing_value) {
     return s;
 }
 
-double integrate_product(const Spectrum& a, const Spectrum& b) {
-    double sum = 0;
-    for (int i = 0; i < N; ++i) sum += a[i] * b[i];
-    return sum * kWavelengthStepNm;
+double dot(const Spectrum& a, const Spectrum& b) {
+    double p0 = 0, p1 = 0, p2 = 0, p3 = 0;
+    int i = 0;
+    for (; i + 4 <= N; i += 4)
+        p0 += a[i] * b[i], p1 += a[i + 1] * b[i + 1], p2 += a[i + 2] * b[i + 2], p3 += a[i + 3] * b[i + 3];
+    for (; i < N; ++i) p0 += a[i] * b[i];
+    return (p0 + p1) + (p2 + p3);
 }
+
+double integrate_product(const Spectrum& a, const Spectrum& b) { return dot(a, b) * kWavelengthStepNm; }
 
 // ---------------------------------------------------------------------------------------
 // CMFs and illuminants
@@ -394,15 +399,10 @@ Xyz linear_srgb_to_xyz(const Rgb& rgb) { return multiply(kLinearSrgbToXyz, rgb);
 
 Xyz reflectance_to_xyz(const Spectrum& reflectance, const Spectrum& illuminant) {
     const auto& cmf = tables().cmf;
-    double x = 0, y = 0, z = 0, white_y = 0;
-    for (int i = 0; i < N; ++i) {
-        double light = reflectance[i] * illuminant[i];
-        x += cmf[0][i] * light;
-        y += cmf[1][i] * light;
-        z += cmf[2][i] * light;
-        white_y += cmf[1][i] * illuminant[i];
-    }
-    return {x / white_y, y / white_y, z / white_y};
+    Spectrum light;
+    for (int i = 0; i < N; ++i) light[i] = reflectance[i] * illuminant[i];
+    const double white_y = dot(cmf[1], illuminant);
+    return {dot(cmf[0], light) / white_y, dot(cmf[1], light) / white_y, dot(cmf[2], light) / white_y};
 }
 
 Xyz white_point_xyz(const Spectrum& illuminant) { return reflectance_to_xyz(flat_spectrum(1.0), illuminant); }
@@ -475,10 +475,7 @@ double ciede2000(const Lab& lab1, const Lab& lab2) {
 
 Rgb reflectance_to_linear_srgb(const Spectrum& reflectance) {
     const auto& p = tables().srgb_projection;
-    Rgb rgb{0.0, 0.0, 0.0};
-    for (int c = 0; c < 3; ++c)
-        for (int i = 0; i < N; ++i) rgb[c] += p[c][i] * reflectance[i];
-    return rgb;
+    return {dot(p[0], reflectance), dot(p[1], reflectance), dot(p[2], reflectance)};
 }
 
 // ---------------------------------------------------------------------------------------

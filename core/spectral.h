@@ -54,6 +54,9 @@ Spectrum resample_to_grid(const std::vector<double>& nm, const std::vector<doubl
 // Typical use: from_log10(resample_to_grid(nm, log_s, NAN), 0.0).
 Spectrum from_log10(const Spectrum& log10_values, double missing_value);
 
+// sum_i a_i b_i, in four interleaved partial sums so that the additions overlap instead of
+// each waiting on the last (the per-pixel spectral stages are bound by that wait). Per pixel.
+double dot(const Spectrum& a, const Spectrum& b);
 // sum_i a_i b_i * 5 nm. Per pixel.
 double integrate_product(const Spectrum& a, const Spectrum& b);
 

@@ -139,14 +139,13 @@ void PrintExposure::expose(const double* negative_density, double* paper_exposur
     }
     double net[3];
     for (int l = 0; l < film_layers_; ++l) net[l] = negative_density[l] - film_d_min_[l];
-    double sum[3] = {0, 0, 0};
+    Spectrum t;
     for (int i = 0; i < kSpectralSamples; ++i) {
         double d = film_base_[i];
         for (int l = 0; l < film_layers_; ++l) d += net[l] * film_dye_[l][i];
-        double t = std::exp(-kLn10 * d);
-        for (int j = 0; j < paper_layers_; ++j) sum[j] += weighted_light_[j][i] * t;
+        t[i] = std::exp(-kLn10 * d);
     }
-    for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = sum[j];
+    for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = dot(weighted_light_[j], t);
 }
 
 Spectrum PrintExposure::layer_transmittance(int layer, double density) const {
@@ -161,17 +160,7 @@ void PrintExposure::expose(const std::array<const Spectrum*, 3>& layer_transmitt
     Spectrum t = *layer_transmittance[0];
     for (int l = 1; l < film_layers_; ++l)
         for (int i = 0; i < kSpectralSamples; ++i) t[i] *= (*layer_transmittance[l])[i];
-    // Each sum in four interleaved parts, so that its additions overlap rather than wait on
-    // one another (a grid has many nodes; the order changes the sum by rounding only).
-    for (int j = 0; j < paper_layers_; ++j) {
-        const Spectrum& w = weighted_light_[j];
-        double p0 = 0, p1 = 0, p2 = 0, p3 = 0;
-        int i = 0;
-        for (; i + 4 <= kSpectralSamples; i += 4)
-            p0 += w[i] * t[i], p1 += w[i + 1] * t[i + 1], p2 += w[i + 2] * t[i + 2], p3 += w[i + 3] * t[i + 3];
-        for (; i < kSpectralSamples; ++i) p0 += w[i] * t[i];
-        paper_exposure[j] = (p0 + p1) + (p2 + p3);
-    }
+    for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = dot(weighted_light_[j], t);
 }
 
 std::string PrintExposure::fingerprint() const {
