@@ -131,36 +131,12 @@ std::vector<Window> sample_windows(int width, int height, int count, int side_px
     return out;
 }
 
-// Grain: a wedge of flat square patches one stop apart around mid grey, grain on (MTF and
-// halation off, so each patch is flat), the density analysed as a plate would be.
 // The copy pass is cheap: timed many times, so that its fastest run is the machine's
 // speed and not a moment of contention; in turn with the fast tier's frame runs where that
 // tier is benchmarked (a shared machine's speed drifts over the minutes between).
 constexpr int kCopyRuns = 20;
 
 constexpr int kWedgePatches = 7, kWedgePatchPx = 128, kWedgeBlockPx = 32;
-
-GrainProfile measure_grain(const Stock& film, Quality q, uint64_t seed, double pitch_um, int threads) {
-    const int width = kWedgePatches * kWedgePatchPx;
-    DevelopSettings s = density_target(q, seed, pitch_um, width);
-    s.mtf = false;
-    s.halation = 0;
-    Plan plan = Plan::compile(film, nullptr, s, {width, kWedgePatchPx});
-    Image wedge(width, kWedgePatchPx, 3);
-    const double h0 = mid_grey_exposure_lux_s(film.iso_speed);
-    for (int y = 0; y < kWedgePatchPx; ++y)
-        for (int x = 0; x < width; ++x) {
-            float h = float(h0 * std::exp2(x / kWedgePatchPx - kWedgePatches / 2));
-            for (int c = 0; c < 3; ++c) wedge.at(x, y)[c] = h;
-        }
-    Image density = render(plan, wedge.view(), wedge.window, threads);
-    GrainAnalysisSettings a;
-    a.channels = 3;
-    a.block_size_px = kWedgeBlockPx;
-    a.level_bins = kWedgePatches;
-    a.threads = threads;
-    return analyze_grain({density.view()}, a);
-}
 
 GrainErrors grain_errors(const GrainProfile& reference, const GrainProfile& test) {
     GrainErrors e;
@@ -175,6 +151,35 @@ GrainErrors grain_errors(const GrainProfile& reference, const GrainProfile& test
 }
 
 }  // namespace
+
+GrainProfile measure_wedge_grain(const Stock& film, const Stock* paper, Quality q, uint64_t seed, double pitch_um,
+                                 int threads) {
+    const int width = kWedgePatches * kWedgePatchPx;
+    DevelopSettings s = density_target(q, seed, pitch_um, width);
+    s.mtf = false;
+    s.halation = 0;
+    if (paper) {
+        s.output = OutputMode::print;
+        s.print_width_mm = paper->frame_width_mm * width / kTargetWidthPx;
+    }
+    Plan plan = Plan::compile(film, paper, s, {width, kWedgePatchPx});
+    Image wedge(width, kWedgePatchPx, 3);
+    const double h0 = mid_grey_exposure_lux_s(film.iso_speed);
+    for (int y = 0; y < kWedgePatchPx; ++y)
+        for (int x = 0; x < width; ++x) {
+            float h = float(h0 * std::exp2(x / kWedgePatchPx - kWedgePatches / 2));
+            for (int c = 0; c < 3; ++c) wedge.at(x, y)[c] = h;
+        }
+    Image density = render(plan, wedge.view(), wedge.window, threads);
+    if (paper)
+        for (float& v : density.pixels) v = float(-std::log10(std::max(v, 1e-30f)));
+    GrainAnalysisSettings a;
+    a.channels = 3;
+    a.block_size_px = kWedgeBlockPx;
+    a.level_bins = kWedgePatches;
+    a.threads = threads;
+    return analyze_grain({density.view()}, a);
+}
 
 // MTF on the density output: one-row sine targets of modulation 0.1 around a mid-grey
 // exposure (a one-row frame: rows clamp at the frame edge, so the 2D PSF acts as its line
@@ -243,6 +248,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
     r.pixel_pitch_um = film.frame_width_mm * 1000.0 / kTargetWidthPx;
     for (int k : {1, 2, 4, 8, 12, 16, 20, 24, 28, 32}) r.mtf_cycles_per_px.push_back(k / 64.0);
     r.grain_wedge_patches = kWedgePatches, r.grain_wedge_patch_px = kWedgePatchPx;
+    r.print_grain = o.print_grain;
 
     std::vector<Quality> tiers{Quality::reference};
     for (Quality q : o.tiers)
@@ -267,7 +273,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
         std::vector<Image> print, density;
     };
     std::vector<WindowRenders> renders(tiers.size());
-    GrainProfile reference_grain;
+    GrainProfile reference_grain, reference_print_grain;
     for (size_t t = 0; t < tiers.size(); ++t) {
         const Quality q = tiers[t];
         TierResult tr;
@@ -306,7 +312,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
             if (with_copy) r.copy_seconds = copy.seconds, r.copy_runs = copy.runs;
         }
 
-        say(tr.name + ": errors on the sample windows, MTF, grain wedge");
+        say(tr.name + ": errors on the sample windows, MTF, grain wedge" + (o.print_grain ? ", printed grain wedge" : ""));
         DevelopSettings no_grain = s;
         no_grain.grain = false;
         Plan print_plan = Plan::compile(film, &paper, no_grain, frame);
@@ -336,17 +342,26 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
                 for (size_t k = 0; k < tr.mtf[l].size(); ++k)
                     tr.mtf_error = std::max(tr.mtf_error, std::abs(tr.mtf[l][k] - r.tiers[0].mtf[l][k]));
 
-        try {
-            if (q == Quality::reference) {
-                reference_grain = measure_grain(film, q, o.seed, r.pixel_pitch_um, o.threads);
-                // Another realisation of the reference: the measurement's own noise floor.
-                tr.grain = grain_errors(reference_grain, measure_grain(film, q, o.seed + 1, r.pixel_pitch_um, o.threads));
-            } else {
-                tr.grain = grain_errors(reference_grain, measure_grain(film, q, o.seed, r.pixel_pitch_um, o.threads));
+        // The wedge's grain against the reference's, on the negative or (with a paper) the print;
+        // the reference's against another realisation of itself: the measurement's noise floor.
+        auto grain_against_reference = [&](const Stock* print_paper, GrainProfile& reference) {
+            GrainErrors e;
+            try {
+                auto measure = [&](uint64_t seed) {
+                    return measure_wedge_grain(film, print_paper, q, seed, r.pixel_pitch_um, o.threads);
+                };
+                if (q == Quality::reference) reference = measure(o.seed);
+                return grain_errors(reference, measure(q == Quality::reference ? o.seed + 1 : o.seed));
+            } catch (const std::exception& ex) {
+                e.problem = ex.what();
             }
-        } catch (const std::exception& e) {
-            tr.grain.problem = e.what();
-        }
+            return e;
+        };
+        tr.grain = grain_against_reference(nullptr, reference_grain);
+        if (o.print_grain)
+            tr.print_grain = grain_against_reference(&paper, reference_print_grain);
+        else
+            tr.print_grain.problem = "not asked (--print-grain)";
         r.tiers.push_back(std::move(tr));
 
         if (q == Quality::fast) {
@@ -392,7 +407,8 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
             r.target.evaluated = true;
             r.target.copy_ratio = copy_ratio(fast.seconds, r.copy_seconds);
             r.target.mean_de2000 = fast.print_error.mean;
-            r.target.grain_within = fast.grain.within(r.grain_tolerance);
+            r.target.grain_within = fast.grain.within(r.grain_tolerance) &&
+                                    (!o.print_grain || fast.print_grain.within(r.grain_tolerance));
         }
     }
     std::vector<std::pair<double, double>> points;

@@ -22,7 +22,9 @@
 // - grain: a wedge of flat patches with grain on, each tier's density analysed by the
 //   plate-matching analysis (core/plate/grain_analysis.h) and compared with the
 //   reference's (core/plate/grain_compare.h). The reference is also compared with itself
-//   under another seed: that is the measurement's noise floor.
+//   under another seed: that is the measurement's noise floor. With print_grain, the same
+//   wedge printed as well, each channel of the print read as a density (what a plate
+//   scanned from the print shows).
 // Disabled stages: the fast tier again with grain, MTF and halation off in turn, each left
 // out of the plan and, for comparison, kept in it at its neutral value. Then the fast tier
 // stage after stage and at each narrower instruction set the processor runs.
@@ -46,6 +48,9 @@ struct BenchOptions {
     int runs = 3;                     // timed whole-frame runs after one warm-up; the fastest is kept
     int sample_windows = 4;           // along the frame's diagonal, one per band of the demo scene
     int sample_window_px = 128;
+    // Also the print's grain (measure_wedge_grain with the paper): the reference's paper grain
+    // makes its two prints of the wedge take minutes, so only when asked.
+    bool print_grain = false;
     uint64_t seed = 0;
     std::function<void(const std::string&)> progress;  // told what runs next (may be empty)
 };
@@ -81,6 +86,7 @@ struct TierResult {
     double mtf_error = 0;      // max |MTF - MTF_reference|
     std::vector<std::vector<double>> mtf;  // measured, per layer per frequency
     GrainErrors grain;         // against the reference (for the reference: another seed)
+    GrainErrors print_grain;   // the same for the printed wedge, when asked (BenchOptions::print_grain)
     bool pareto_optimal = false;  // in (seconds, mean print CIEDE2000) among the tiers run
 };
 
@@ -113,7 +119,7 @@ struct TargetCheck {
     bool evaluated = false;    // the fast tier was benchmarked
     double max_copy_ratio = 10, max_mean_de2000 = 0.5;
     double copy_ratio = 0, mean_de2000 = 0;
-    bool grain_within = false;
+    bool grain_within = false;  // the negative's grain, and the print's where measured
     bool passes() const {
         return evaluated && copy_ratio <= max_copy_ratio && mean_de2000 <= max_mean_de2000 && grain_within;
     }
@@ -132,6 +138,7 @@ struct BenchReport {
     double pixel_pitch_um = 0;
     std::vector<double> mtf_cycles_per_px;
     int grain_wedge_patches = 0, grain_wedge_patch_px = 0;
+    bool print_grain = false;  // the printed wedge's grain measured too (BenchOptions::print_grain)
     GrainMatchTolerance grain_tolerance;
     std::vector<TierResult> tiers;  // reference first
     std::vector<DisabledStage> disabled;
@@ -146,6 +153,14 @@ struct BenchReport {
 // curve and divided by the input's modulation measured the same way (sine_amplitude).
 std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality quality, double pitch_um,
                                                      const std::vector<double>& cycles_per_px, int threads);
+
+// The grain of a wedge of flat square patches one stop apart around mid grey (grain on, MTF
+// and halation off, so each patch is flat) at `pitch_um` on film, analysed as a plate would be
+// (core/plate/grain_analysis.h): the negative's density or, with a paper, the print's, each
+// channel of its linear Rec.709 read as a density, -log10 (the print at the paper's format's
+// pitch for a 4096 px wide frame).
+GrainProfile measure_wedge_grain(const Stock& film, const Stock* paper, Quality quality, uint64_t seed,
+                                 double pitch_um, int threads);
 
 // Throws std::invalid_argument for unusable options or stocks.
 BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOptions& options);

@@ -20,6 +20,7 @@ struct BenchCliOptions {
     int runs = 3;
     std::string film = "kodak-vision3-250d", paper = "kodak-2383";
     std::string tiers = "reference,high,fast,preview";
+    bool print_grain = false;
 };
 
 std::pair<int, int> parse_size(const std::string& text) {
@@ -65,7 +66,8 @@ nlohmann::json report_json(const bench::BenchReport& r) {
         {"copy_in_turn_with_fast", r.copy_in_turn_with_fast},
         {"sample_windows", windows},
         {"mtf_cycles_per_px", r.mtf_cycles_per_px},
-        {"grain_wedge", {{"patches", r.grain_wedge_patches}, {"patch_px", r.grain_wedge_patch_px}}},
+        {"grain_wedge",
+         {{"patches", r.grain_wedge_patches}, {"patch_px", r.grain_wedge_patch_px}, {"printed_too", r.print_grain}}},
         {"grain_tolerance",
          {{"response_percent", r.grain_tolerance.response_percent},
           {"nps_db", r.grain_tolerance.nps_db},
@@ -73,13 +75,16 @@ nlohmann::json report_json(const bench::BenchReport& r) {
         {"tiers", nlohmann::json::array()},
         {"disabled_stages", nlohmann::json::array()}};
     for (const auto& t : r.tiers) {
-        nlohmann::json grain = {{"measured", t.grain.measured},
+        auto grain_json = [&](const bench::GrainErrors& g) {
+            nlohmann::json j = {{"measured", g.measured},
                                 {"against", t.quality == Quality::reference ? "reference, another seed" : "reference"},
-                                {"response_percent", t.grain.response_percent},
-                                {"nps_db", t.grain.nps_db},
-                                {"correlation", t.grain.correlation},
-                                {"within_tolerance", t.grain.within(r.grain_tolerance)}};
-        if (!t.grain.measured) grain["problem"] = t.grain.problem;
+                                {"response_percent", g.response_percent},
+                                {"nps_db", g.nps_db},
+                                {"correlation", g.correlation},
+                                {"within_tolerance", g.within(r.grain_tolerance)}};
+            if (!g.measured) j["problem"] = g.problem;
+            return j;
+        };
         doc["tiers"].push_back({{"name", t.name},
                                 {"compile_seconds", t.compile_seconds},
                                 {"seconds", t.seconds},
@@ -92,7 +97,8 @@ nlohmann::json report_json(const bench::BenchReport& r) {
                                   {"print_de2000_max", t.print_error.max},
                                   {"negative_density_max", t.density_error},
                                   {"mtf_max", t.mtf_error},
-                                  {"grain", grain}}},
+                                  {"grain", grain_json(t.grain)},
+                                  {"print_grain", grain_json(t.print_grain)}}},
                                 {"mtf", t.mtf},
                                 {"pareto_optimal", t.pareto_optimal}});
     }
@@ -189,19 +195,32 @@ void print_report(const bench::BenchReport& r) {
     tier_row("negative max |dD|", [&](const auto& t) { return error_cell(t, t.density_error); }, "density, grain off");
     tier_row("MTF max |d response|", [&](const auto& t) { return error_cell(t, t.mtf_error); },
              "sine targets to Nyquist, grain and halation off");
-    auto grain_cell = [](const auto& t, double bench::GrainErrors::*field) {
-        return t.grain.measured ? number_cell(t.grain.*field, "%.3g") : std::string("not measured");
-    };
-    tier_row("grain response error %", [&](const auto& t) { return grain_cell(t, &bench::GrainErrors::response_percent); },
-             "tolerance " + number_cell(r.grain_tolerance.response_percent, "%g"));
-    tier_row("grain NPS distance dB", [&](const auto& t) { return grain_cell(t, &bench::GrainErrors::nps_db); },
-             "tolerance " + number_cell(r.grain_tolerance.nps_db, "%g"));
-    tier_row("grain correlation diff", [&](const auto& t) { return grain_cell(t, &bench::GrainErrors::correlation); },
-             "tolerance " + number_cell(r.grain_tolerance.correlation, "%g"));
+    // The negative's grain, and the print's where it was measured (--print-grain).
+    const bool print_grain = r.print_grain;
+    for (const auto [prefix, grain] : {std::pair{"", &bench::TierResult::grain},
+                                       std::pair{"print ", &bench::TierResult::print_grain}}) {
+        if (grain == &bench::TierResult::print_grain && !print_grain) continue;
+        auto grain_cell = [grain = grain](const bench::TierResult& t, double bench::GrainErrors::*field) {
+            const bench::GrainErrors& g = t.*grain;
+            return g.measured ? number_cell(g.*field, "%.3g") : std::string("not measured");
+        };
+        const std::string p = prefix;
+        tier_row(p + "grain response error %",
+                 [&](const auto& t) { return grain_cell(t, &bench::GrainErrors::response_percent); },
+                 "tolerance " + number_cell(r.grain_tolerance.response_percent, "%g"));
+        tier_row(p + "grain NPS distance dB", [&](const auto& t) { return grain_cell(t, &bench::GrainErrors::nps_db); },
+                 "tolerance " + number_cell(r.grain_tolerance.nps_db, "%g"));
+        tier_row(p + "grain correlation diff",
+                 [&](const auto& t) { return grain_cell(t, &bench::GrainErrors::correlation); },
+                 "tolerance " + number_cell(r.grain_tolerance.correlation, "%g"));
+    }
     tier_row("Pareto-optimal", [](const auto& t) { return std::string(t.pareto_optimal ? "yes" : "dominated"); },
              "in (time, mean CIEDE2000)");
-    for (const auto& t : r.tiers)
+    for (const auto& t : r.tiers) {
         if (!t.grain.measured) std::printf("grain of %s not measured: %s\n", t.name.c_str(), t.grain.problem.c_str());
+        if (print_grain && !t.print_grain.measured)
+            std::printf("print grain of %s not measured: %s\n", t.name.c_str(), t.print_grain.problem.c_str());
+    }
     std::printf(
         "\n(*) reference: rendered only on the sample windows; its times are the windows' times x frame pixels /\n"
         "    window pixels, an upper bound (each window also computes its halo); the lower bound divides by the\n"
@@ -209,8 +228,11 @@ void print_report(const bench::BenchReport& r) {
         "Colour and density errors are measured with grain off in both renders: grain realisations differ\n"
         "between tiers. Grain: a %d-patch wedge (%d px patches, one stop apart, MTF and halation off), each tier's\n"
         "density analysed as a plate and compared with the reference's; the reference column compares the\n"
-        "reference with itself under another seed (the measurement's noise floor).\n",
-        r.grain_wedge_patches, r.grain_wedge_patch_px);
+        "reference with itself under another seed (the measurement's noise floor).%s\n",
+        r.grain_wedge_patches, r.grain_wedge_patch_px,
+        print_grain ? "\nPrint grain: the same wedge printed, each channel of the print's linear Rec.709 read as a "
+                      "density\n(-log10), analysed and compared the same way."
+                    : "");
 
     if (!r.disabled.empty()) {
         std::printf("\nfast tier with one stage off (whole frame):\n");
@@ -251,6 +273,7 @@ void run_bench(const BenchCliOptions& o) {
     options.tiers = parse_tiers(o.tiers);
     options.threads = o.threads;
     options.runs = o.runs;
+    options.print_grain = o.print_grain;
     options.progress = [](const std::string& what) { std::cerr << "bench: " << what << "\n"; };
     Stock film, paper;
     try {
@@ -286,6 +309,9 @@ void add_bench_command(CLI::App& app) {
     cmd->add_option("--paper", o->paper, "Paper or print film id or .json file (default kodak-2383)");
     cmd->add_option("--tiers", o->tiers,
                     "Comma-separated tiers (default reference,high,fast,preview); the reference always runs");
+    cmd->add_flag("--print-grain", o->print_grain,
+                  "Also measure the print's grain against the reference's: the grain wedge printed and each channel "
+                  "read as a density (the reference's two prints of it take minutes)");
     cmd->callback([o] { run_bench(*o); });
 }
 

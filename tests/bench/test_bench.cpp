@@ -1,5 +1,6 @@
 // The benchmark's measurements against their definitions (no timing is asserted).
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 
 #include "bench/bench.h"
@@ -102,6 +103,50 @@ TEST_CASE("the density MTF of a film whose MTF is a Gaussian is that Gaussian") 
             double f_px = frequencies[k];
             CHECK(layer[k] == Approx(std::exp(-2 * M_PI * M_PI * 4.0 * f_px * f_px)).margin(0.01));
         }
+}
+
+TEST_CASE("the printed grain wedge reads the print's densities, and the fast tier's print grain is high's") {
+    const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    const double pitch_um = film.frame_width_mm * 1000.0 / 4096;
+    const GrainProfile negative = measure_wedge_grain(film, nullptr, Quality::high, 0, pitch_um, 2);
+    const GrainProfile high = measure_wedge_grain(film, &paper, Quality::high, 0, pitch_um, 2);
+    const GrainProfile fast = measure_wedge_grain(film, &paper, Quality::fast, 0, pitch_um, 2);
+    // The print's levels are the print's densities, -log10 of its linear Rec.709: the middle
+    // patch, the scene's mid grey, is the grain-free print's of it (neutral at the paper's aim,
+    // by PrintExposure's automatic lights), and the print spans more density than the negative
+    // (its contrast the paper's gamma times the negative's).
+    DevelopSettings s;
+    s.quality = Quality::high;
+    s.grain = false;
+    s.mtf = false;
+    s.halation = 0;
+    s.input_units = InputUnits::lux_seconds;
+    s.frame_width_mm = pitch_um * 4 / 1000.0, s.print_width_mm = paper.frame_width_mm * 4 / 4096;
+    const Plan plan = Plan::compile(film, &paper, s, {4, 4});
+    Image grey(4, 4, 3, float(mid_grey_exposure_lux_s(film.iso_speed))), print(4, 4, 3);
+    plan.run(grey.view(), print.view(), 1);
+    REQUIRE(high.channels.size() == 3);
+    for (int c = 0; c < 3; ++c) {
+        const std::vector<double>& level = high.channels[c].level;
+        const double grey_density = -std::log10(print.at(1, 1)[c]);
+        INFO("channel " << c << ": grey prints at density " << grey_density);
+        CHECK(std::any_of(level.begin(), level.end(), [&](double l) { return std::abs(l - grey_density) < 0.01; }));
+        const std::vector<double>& negative_level = negative.channels[c].level;
+        CHECK(level.back() - level.front() > 1.5 * (negative_level.back() - negative_level.front()));
+    }
+    // Fast prints through one table with the paper's grain folded into the film's, each
+    // channel's variance matched (develop.cpp, fold_paper_grain); high prints each pixel
+    // spectrally with the paper's own grain: two paths, the same grain in amplitude and
+    // spectrum. (Not in channel correlation: the fold's extra grain reaches the print through
+    // the negative's dyes, which mix the channels more than the paper's own grain does; 0.051
+    // against high's, at the plate-matching tolerance of 0.05: README, The print's grain.)
+    const GrainMatch m = compare_grain_profiles(high, fast);
+    const GrainMatchTolerance tolerance;
+    for (const ChannelMatch& c : m.channels) {
+        INFO(c.name);
+        CHECK(c.response_error_percent <= tolerance.response_percent);
+        CHECK(c.nps_distance_db <= tolerance.nps_db);
+    }
 }
 
 TEST_CASE("the copy pass copies the pixels, and a copy ratio is time over copy time") {

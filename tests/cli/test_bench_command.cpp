@@ -20,6 +20,7 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
     for (const char* key : {"timed_runs", "warmup_runs", "copy_runs", "sample_windows", "mtf_cycles_per_px", "grain_wedge",
                             "grain_tolerance", "target", "disabled_stages"})
         CHECK(doc.contains(key));
+    CHECK(doc["grain_wedge"]["printed_too"] == false);
     // Four tiers, fast among them: the copy pass is timed in turn with its frame runs.
     CHECK(doc["copy_in_turn_with_fast"] == true);
     CHECK(doc["copy_runs"].get<int>() >= 20);
@@ -36,8 +37,13 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
         const auto& e = tier["errors"];
         for (const char* key : {"print_de2000_mean", "print_de2000_max", "negative_density_max", "mtf_max"})
             CHECK(e[key].get<double>() >= 0);
-        for (const char* key : {"measured", "against", "response_percent", "nps_db", "correlation", "within_tolerance"})
+        for (const char* key : {"measured", "against", "response_percent", "nps_db", "correlation", "within_tolerance"}) {
             CHECK(e["grain"].contains(key));
+            CHECK(e["print_grain"].contains(key));
+        }
+        // The print's grain only with --print-grain, and then said so.
+        CHECK(e["print_grain"]["measured"] == false);
+        CHECK(e["print_grain"]["problem"].get<std::string>().find("--print-grain") != std::string::npos);
     }
     // The reference against itself (grain off): no colour, density or MTF error.
     CHECK(doc["tiers"][0]["errors"]["print_de2000_max"] == 0.0);
