@@ -271,14 +271,15 @@ void table_density_range(const Stock& stock, std::array<double, 3>& lo, std::arr
     }
 }
 
-// The paper's layer densities printed from the negative's (colour on colour): the enlarger's
-// exposure developed through the paper's curves.
+// The paper's layer densities from its layers' exposures, through its curves.
 void develop_paper(const Stock& paper, const double* paper_exposure_lux_s, double* paper_density) {
     for (int j = 0; j < 3; ++j)
         paper_density[j] =
             paper.layers[j].density_curve(std::log10(std::clamp(paper_exposure_lux_s[j], 1e-30, kMaxInput)));
 }
 
+// The paper's layer densities printed from the negative's (colour on colour): the enlarger's
+// exposure developed through the paper's curves.
 void print_densities(const PrintExposure& enlarger, const Stock& paper, const double* negative_density,
                      double* paper_density) {
     double h[3];
@@ -288,8 +289,8 @@ void print_densities(const PrintExposure& enlarger, const Stock& paper, const do
 
 // The one print table of a colour negative on colour paper: the negative's densities -> log2
 // XYZ of the print. A plan compiled again for another exposure, grain, MTF or halation (a
-// slider dragged in a host) prints the same: its table, a few hundred ms of spectral sums on
-// two cores, is taken from the last few built, found by the bytes of everything it reads.
+// slider dragged in a host) prints the same: its table, about a tenth of a second of spectral
+// sums on two cores, is taken from the last few built, found by the bytes of everything it reads.
 std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock& paper, const PrintExposure& enlarger,
                                                   int nodes) {
     std::array<double, 3> lo, hi;
