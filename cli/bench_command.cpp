@@ -197,7 +197,7 @@ void print_report(const bench::BenchReport& r) {
              "sine targets to Nyquist, grain and halation off");
     // The negative's grain, and the print's where it was measured (--print-grain).
     const bool print_grain = r.print_grain;
-    for (const auto [prefix, grain] : {std::pair{"", &bench::TierResult::grain},
+    for (const auto& [prefix, grain] : {std::pair{"", &bench::TierResult::grain},
                                        std::pair{"print ", &bench::TierResult::print_grain}}) {
         if (grain == &bench::TierResult::print_grain && !print_grain) continue;
         auto grain_cell = [grain = grain](const bench::TierResult& t, double bench::GrainErrors::*field) {
