@@ -322,7 +322,8 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
     std::array<std::vector<Spectrum>, 3> transmittance;
     for (int a = 0; a < 3 && enlarger.spectral(); ++a)
         for (int i = 0; i < nodes; ++i)
-            transmittance[a].push_back(enlarger.layer_transmittance(a, lo[a] + i * (hi[a] - lo[a]) / (nodes - 1)));
+            transmittance[a].push_back(
+                enlarger.layer_transmittance(a, Table3D::node_coordinate(lo[a], hi[a], nodes, i)));
     const PrintView view(paper);
     auto table = std::make_shared<const Table3D>(lo, hi, nodes, [&](const int* node, const double* d, double* log2_xyz) {
         double h[3], paper_density[3];

@@ -255,11 +255,9 @@ float fast_exp2(float x) {
 
 Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f)
     : nodes_(nodes) {
-    std::array<double, 3> step;
     for (int a = 0; a < 3; ++a) {
-        step[a] = (hi[a] - lo[a]) / (nodes - 1);
         lo_[a] = float(lo[a]);
-        scale_[a] = float(1.0 / step[a]);
+        scale_[a] = float(1.0 / ((hi[a] - lo[a]) / (nodes - 1)));  // 1 / the node spacing
     }
     values_.resize(size_t(nodes) * nodes * nodes);
     // Each node on its own: the planes of nodes along z shared among the threads.
@@ -268,7 +266,8 @@ Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& h
             for (int j = 0; j < nodes; ++j)
                 for (int i = 0; i < nodes; ++i) {
                     const int node[3] = {i, j, k};
-                    double in[3] = {lo[0] + i * step[0], lo[1] + j * step[1], lo[2] + k * step[2]}, out[3];
+                    double in[3], out[3];
+                    for (int a = 0; a < 3; ++a) in[a] = node_coordinate(lo[a], hi[a], nodes, node[a]);
                     f(node, in, out);
                     values_[(size_t(k) * nodes + j) * nodes + i] = {float(out[0]), float(out[1]), float(out[2]), 0.0f};
                 }

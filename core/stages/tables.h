@@ -57,6 +57,8 @@ public:
     // f is evaluated at the nodes on every core, so it must be safe to call from several
     // threads at once; the values do not depend on how many.
     Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f);
+    // Node i's coordinate on an axis over [lo, hi] (the in that f is given).
+    static double node_coordinate(double lo, double hi, int nodes, int i) { return lo + i * ((hi - lo) / (nodes - 1)); }
     void operator()(const float* in, float* out) const;
     // The table at n points given as three rows (in[a][i] is axis a of point i), into three
     // rows: operator() at each point, a vector of points at a time, bit for bit the same values.
