@@ -58,6 +58,16 @@ LogAxisTable::LogAxisTable(const Curve& curve, int mantissa_bits, const Function
     fg[samples] = fg[samples - 1];  // so the last sample interpolates to itself
     nodes_.resize(samples);
     for (uint32_t i = 0; i < samples; ++i) nodes_[i] = {fg[i][0], fg[i][1], fg[i + 1][0], fg[i + 1][1]};
+    for (int part = 0; part < 2; ++part) {
+        std::vector<float>& row = part == 0 ? f_row_ : g_row_;
+        row.assign(size_t(samples) + 1 + 2 * kWindowPad, fg[samples][size_t(part)]);
+        for (uint32_t i = 0; i < samples; ++i) row[kWindowPad + i] = fg[i][size_t(part)];
+        std::fill(row.begin(), row.begin() + kWindowPad, fg[0][size_t(part)]);
+    }
+}
+
+LogAxisTable::Samples LogAxisTable::samples() const {
+    return {&nodes_[0][0], f_row_.data() + kWindowPad, g_row_.data() + kWindowPad, first_bits_, last_bits_, shift_};
 }
 
 namespace {
@@ -119,34 +129,63 @@ __attribute__((always_inline)) inline void node_values(const float* values, cons
     }
 }
 
+// Where the 16 lanes' node indices lie within 8 below and 7 above the middle lane's (a smooth
+// row's usually do), the values of their nodes as four permutes of a window of 16 consecutive
+// samples of f and of g each, in place of 16 node loads and their transpose: the same floats.
+// Otherwise (and for other lane counts, or a compiler without GCC's variable shuffles) false.
+template <typename U, typename V>
+__attribute__((always_inline)) inline bool window_values(const LogAxisTable::Samples& table, const U& index, V* node) {
+#if defined(__GNUC__) && !defined(__clang__)
+    if constexpr (sizeof(V) == 16 * sizeof(float)) {
+        const int first = int(index[8]) - 8;  // (the rows hold kWindowPad samples past either end)
+        const U in_window = index - uint32_t(first);  // from 0, or wrapped past 2^31 below the window
+        U any = in_window | __builtin_shufflevector(in_window, in_window, 8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7);
+        any |= __builtin_shufflevector(any, any, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3);
+        any |= __builtin_shufflevector(any, any, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1);
+        any |= __builtin_shufflevector(any, any, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0);
+        if (any[0] >= 16) return false;  // (the lanes' bits ORed: under 16 only if every lane is)
+        V f, f_next, g, g_next;
+        load(f, table.f_row + first);
+        load(f_next, table.f_row + first + 1);
+        load(g, table.g_row + first);
+        load(g_next, table.g_row + first + 1);
+        node[0] = __builtin_shuffle(f, in_window);
+        node[1] = __builtin_shuffle(g, in_window);
+        node[2] = __builtin_shuffle(f_next, in_window);
+        node[3] = __builtin_shuffle(g_next, in_window);
+        return true;
+    }
+#endif
+    (void)table, (void)index, (void)node;
+    return false;
+}
+
 // The lookup of LogAxisTable at the lanes of v: f in place, and g into *g when asked (V
 // any number of float lanes, U its uint32 lanes): one piece of code for vector blocks and scalar
 // tails. (No vector passes through a call by value: its ABI would differ with and without AVX.)
 template <typename V, typename U>
-__attribute__((always_inline)) inline void log_axis_lookup(const float* nodes, uint32_t first_bits,
-                                                           uint32_t last_bits, int shift, V& v, V* g) {
+__attribute__((always_inline)) inline void log_axis_lookup(const LogAxisTable::Samples& table, V& v, V* g) {
     // Non-negative floats order like their bit patterns; NaN and negatives count as 0.
     v = v > 0.0f ? v : V{} + 0.0f;
     U b;
     std::memcpy(&b, &v, sizeof b);
-    b = b < first_bits ? U{} + first_bits : b;
-    b = b > last_bits ? U{} + last_bits : b;
-    b -= first_bits;
-    const U offset = (b >> shift) * 4u;
-    const V t = __builtin_convertvector(b & ((1u << shift) - 1), V) * bits_float((127u - shift) << 23);  // * 2^-shift
+    b = b < table.first_bits ? U{} + table.first_bits : b;
+    b = b > table.last_bits ? U{} + table.last_bits : b;
+    b -= table.first_bits;
+    const U index = b >> table.shift;
+    const V t = __builtin_convertvector(b & ((1u << table.shift) - 1), V) * bits_float((127u - table.shift) << 23);  // * 2^-shift
     V node[4];  // f_i, g_i, f_i+1, g_i+1
-    node_values<4>(nodes, offset, node);
+    if (!window_values(table, index, node)) node_values<4>(table.nodes, index * 4u, node);
     v = node[0] + t * (node[2] - node[0]);
     if (g) *g = node[1] + t * (node[3] - node[1]);
 }
 
 // max(floor, f + g noise) at the lanes of v, in place: a density with its grain.
 template <typename V, typename U>
-__attribute__((always_inline)) inline void log_axis_with_noise(const float* nodes, uint32_t first_bits,
-                                                               uint32_t last_bits, int shift, const float* noise,
+__attribute__((always_inline)) inline void log_axis_with_noise(const LogAxisTable::Samples& table, const float* noise,
                                                                float floor, V& v) {
     V g, n;
-    log_axis_lookup<V, U>(nodes, first_bits, last_bits, shift, v, &g);
+    log_axis_lookup<V, U>(table, v, &g);
     load(n, noise);
     v = v + g * n;
     v = floor < v ? v : V{} + floor;  // as std::max(floor, v): NaN gives floor
@@ -154,21 +193,19 @@ __attribute__((always_inline)) inline void log_axis_with_noise(const float* node
 
 struct LogAxisNoiseRow {
     template <int lanes>
-    __attribute__((always_inline)) static void run(const float* nodes, uint32_t first_bits, uint32_t last_bits,
-                                                   int shift, const float* in, const float* noise, float floor,
-                                                   float* out, int n) {
+    __attribute__((always_inline)) static void run(LogAxisTable::Samples table, const float* in, const float* noise,
+                                                   float floor, float* out, int n) {
         using V = typename simd::Lanes<lanes>::F;
         int i = 0;
         for (; i + lanes <= n; i += lanes) {
             V v;
             load(v, in + i);
-            log_axis_with_noise<V, typename simd::Lanes<lanes>::U>(nodes, first_bits, last_bits, shift, noise + i,
-                                                                   floor, v);
+            log_axis_with_noise<V, typename simd::Lanes<lanes>::U>(table, noise + i, floor, v);
             store(out + i, v);
         }
         for (; i < n; ++i) {
             Float1 lane{in[i]};
-            log_axis_with_noise<Float1, Uint1>(nodes, first_bits, last_bits, shift, noise + i, floor, lane);
+            log_axis_with_noise<Float1, Uint1>(table, noise + i, floor, lane);
             out[i] = lane[0];
         }
     }
@@ -177,21 +214,21 @@ struct LogAxisNoiseRow {
 // A row of lookups (g_out may be null: f only), in vectors of `lanes`, then one at a time.
 struct LogAxisRow {
     template <int lanes>
-    __attribute__((always_inline)) static void run(const float* nodes, uint32_t first_bits, uint32_t last_bits,
-                                                   int shift, const float* in, float* out, float* g_out, int n) {
+    __attribute__((always_inline)) static void run(LogAxisTable::Samples table, const float* in, float* out,
+                                                   float* g_out, int n) {
         using V = typename simd::Lanes<lanes>::F;
         using U = typename simd::Lanes<lanes>::U;
         int i = 0;
         for (; i + lanes <= n; i += lanes) {
             V v, g{};
             load(v, in + i);
-            log_axis_lookup<V, U>(nodes, first_bits, last_bits, shift, v, g_out ? &g : nullptr);
+            log_axis_lookup<V, U>(table, v, g_out ? &g : nullptr);
             store(out + i, v);
             if (g_out) store(g_out + i, g);
         }
         for (; i < n; ++i) {
             Float1 lane{in[i]}, g{};
-            log_axis_lookup<Float1, Uint1>(nodes, first_bits, last_bits, shift, lane, g_out ? &g : nullptr);
+            log_axis_lookup<Float1, Uint1>(table, lane, g_out ? &g : nullptr);
             out[i] = lane[0];
             if (g_out) g_out[i] = g[0];
         }
@@ -202,20 +239,20 @@ struct LogAxisRow {
 
 float LogAxisTable::operator()(float v) const {
     Float1 lane{v};
-    log_axis_lookup<Float1, Uint1>(&nodes_[0][0], first_bits_, last_bits_, shift_, lane, nullptr);
+    log_axis_lookup<Float1, Uint1>(samples(), lane, nullptr);
     return lane[0];
 }
 
 void LogAxisTable::apply_row(const float* in, float* out, int n) const {
-    simd::dispatch<LogAxisRow>(&nodes_[0][0], first_bits_, last_bits_, shift_, in, out, (float*)nullptr, n);
+    simd::dispatch<LogAxisRow>(samples(), in, out, (float*)nullptr, n);
 }
 
 void LogAxisTable::apply_row(const float* in, float* f_out, float* g_out, int n) const {
-    simd::dispatch<LogAxisRow>(&nodes_[0][0], first_bits_, last_bits_, shift_, in, f_out, g_out, n);
+    simd::dispatch<LogAxisRow>(samples(), in, f_out, g_out, n);
 }
 
 void LogAxisTable::apply_row_with_noise(const float* in, const float* noise, float floor, float* out, int n) const {
-    simd::dispatch<LogAxisNoiseRow>(&nodes_[0][0], first_bits_, last_bits_, shift_, in, noise, floor, out, n);
+    simd::dispatch<LogAxisNoiseRow>(samples(), in, noise, floor, out, n);
 }
 
 namespace {

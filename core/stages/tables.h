@@ -35,8 +35,24 @@ public:
     // grain, g its amplitude (out may be in).
     void apply_row_with_noise(const float* in, const float* noise, float floor, float* out, int n) const;
 
+    // The samples once more, f's and g's each in a row of their own, with kWindowPad copies of
+    // the end samples before and after: the rows a window of 16 consecutive nodes is read from
+    // by permutes, where a vector's lanes fall within 16 nodes of one another (tables.cpp).
+    static constexpr int kWindowPad = 9;
+    // The table's arrays and bounds as its row kernels read them.
+    struct Samples {
+        const float* nodes;  // the 16-byte nodes
+        const float* f_row;  // f_i at f_row[i], i from -kWindowPad
+        const float* g_row;  // g_i at g_row[i] likewise
+        uint32_t first_bits, last_bits;
+        int shift;
+    };
+
 private:
+    Samples samples() const;
+
     std::vector<std::array<float, 4>> nodes_;  // (f_i, g_i, f_i+1, g_i+1)
+    std::vector<float> f_row_, g_row_;          // f_i and g_i at i + kWindowPad
     uint32_t first_bits_ = 0, last_bits_ = 0;  // float bit patterns of the first and last sample
     int shift_ = 0;                             // 23 - mantissa_bits
 };
