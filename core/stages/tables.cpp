@@ -67,7 +67,8 @@ LogAxisTable::LogAxisTable(const Curve& curve, int mantissa_bits, const Function
 }
 
 LogAxisTable::Samples LogAxisTable::samples() const {
-    return {&nodes_[0][0], f_row_.data() + kWindowPad, g_row_.data() + kWindowPad, first_bits_, last_bits_, shift_};
+    return {&nodes_[0][0], f_row_.data() + kWindowPad, g_row_.data() + kWindowPad, first_bits_, last_bits_, shift_,
+            simd::isa() != simd::Isa::baseline};
 }
 
 namespace {
@@ -129,21 +130,32 @@ __attribute__((always_inline)) inline void node_values(const float* values, cons
     }
 }
 
-// Where the 16 lanes' node indices lie within 8 below and 7 above the middle lane's (a smooth
-// row's usually do), the values of their nodes as four permutes of a window of 16 consecutive
-// samples of f and of g each, in place of 16 node loads and their transpose: the same floats.
-// Otherwise (and for other lane counts, or a compiler without GCC's variable shuffles) false.
+// The OR of a vector's lanes, in every lane: halves folded onto each other.
+template <int half, typename U, size_t... J>
+__attribute__((always_inline)) inline U or_of_lanes(const U& v, std::index_sequence<J...> j) {
+    constexpr int lanes = sizeof(U) / sizeof(uint32_t);
+    const U folded = v | __builtin_shufflevector(v, v, int((J + half) % lanes)...);
+    if constexpr (half == 1)
+        return folded;
+    else
+        return or_of_lanes<half / 2>(folded, j);
+}
+
+// Where a vector's lanes' node indices lie within lanes/2 below and lanes/2 - 1 above its
+// middle lane's (a smooth row's usually do), the values of their nodes as four permutes of a
+// window of `lanes` consecutive samples of f and of g each, in place of a node load a lane and
+// their transpose: the same floats. Otherwise (one lane, the baseline's SSE2, which has no
+// variable permute, or a compiler without GCC's variable shuffles) false.
 template <typename U, typename V>
 __attribute__((always_inline)) inline bool window_values(const LogAxisTable::Samples& table, const U& index, V* node) {
 #if defined(__GNUC__) && !defined(__clang__)
-    if constexpr (sizeof(V) == 16 * sizeof(float)) {
-        const int first = int(index[8]) - 8;  // (the rows hold kWindowPad samples past either end)
-        const U in_window = index - uint32_t(first);  // from 0, or wrapped past 2^31 below the window
-        U any = in_window | __builtin_shufflevector(in_window, in_window, 8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7);
-        any |= __builtin_shufflevector(any, any, 4, 5, 6, 7, 0, 1, 2, 3, 4, 5, 6, 7, 0, 1, 2, 3);
-        any |= __builtin_shufflevector(any, any, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1);
-        any |= __builtin_shufflevector(any, any, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0, 1, 0);
-        if (any[0] >= 16) return false;  // (the lanes' bits ORed: under 16 only if every lane is)
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    if constexpr (lanes == 8 || lanes == 16) {
+        if (!table.permutes) return false;
+        const int first = int(index[lanes / 2]) - lanes / 2;  // (the rows hold kWindowPad samples past either end)
+        const U in_window = index - uint32_t(first);          // from 0, or wrapped past 2^31 below the window
+        // The lanes' bits ORed are under `lanes` only if every lane's are.
+        if (or_of_lanes<lanes / 2>(in_window, std::make_index_sequence<lanes>())[0] >= uint32_t(lanes)) return false;
         V f, f_next, g, g_next;
         load(f, table.f_row + first);
         load(f_next, table.f_row + first + 1);

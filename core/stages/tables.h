@@ -46,6 +46,7 @@ public:
         const float* g_row;  // g_i at g_row[i] likewise
         uint32_t first_bits, last_bits;
         int shift;
+        bool permutes;  // the vector kernels may read windows (the instruction set has variable permutes)
     };
 
 private:

@@ -9,6 +9,7 @@
 
 #include "core/demo_scene.h"
 #include "core/develop.h"
+#include "core/simd.h"
 #include "core/spectral.h"
 #include "core/stages/halation.h"
 #include "core/stages/tables.h"
@@ -64,32 +65,42 @@ TEST_CASE("a curve tabulated against exposure follows the curve within its inter
 }
 
 TEST_CASE("a tabulated curve's rows read their nodes' values however near the lanes' nodes lie", "[quality][tables]") {
-    // The vector rows read a window of 16 consecutive nodes where a vector's lanes fall within
-    // it (8 below the middle lane's node to 7 above) and each lane's own node otherwise: rows
-    // whose lanes step by a sixteenth of a node to several nodes, so that vectors fall inside,
-    // on the edges of and outside the window, including past the table's ends (the window's
-    // padding) and with an odd element out; each value against the one-element row's, which
-    // reads its node alone.
+    // The vector rows read a window of as many consecutive nodes as lanes where a vector's
+    // lanes fall within it (half below the middle lane's node, half less one above) and each
+    // lane's own node otherwise: rows whose lanes step by a sixteenth of a node to several
+    // nodes, so that vectors fall inside, on the edges of and outside the window, including
+    // past the table's ends (the window's padding) and with an odd element out; each value
+    // against the one-element row's, which reads its node alone, in every instruction set
+    // this processor runs (16 lanes, 8, and the baseline's, which reads no windows).
     const Curve curve = make_curve({-3.0, -2.0, -1.0, 0.0, 1.0}, {0.2, 0.3, 1.0, 1.8, 2.2}, "curve");
     const LogAxisTable table(curve, 6, [](double d) { return 0.01 + 0.02 * d; });
     const double node_log10 = std::log10(2.0) / 64;  // a node's width in log10 of exposure (6 bits)
-    for (double step_nodes : {1.0 / 16, 0.5, 15.0 / 16, 1.0, 17.0 / 16, 3.0})
-        for (double from_log10 : {-4.0, -3.01, -1.37, 0.97}) {
-            std::vector<float> row;
-            for (int i = 0; i < 200; ++i) row.push_back(float(std::pow(10.0, from_log10 + i * step_nodes * node_log10)));
-            row[77] = std::nanf("");  // one lane far from its neighbours' nodes
-            row[141] = 1e30f;
-            std::vector<float> f(row.size()), g(row.size());
-            table.apply_row(row.data(), f.data(), g.data(), int(row.size()));
-            for (size_t i = 0; i < row.size(); ++i) {
-                float f_alone, g_alone;
-                table.apply_row(&row[i], &f_alone, &g_alone, 1);
-                INFO("step " << step_nodes << " nodes from log10 H " << from_log10 << ", element " << i);
-                REQUIRE(f[i] == f_alone);
-                REQUIRE(g[i] == g_alone);
-                REQUIRE(f[i] == table(row[i]));
+    struct IsaScope {  // the dispatch's choice restored however the test ends
+        simd::Isa saved = simd::isa();
+        ~IsaScope() { simd::set_isa(saved); }
+    } scope;
+    for (simd::Isa isa : {simd::Isa::baseline, simd::Isa::avx2, simd::Isa::avx512}) {
+        if (int(isa) > int(simd::widest_isa())) continue;
+        simd::set_isa(isa);
+        for (double step_nodes : {1.0 / 16, 0.5, 15.0 / 16, 1.0, 17.0 / 16, 3.0})
+            for (double from_log10 : {-4.0, -3.01, -1.37, 0.97}) {
+                std::vector<float> row;
+                for (int i = 0; i < 200; ++i) row.push_back(float(std::pow(10.0, from_log10 + i * step_nodes * node_log10)));
+                row[77] = std::nanf("");  // one lane far from its neighbours' nodes
+                row[141] = 1e30f;
+                std::vector<float> f(row.size()), g(row.size());
+                table.apply_row(row.data(), f.data(), g.data(), int(row.size()));
+                for (size_t i = 0; i < row.size(); ++i) {
+                    float f_alone, g_alone;
+                    table.apply_row(&row[i], &f_alone, &g_alone, 1);
+                    INFO(simd::isa_name(isa) << ": step " << step_nodes << " nodes from log10 H " << from_log10
+                                             << ", element " << i);
+                    REQUIRE(f[i] == f_alone);
+                    REQUIRE(g[i] == g_alone);
+                    REQUIRE(f[i] == table(row[i]));
+                }
             }
-        }
+    }
 }
 
 TEST_CASE("fast_exp2 is 2^x within 3e-7", "[quality][tables]") {
