@@ -107,9 +107,11 @@ __attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int
         x = tap_blocks<lanes, 1, outputs, accumulate, kTaps>(tap, n, pairs, x, width, out, row_of);
         tap_blocks<1, 1, outputs, accumulate, kTaps>(tap, n, pairs, x, width, out, row_of);
     };
-    // The fast tiers' kernels: the MTF's 7 taps (radius 3), the grain's 3.
+    // The fast tiers' kernels: the MTF's 7 taps (radius 3; preview's 5), the grain's 3.
     if (symmetric && n == 7)
         run(std::integral_constant<int, 7>());
+    else if (symmetric && n == 5)
+        run(std::integral_constant<int, 5>());
     else if (symmetric && n == 3)
         run(std::integral_constant<int, 3>());
     else
