@@ -162,7 +162,7 @@ GrainProfile measure_wedge_grain(const Stock& film, const Stock* paper, Quality 
         s.output = OutputMode::print;
         s.print_width_mm = paper->frame_width_mm * width / kTargetWidthPx;
     }
-    Plan plan = Plan::compile(film, paper, s, {width, kWedgePatchPx});
+    Plan plan = Plan::compile(film, paper, s, {width, kWedgePatchPx}, threads);
     Image wedge(width, kWedgePatchPx, 3);
     const double h0 = mid_grey_exposure_lux_s(film.iso_speed);
     for (int y = 0; y < kWedgePatchPx; ++y)
@@ -192,12 +192,12 @@ std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality 
     DevelopSettings s = density_target(q, 0, pitch_um, width);
     s.grain = false;
     s.halation = 0;
-    Plan plan = Plan::compile(film, nullptr, s, {width, 1});
+    Plan plan = Plan::compile(film, nullptr, s, {width, 1}, threads);
     int halo = width / 2 - plan.input_window({width / 2, 0, width / 2 + 1, 1}).x0;
     if (halo >= width / 4) {
         width = 4 * ((halo / 64 + 1) * 64);
         s.frame_width_mm = pitch_um * width / 1000.0;
-        plan = Plan::compile(film, nullptr, s, {width, 1});
+        plan = Plan::compile(film, nullptr, s, {width, 1}, threads);
     }
     const double h0 = mid_grey_exposure_lux_s(film.iso_speed), modulation = 0.1;
     const int x0 = width / 4, n = width / 2;
@@ -258,7 +258,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
     const FrameGeometry frame{o.width, o.height};
     // One compile before any is timed: the first pays for one-time set-up (the spectral
     // upsampling basis), which is no tier's cost.
-    Plan::compile(film, &paper, look(Quality::high, o.seed, film, paper, o.width), frame);
+    Plan::compile(film, &paper, look(Quality::high, o.seed, film, paper, o.width), frame, o.threads);
     Image out(o.width, o.height, 3), copied(o.width, o.height, 3);
     r.copy_in_turn_with_fast = std::find(tiers.begin(), tiers.end(), Quality::fast) != tiers.end();
     if (!r.copy_in_turn_with_fast) {
@@ -281,7 +281,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
         tr.name = quality_name(q);
         DevelopSettings s = look(q, o.seed, film, paper, o.width);
         auto start = Clock::now();
-        Plan plan = Plan::compile(film, &paper, s, frame);
+        Plan plan = Plan::compile(film, &paper, s, frame, o.threads);
         tr.compile_seconds = seconds_since(start);
         if (q == Quality::reference) {
             say(tr.name + ": " + std::to_string(r.sample_windows.size()) + " sample windows");
@@ -315,9 +315,9 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
         say(tr.name + ": errors on the sample windows, MTF, grain wedge" + (o.print_grain ? ", printed grain wedge" : ""));
         DevelopSettings no_grain = s;
         no_grain.grain = false;
-        Plan print_plan = Plan::compile(film, &paper, no_grain, frame);
+        Plan print_plan = Plan::compile(film, &paper, no_grain, frame, o.threads);
         no_grain.output = OutputMode::density;
-        Plan density_plan = Plan::compile(film, nullptr, no_grain, frame);
+        Plan density_plan = Plan::compile(film, nullptr, no_grain, frame, o.threads);
         for (const Window& w : r.sample_windows) {
             renders[t].print.push_back(render(print_plan, scene.view(), w, o.threads));
             renders[t].density.push_back(render(density_plan, scene.view(), w, o.threads));
@@ -379,9 +379,9 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
                 say(std::string("fast without ") + off.stage + ", in turn with it and with it at neutral");
                 DevelopSettings d = s;
                 off.turn_off(d);
-                const Plan off_plan = Plan::compile(film, &paper, d, frame);
+                const Plan off_plan = Plan::compile(film, &paper, d, frame, o.threads);
                 d.skip_noop_stages = false;
-                const Plan neutral_plan = Plan::compile(film, &paper, d, frame);
+                const Plan neutral_plan = Plan::compile(film, &paper, d, frame, o.threads);
                 const std::vector<Timed> t =
                     time_in_turn({{plan, on_out}, {off_plan, out}, {neutral_plan, out_neutral}}, scene, o.runs, o.threads);
                 const Timed &on = t[0], &timed = t[1], &neutral = t[2];
@@ -392,7 +392,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
             say("fast stage after stage");
             DevelopSettings staged = s;
             staged.one_pass = false;
-            Timed timed = time_frame(Plan::compile(film, &paper, staged, frame), scene, out_neutral, o.runs, o.threads);
+            Timed timed = time_frame(Plan::compile(film, &paper, staged, frame, o.threads), scene, out_neutral, o.runs, o.threads);
             r.fast_run_variants.push_back({"stage after stage", timed.seconds, fast_pixels.pixels == out_neutral.pixels});
             const simd::Isa widest = simd::isa();
             for (simd::Isa isa : {simd::Isa::avx2, simd::Isa::baseline}) {

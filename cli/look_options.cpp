@@ -114,7 +114,7 @@ Plan compile_look(const LookOptions& look, const FrameGeometry& frame) {
             throw UserError("--paper none stops at the negative: use --output negative or density");
         DevelopSettings settings = look.settings;
         settings.grain = settings.grain && look.grain_profile.empty();  // the plate's grain replaces the stock's
-        Plan plan = Plan::compile(film, no_paper ? nullptr : &paper, settings, frame);
+        Plan plan = Plan::compile(film, no_paper ? nullptr : &paper, settings, frame, look.threads);
         if (look.verbose)
             for (const std::string& line : plan.describe()) std::cerr << line << "\n";
         return plan;

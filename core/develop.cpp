@@ -292,7 +292,7 @@ void print_densities(const PrintExposure& enlarger, const Stock& paper, const do
 // slider dragged in a host) prints the same: its table, about a tenth of a second of spectral
 // sums on two cores, is taken from the last few built, found by the bytes of everything it reads.
 std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock& paper, const PrintExposure& enlarger,
-                                                  int nodes) {
+                                                  int nodes, int threads) {
     std::array<double, 3> lo, hi;
     table_density_range(film, lo, hi);
     std::string key = enlarger.fingerprint();
@@ -325,7 +325,7 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
             transmittance[a].push_back(
                 enlarger.layer_transmittance(a, Table3D::node_coordinate(lo[a], hi[a], nodes, i)));
     const PrintView view(paper);
-    auto table = std::make_shared<const Table3D>(lo, hi, nodes, [&](const int* node, const double* d, double* log2_xyz) {
+    auto table = std::make_shared<const Table3D>(lo, hi, nodes, threads, [&](const int* node, const double* d, double* log2_xyz) {
         double h[3], paper_density[3];
         if (enlarger.spectral())
             enlarger.expose({&transmittance[0][node[0]], &transmittance[1][node[1]], &transmittance[2][node[2]]}, h);
@@ -448,7 +448,7 @@ std::pair<double, double> solve_increasing(const F& f, double lo, double f_lo, d
 // What the negative cannot carry (README, "How preview prints") is measured there.
 constexpr double kMaxFoldedGrainD = 0.5;
 void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
-                      double exposure_scale, int curve_table_bits) {
+                      double exposure_scale, int curve_table_bits, int threads) {
     if (film.curve_tables.empty()) return;  // (the tiers that print through one table tabulate curves)
     bool grained[3], any = false;
     double gain[3] = {0, 0, 0};  // kappa_i sqrt(rho_i)
@@ -484,7 +484,7 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
         log_view(dp, out);
     };
     std::vector<std::array<double, 3>> extra(levels.size());  // e_i at each level
-    parallel_for(0, int(levels.size()), 0, [&](int begin, int end) {
+    parallel_for(0, int(levels.size()), threads, [&](int begin, int end) {
         for (int level = begin; level < end; ++level) {
             const double* d = levels[size_t(level)].data();
             double dp[3], seen[3], v[3][3], m[3][3];  // V_cj, M_ci
@@ -594,7 +594,7 @@ Window image_window(const FrameGeometry& frame) {
 }  // namespace
 
 Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
-                   const FrameGeometry& frame) {
+                   const FrameGeometry& frame, int threads) {
     const Window image = image_window(frame);
     if (film.kind != StockKind::negative) throw std::invalid_argument("'" + film.id + "' is not a film stock (it is a paper or print film)");
     if (paper && paper->kind == StockKind::negative)
@@ -630,9 +630,9 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
                                           settings.filtration_ymc, settings.print_exposure_ev});
         if (one_print_table) {
             fold_paper_grain(p.film_stages_, p.paper_stages_, *p.print_, p.film_exposure_scale_,
-                             tier.curve_table_bits);
+                             tier.curve_table_bits, threads);
             leave_out_paper_grain(p.paper_stages_, p.film_stages_, p.skipped_);
-            p.print_table_ = shared_print_table(film, *paper, *p.print_, tier.print_table_nodes);
+            p.print_table_ = shared_print_table(film, *paper, *p.print_, tier.print_table_nodes, threads);
         }
     } else if (paper) {
         p.skipped_.push_back("print: the output stops at the negative");

@@ -129,9 +129,12 @@ struct StageTimes {
 
 class Plan {
 public:
-    // Throws std::invalid_argument naming the problem for unusable settings.
+    // Throws std::invalid_argument naming the problem for unusable settings. The tables a
+    // plan builds (the fast tiers' print table, the folded grain) are built on `threads`
+    // threads (0: every core), the budget a host or --threads gives renders too; their values
+    // do not depend on how many.
     static Plan compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
-                        const FrameGeometry& frame);
+                        const FrameGeometry& frame, int threads = 0);
 
     // The input window needed to render `output` (grown by the halo, clipped to the frame).
     Window input_window(const Window& output) const;

@@ -30,7 +30,7 @@ Image develop_density(const Stock& material, const Image& exposure, double pitch
     s.mtf = mtf;
     s.seed = o.seed;
     s.frame_width_mm = pitch_um * exposure.window.width() / 1000.0;
-    Plan plan = Plan::compile(material, nullptr, s, {exposure.window.width(), exposure.window.height()});
+    Plan plan = Plan::compile(material, nullptr, s, {exposure.window.width(), exposure.window.height()}, o.threads);
     Image out(exposure.window, 3);
     plan.run(exposure.view(), out.view(), o.threads);
     return out;

@@ -117,6 +117,13 @@ Stock load_stock(const std::string& path_or_id, bool from_file) {
     return from_file ? load_stock_file(path_or_id) : find_stock(path_or_id);
 }
 
+// The CPUs the host lets an effect use (its multithread suite's count; 1 without the suite).
+unsigned host_cpus() {
+    unsigned cpus = 1;
+    if (!suites.thread || suites.thread->multiThreadNumCPUs(&cpus) != kOfxStatOK || cpus == 0) cpus = 1;
+    return cpus;
+}
+
 std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, const FrameGeometry& frame) {
     const DevelopSettings& s = n.develop;
     std::ostringstream key;
@@ -146,7 +153,9 @@ std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, cons
     if (!compiled) {
         Stock film = load_stock(n.film, n.film_from_file);
         Stock paper = n.paper.empty() ? Stock{} : load_stock(n.paper, n.paper_from_file);
-        compiled = std::make_shared<const Plan>(Plan::compile(film, n.paper.empty() ? nullptr : &paper, s, frame));
+        // (its tables built on the host's CPUs, not every core: a host's budget holds)
+        compiled = std::make_shared<const Plan>(
+            Plan::compile(film, n.paper.empty() ? nullptr : &paper, s, frame, int(host_cpus())));
     }
     auto plan = std::make_shared<const Plan>(compiled->in_image(frame).for_frame(s.frame));
     std::lock_guard<std::mutex> lock(inst.mutex);
@@ -393,9 +402,7 @@ void band_worker(unsigned int, unsigned int, void* arg) {
 }
 
 void run_bands(BandJob& job) {
-    unsigned cpus = 1;
-    if (suites.thread && suites.thread->multiThreadNumCPUs(&cpus) != kOfxStatOK) cpus = 1;
-    unsigned threads = std::max(1u, std::min<unsigned>(cpus, (unsigned)job.bands.size()));
+    unsigned threads = std::max(1u, std::min<unsigned>(host_cpus(), (unsigned)job.bands.size()));
     // multiThread cannot nest (the host may already be running us on one of its threads).
     if (threads == 1 || !suites.thread || suites.thread->multiThread(band_worker, threads, &job) != kOfxStatOK)
         band_worker(0, 1, &job);
@@ -521,12 +528,10 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     job.grain_frame = settings.develop.frame;
     job.output = &output;
     job.film = film;
-    unsigned cpus = 1;
-    if (suites.thread) suites.thread->multiThreadNumCPUs(&cpus);
     // Each band also develops its halo (halation's reaches ~100 px at 4K): bands of at least
     // twice the halo keep that overhead within 2x on the film's first stages, unless that
     // would leave threads without a band. Four bands per thread otherwise balance the load.
-    const int threads = std::max(1, (int)cpus), height = out_core.height();
+    const int threads = int(host_cpus()), height = out_core.height();
     const int per_thread = (height + threads - 1) / threads;
     int band_rows = std::max(height / (4 * threads), std::min(2 * plan->halo_px(), per_thread));
     band_rows = std::max(kMinBandRows, band_rows);

@@ -302,7 +302,8 @@ float fast_exp2(float x) {
 }
 
 
-Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f)
+Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, int threads,
+                 const Function& f)
     : nodes_(nodes) {
     for (int a = 0; a < 3; ++a) {
         lo_[a] = float(lo[a]);
@@ -310,7 +311,7 @@ Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& h
     }
     values_.resize(size_t(nodes) * nodes * nodes);
     // Each node on its own: the planes of nodes along z shared among the threads.
-    parallel_for(0, nodes, 0, [&](int k_begin, int k_end) {
+    parallel_for(0, nodes, threads, [&](int k_begin, int k_end) {
         for (int k = k_begin; k < k_end; ++k)
             for (int j = 0; j < nodes; ++j)
                 for (int i = 0; i < nodes; ++i) {

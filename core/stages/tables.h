@@ -71,9 +71,9 @@ public:
     // per axis node).
     using Function = std::function<void(const int* node, const double* in, double* out)>;
     Table3D() = default;
-    // f is evaluated at the nodes on every core, so it must be safe to call from several
-    // threads at once; the values do not depend on how many.
-    Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, const Function& f);
+    // f is evaluated at the nodes on `threads` threads (0: every core), so it must be safe to
+    // call from several at once; the values do not depend on how many.
+    Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, int threads, const Function& f);
     // Node i's coordinate on an axis over [lo, hi] (the in that f is given).
     static double node_coordinate(double lo, double hi, int nodes, int i) { return lo + i * ((hi - lo) / (nodes - 1)); }
     void operator()(const float* in, float* out) const;

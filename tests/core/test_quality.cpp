@@ -5,7 +5,10 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <mutex>
 #include <random>
+#include <set>
+#include <thread>
 
 #include "core/demo_scene.h"
 #include "core/develop.h"
@@ -137,14 +140,26 @@ TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions 
     };
     const std::array<double, 3> lo{0, -1, 0.5}, hi{2, 1, 3};
     const int nodes = 9;
-    Table3D table(lo, hi, nodes, [&](const int*, const double* v, double* out) { f(v, out); });
+    Table3D table(lo, hi, nodes, 3, [&](const int*, const double* v, double* out) { f(v, out); });
+    // Built on one thread (a host's budget of one), every node on the caller's, and the same
+    // values as built on three.
+    std::set<std::thread::id> builders;
+    std::mutex builders_mutex;
+    const Table3D on_one(lo, hi, nodes, 1, [&](const int*, const double* v, double* out) {
+        std::lock_guard<std::mutex> lock(builders_mutex);
+        builders.insert(std::this_thread::get_id());
+        f(v, out);
+    });
+    CHECK(builders == std::set<std::thread::id>{std::this_thread::get_id()});
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> u(0, 1);
     for (int i = 0; i < 1000; ++i) {
         double in[3] = {2 * u(rng), -1 + 2 * u(rng), 0.5 + 2.5 * u(rng)}, expected[3];
         f(in, expected);
-        float in_f[3] = {float(in[0]), float(in[1]), float(in[2])}, out[3];
+        float in_f[3] = {float(in[0]), float(in[1]), float(in[2])}, out[3], out_one[3];
         table(in_f, out);
+        on_one(in_f, out_one);
+        REQUIRE(std::equal(out, out + 3, out_one));
         CHECK(out[0] == Approx(expected[0]).margin(1e-5));
         // The other two against the six-case definition on the table's own nodes.
         double cell[3], frac[3];
@@ -165,7 +180,7 @@ TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions 
         }
     }
     // f is told each node's indices: as values they are the linear function (in - lo) / step.
-    const Table3D indices(lo, hi, nodes, [](const int* node, const double*, double* out) {
+    const Table3D indices(lo, hi, nodes, 0, [](const int* node, const double*, double* out) {
         for (int a = 0; a < 3; ++a) out[a] = node[a];
     });
     for (int i = 0; i < 100; ++i) {
@@ -198,7 +213,7 @@ TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions 
     }
     // Read as log2 values: 2^v of each (values from -200 to 400 on this table's third
     // channel, past exp2's clamps at +-126), then times a matrix, in the same float operations.
-    const Table3D wide({-2, -2, -2}, {4, 4, 4}, 9, [](const int*, const double* v, double* out) {
+    const Table3D wide({-2, -2, -2}, {4, 4, 4}, 9, 0, [](const int*, const double* v, double* out) {
         out[0] = v[0] - v[1];
         out[1] = 0.5 * v[2];
         out[2] = 100 * v[0];
