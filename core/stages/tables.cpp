@@ -185,7 +185,10 @@ __attribute__((always_inline)) inline void log_axis_lookup(const LogAxisTable::S
     b = b > table.last_bits ? U{} + table.last_bits : b;
     b -= table.first_bits;
     const U index = b >> table.shift;
-    const V t = __builtin_convertvector(b & ((1u << table.shift) - 1), V) * bits_float((127u - table.shift) << 23);  // * 2^-shift
+    // The position within the sample, converted as signed (it is under 2^23; AVX2 converts
+    // only signed integers to floats), times 2^-shift.
+    using I = typename simd::Lanes<int(sizeof(U) / sizeof(uint32_t))>::I;
+    const V t = __builtin_convertvector(I(b & ((1u << table.shift) - 1)), V) * bits_float((127u - table.shift) << 23);
     V node[4];  // f_i, g_i, f_i+1, g_i+1
     if (!window_values(table, index, node)) node_values<4>(table.nodes, index * 4u, node);
     v = node[0] + t * (node[2] - node[0]);
