@@ -36,9 +36,11 @@ public:
     void apply_row_with_noise(const float* in, const float* noise, float floor, float* out, int n) const;
 
     // The samples once more, f's and g's each in a row of their own, with kWindowPad copies of
-    // the end samples before and after: the rows a window of 16 consecutive nodes is read from
-    // by permutes, where a vector's lanes fall within 16 nodes of one another (tables.cpp).
-    static constexpr int kWindowPad = 9;
+    // the end samples before and after: the rows from which a vector reads a window of as many
+    // consecutive nodes as it has lanes, by permutes, where its lanes' nodes fall within it
+    // (tables.cpp). A window starts half the lanes before its middle lane's node and reads
+    // each node's next sample too: half the widest vector's 16 lanes either side suffices.
+    static constexpr int kWindowPad = 8;
     // The table's arrays and bounds as its row kernels read them.
     struct Samples {
         const float* nodes;  // the 16-byte nodes
