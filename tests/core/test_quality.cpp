@@ -78,12 +78,8 @@ TEST_CASE("a tabulated curve's rows read their nodes' values however near the la
     const Curve curve = make_curve({-3.0, -2.0, -1.0, 0.0, 1.0}, {0.2, 0.3, 1.0, 1.8, 2.2}, "curve");
     const LogAxisTable table(curve, 6, [](double d) { return 0.01 + 0.02 * d; });
     const double node_log10 = std::log10(2.0) / 64;  // a node's width in log10 of exposure (6 bits)
-    struct IsaScope {  // the dispatch's choice restored however the test ends
-        simd::Isa saved = simd::isa();
-        ~IsaScope() { simd::set_isa(saved); }
-    } scope;
-    for (simd::Isa isa : {simd::Isa::baseline, simd::Isa::avx2, simd::Isa::avx512}) {
-        if (int(isa) > int(simd::widest_isa())) continue;
+    test::IsaScope scope;
+    for (simd::Isa isa : test::runnable_isas()) {
         simd::set_isa(isa);
         for (double step_nodes : {1.0 / 16, 0.5, 15.0 / 16, 1.0, 17.0 / 16, 3.0})
             for (double from_log10 : {-4.0, -3.01, -1.37, 0.97}) {

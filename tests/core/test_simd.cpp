@@ -7,26 +7,12 @@
 #include "core/develop.h"
 #include "core/simd.h"
 #include "core/stock.h"
+#include "test_support.h"
 
 using namespace darkroom;
 
-namespace {
-
-// The instruction sets this processor runs, narrowest first.
-std::vector<simd::Isa> runnable_isas() {
-    std::vector<simd::Isa> isas;
-    for (simd::Isa isa : {simd::Isa::baseline, simd::Isa::avx2, simd::Isa::avx512})
-        if (int(isa) <= int(simd::widest_isa())) isas.push_back(isa);
-    return isas;
-}
-
-// Restores the dispatch's choice when a test ends, however it ends.
-struct IsaScope {
-    simd::Isa saved = simd::isa();
-    ~IsaScope() { simd::set_isa(saved); }
-};
-
-}  // namespace
+using test::IsaScope;
+using test::runnable_isas;
 
 TEST_CASE("the instruction set is chosen once, can be lowered, and never raised past the processor's", "[simd]") {
     IsaScope scope;

@@ -3,8 +3,10 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "core/develop.h"
+#include "core/simd.h"
 #include "core/stock.h"
 
 namespace darkroom::test {
@@ -109,5 +111,19 @@ inline Image render(const Stock& film, const Stock* paper, const DevelopSettings
     plan.run(in.view(), out.view(), threads);
     return out;
 }
+
+// The instruction sets this processor runs, narrowest first.
+inline std::vector<simd::Isa> runnable_isas() {
+    std::vector<simd::Isa> isas;
+    for (simd::Isa isa : {simd::Isa::baseline, simd::Isa::avx2, simd::Isa::avx512})
+        if (int(isa) <= int(simd::widest_isa())) isas.push_back(isa);
+    return isas;
+}
+
+// Restores the dispatch's choice when a test ends, however it ends.
+struct IsaScope {
+    simd::Isa saved = simd::isa();
+    ~IsaScope() { simd::set_isa(saved); }
+};
 
 }  // namespace darkroom::test
