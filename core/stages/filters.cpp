@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <stdexcept>
 #include <type_traits>
 
 #include "core/parallel.h"
@@ -53,6 +54,17 @@ __attribute__((always_inline)) inline int tap_blocks(const float* tap, int n, in
     if constexpr (kTaps > 0) n = kTaps, pairs = kTaps / 2;
     using Vec = typename simd::Lanes<lanes>::F;
     constexpr int block = lanes * vecs;
+    // With kTaps known, the taps' vectors are set once, before the loop (the compiler would
+    // load them again each block: the stores to `out` might change them).
+    Vec kept_tap[kTaps > 0 ? kTaps : 1];
+    if constexpr (kTaps > 0)
+        for (int k = 0; k < kTaps; ++k) kept_tap[k] = Vec{} + tap[k];
+    auto tap_vec = [&](int k) __attribute__((always_inline)) {
+        if constexpr (kTaps > 0)
+            return kept_tap[k];
+        else
+            return Vec{} + tap[k];
+    };
     for (; x + block <= width; x += block) {
         Vec sum[outputs][vecs];
         for (int o = 0; o < outputs; ++o)
@@ -62,7 +74,7 @@ __attribute__((always_inline)) inline int tap_blocks(const float* tap, int n, in
                 else
                     sum[o][v] = Vec{};
         for (int k = 0; k < pairs; ++k) {
-            const Vec t = Vec{} + tap[k];
+            const Vec t = tap_vec(k);
             for (int o = 0; o < outputs; ++o) {
                 const float *row = row_of(k + o) + x, *mirror = row_of(n - 1 - k + o) + x;
                 for (int v = 0; v < vecs; ++v) {
@@ -74,7 +86,7 @@ __attribute__((always_inline)) inline int tap_blocks(const float* tap, int n, in
             }
         }
         for (int k = pairs; k < n - pairs; ++k) {
-            const Vec t = Vec{} + tap[k];
+            const Vec t = tap_vec(k);
             for (int o = 0; o < outputs; ++o) {
                 const float* row = row_of(k + o) + x;
                 for (int v = 0; v < vecs; ++v) {
@@ -149,11 +161,20 @@ void convolve_column_add(const float* const* rows, const std::vector<float>& tap
 }
 
 void convolve_columns(const float* const* rows, const std::vector<float>& taps, int width, float* const* out,
-                      bool add) {
-    if (add)
-        simd::dispatch<ConvolveColumn<2, true>>(rows, taps.data(), int(taps.size()), width, out);
+                      int outputs, bool add) {
+    const float* t = taps.data();
+    const int n = int(taps.size());
+    if (outputs == 4)
+        add ? simd::dispatch<ConvolveColumn<4, true>>(rows, t, n, width, out)
+            : simd::dispatch<ConvolveColumn<4, false>>(rows, t, n, width, out);
+    else if (outputs == 2)
+        add ? simd::dispatch<ConvolveColumn<2, true>>(rows, t, n, width, out)
+            : simd::dispatch<ConvolveColumn<2, false>>(rows, t, n, width, out);
+    else if (outputs == 1)
+        add ? simd::dispatch<ConvolveColumn<1, true>>(rows, t, n, width, out)
+            : simd::dispatch<ConvolveColumn<1, false>>(rows, t, n, width, out);
     else
-        simd::dispatch<ConvolveColumn<2, false>>(rows, taps.data(), int(taps.size()), width, out);
+        throw std::invalid_argument("convolve_columns: 1, 2 or 4 rows at once");
 }
 
 // Eigenvalues and orthonormal eigenvectors of a symmetric n x n matrix `a` (row-major, used
@@ -238,11 +259,13 @@ SeparableFilter separable_approximation(const std::vector<double>& taps, int r, 
 }
 
 SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters, int row_begin, int row_end,
-                                 int rows_end, Source source)
+                                 int rows_end, Source source, int rows_together)
     : width_(width), radius_(0), row_begin_(row_begin), row_end_(row_end), rows_end_(rows_end),
-      filters_(std::move(filters)), pending_row_(std::numeric_limits<int>::min()), source_(std::move(source)) {
+      rows_together_(rows_together), filters_(std::move(filters)), source_(std::move(source)) {
+    if (rows_together < 1 || rows_together > kMaxRowsTogether)
+        throw std::invalid_argument("separable stream: 1 to 4 rows summed together");
     for (const SeparableFilter& f : filters_) radius_ = std::max(radius_, f.radius());
-    slots_ = 2 * radius_ + 2;
+    slots_ = 2 * radius_ + rows_together_;
     // Rows are a cache line more than the width apart: at widths of a power of two, rows
     // exactly 2^k bytes apart share the L1 cache's sets and would evict each other.
     stride_ = size_t(width) + 16;
@@ -257,7 +280,7 @@ SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters
         centre_.push_back({f.centre});
         ring_.emplace_back(f.terms.size() * slots_ * stride_);
         padded_.emplace_back((keeps_input_rows(f) ? slots_ : 1) * padded_stride_);
-        for (int o = 0; o < 2; ++o) {
+        for (int o = 0; o < rows_together_; ++o) {
             output_[o].emplace_back(size_t(width));
             out_rows_[o].push_back(output_[o].back().data());
         }
@@ -280,15 +303,13 @@ float* SeparableStream::padded_row(size_t plane, int y) {
 }
 
 float* const* SeparableStream::row(int y) {
-    if (y == pending_row_) {
-        pending_row_ = std::numeric_limits<int>::min();
-        return out_rows_[1].data();
-    }
+    if (y >= group_y_ && y < group_y_ + group_rows_) return out_rows_[y - group_y_].data();
     if (!started_) {
         next_ = std::max(y - radius_, row_begin_);
         started_ = true;
     }
-    const int rows = y + 1 < rows_end_ ? 2 : 1;  // this row, and the next with it where it is asked for
+    // This row and the next ones asked for, up to rows_together_.
+    const int rows = std::clamp(rows_end_ - y, 1, rows_together_);
     for (; next_ <= std::min(y + rows - 1 + radius_, row_end_ - 1); ++next_) {
         for (size_t p = 0; p < filters_.size(); ++p) padded_rows_[p] = padded_row(p, next_);
         source_(next_, padded_rows_.data());
@@ -300,27 +321,30 @@ float* const* SeparableStream::row(int y) {
     }
     for (size_t p = 0; p < filters_.size(); ++p) {
         const SeparableFilter& f = filters_[p];
-        if (f.is_identity()) {  // (its input rows outlive the pair: the ring holds 2R + 2)
+        if (f.is_identity()) {  // (its input rows outlive the group: the ring holds 2R + rows_together)
             for (int o = 0; o < rows; ++o) out_rows_[o][p] = padded_row(p, y + o) + radius_;
             continue;
         }
-        float* out[2] = {out_rows_[0][p], out_rows_[1][p]};  // (the plane's own output rows: set once)
         const int r = f.radius();
         for (size_t t = 0; t < f.terms.size(); ++t) {
             for (int k = -r; k <= r + rows - 1; ++k)
                 column_[k + r] = ring_row(p, int(t), std::clamp(y + k, row_begin_, row_end_ - 1));
-            if (rows == 2)
-                convolve_columns(column_.data(), vertical_[p][t], width_, out, t > 0);
-            else
-                (t == 0 ? convolve_column : convolve_column_add)(column_.data(), vertical_[p][t], width_, out[0]);
+            // The rows in runs of 4, 2 and 1, each value summed alike in any of them.
+            for (int o = 0; o < rows;) {
+                const int run = rows - o >= 4 ? 4 : rows - o >= 2 ? 2 : 1;
+                float* out[kMaxRowsTogether];  // (the plane's own output rows)
+                for (int i = 0; i < run; ++i) out[i] = out_rows_[o + i][p];
+                convolve_columns(column_.data() + o, vertical_[p][t], width_, out, run, t > 0);
+                o += run;
+            }
         }
         if (f.centre == 0) continue;
         for (int o = 0; o < rows; ++o) {  // after the terms: one order of the sum for every row
             const float* pixels = padded_row(p, y + o) + radius_;
-            (f.terms.empty() ? convolve_column : convolve_column_add)(&pixels, centre_[p], width_, out[o]);
+            (f.terms.empty() ? convolve_column : convolve_column_add)(&pixels, centre_[p], width_, out_rows_[o][p]);
         }
     }
-    if (rows == 2) pending_row_ = y + 1;
+    group_y_ = y, group_rows_ = rows;
     return out_rows_[0].data();
 }
 

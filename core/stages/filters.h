@@ -22,10 +22,11 @@ void convolve_row(const float* in, const std::vector<float>& taps, int width, fl
 // One row of a vertical pass: out[x] = sum_k taps[k] rows[k][x], or added to out.
 void convolve_column(const float* const* rows, const std::vector<float>& taps, int width, float* out);
 void convolve_column_add(const float* const* rows, const std::vector<float>& taps, int width, float* out);
-// Two consecutive rows of a vertical pass at once: out[o][x] (+)= sum_k taps[k] rows[k + o][x]
-// for o = 0, 1 (rows holds taps + 1 rows), each value as convolve_column sums it.
+// Consecutive rows of a vertical pass at once (outputs 1, 2 or 4): out[o][x] (+)= sum_k
+// taps[k] rows[k + o][x] for o < outputs (rows holds taps + outputs - 1 rows), each value as
+// convolve_column sums it; the rows are read from memory once for all of them.
 void convolve_columns(const float* const* rows, const std::vector<float>& taps, int width, float* const* out,
-                      bool add);
+                      int outputs, bool add);
 
 // A sum of separable filters, sum_t sign_t (taps_t in x, then taps_t in y), all of 2r + 1
 // taps, plus `centre` times the pixel itself (a delta, which costs a multiply and an add where
@@ -55,16 +56,18 @@ SeparableFilter separable_approximation(const std::vector<double>& taps, int r, 
 // Planes filtered as they stream down the rows, each by its own SeparableFilter, for one
 // thread: output rows in increasing order, each summed from the rows its vertical pass reads
 // (clamped to [row_begin, row_end)), which are filtered horizontally once each and kept in a
-// ring of 2R + 2 (R the largest radius), so that they stay in cache; two consecutive output
-// rows are summed together (convolve_columns) where both are below rows_end, the end of the
-// rows the stream is asked for. source(y, padded) writes each plane's input row y, the
-// width + 2R values from R before the first output pixel. Each output value is summed in one
-// fixed order (terms, then taps), so a row is the same whatever row a stream starts at.
+// ring of 2R + rows_together (R the largest radius), so that they stay in cache; up to
+// `rows_together` consecutive output rows are summed at once (convolve_columns: each ring row
+// is read once for all of them) where they are below rows_end, the end of the rows the stream
+// is asked for. source(y, padded) writes each plane's input row y, the width + 2R values from
+// R before the first output pixel. Each output value is summed in one fixed order (terms, then
+// taps), so a row is the same whatever row a stream starts at and however many are summed at once.
 class SeparableStream {
 public:
     using Source = std::function<void(int y, float* const* padded)>;
+    static constexpr int kMaxRowsTogether = 4;
     SeparableStream(int width, std::vector<SeparableFilter> filters, int row_begin, int row_end, int rows_end,
-                    Source source);
+                    Source source, int rows_together = kMaxRowsTogether);
     SeparableStream(const SeparableStream&) = delete;  // (out_rows_ point into its own storage)
     SeparableStream& operator=(const SeparableStream&) = delete;
     // Output row y of each plane (width values each; y never decreases), in the stream's own
@@ -75,7 +78,7 @@ private:
     static bool keeps_input_rows(const SeparableFilter& f);
     float* ring_row(size_t plane, int term, int y);
     float* padded_row(size_t plane, int y);
-    int width_, radius_, row_begin_, row_end_, rows_end_, slots_;
+    int width_, radius_, row_begin_, row_end_, rows_end_, rows_together_, slots_;
     size_t stride_, padded_stride_;
     std::vector<SeparableFilter> filters_;
     std::vector<std::vector<std::vector<float>>> vertical_;  // per plane and term, the sign folded in
@@ -88,11 +91,11 @@ private:
     std::vector<std::vector<float>> padded_;
     std::vector<float*> padded_rows_;
     std::vector<const float*> column_;
-    // Per plane, the pair of output rows summed together; out_rows_[o] points at each plane's
-    // row o of the pair (or, for the identity, its input row).
-    std::vector<std::vector<float>> output_[2];
-    std::vector<float*> out_rows_[2];
-    int pending_row_;  // the pair's second row, to be returned next
+    // Per plane, the group of output rows summed together; out_rows_[o] points at each plane's
+    // row o of the group (or, for the identity, its input row).
+    std::vector<std::vector<float>> output_[kMaxRowsTogether];
+    std::vector<float*> out_rows_[kMaxRowsTogether];
+    int group_y_ = 0, group_rows_ = 0;  // the group's first row and how many it holds
     Source source_;
     int next_ = 0;  // the next row to filter horizontally
     bool started_ = false;

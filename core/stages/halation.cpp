@@ -108,13 +108,17 @@ CoarseHalationStream::CoarseHalationStream(const std::vector<const HalationKerne
         plane.column_sums.resize(size_t(means_window_.width()) * d_);
         for (auto& row : plane.across) row.resize(size_t(out.width()));
     }
-    // Every plane's coarse rows from one stream, so that each fine row is read once for all.
+    // Every plane's coarse rows from one stream, so that each fine row is read once for all;
+    // two coarse rows summed at once (more would read further ahead, for a ring of fine rows
+    // the deeper, and the coarse rows cost little).
+    constexpr int kCoarseRowsTogether = 2;
     blur_ = std::make_unique<SeparableStream>(blurred_window_.width(), std::move(filters), means_window_.y0, means_window_.y1,
                                               blurred_window_.y1,
-                                              [this](int by, float* const* means) { block_means(by, means); });
-    // Output row y lies above coarse row j + 1 <= y / d + 1, whose blur (with the next, as the
-    // stream sums rows in pairs) reads block rows to j + 2 + r, each d fine rows.
-    slots_ = d_ * (r + 5) + 2;
+                                              [this](int by, float* const* means) { block_means(by, means); },
+                                              kCoarseRowsTogether);
+    // Output row y lies above coarse row j + 1 <= y / d + 1, whose blur (with the next one)
+    // reads block rows to j + kCoarseRowsTogether + r, each d fine rows.
+    slots_ = d_ * (r + 3 + kCoarseRowsTogether) + 2;
     ring_.resize(planes_.size());
     for (auto& ring : ring_) ring.resize(size_t(slots_) * size_t(read_x1_ - read_x0_));
     ring_rows_.resize(planes_.size());

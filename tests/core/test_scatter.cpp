@@ -1,4 +1,5 @@
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -242,41 +243,47 @@ TEST_CASE("row and column convolutions sum their taps in the documented order, i
             std::vector<float> taps(n);
             for (int k = 0; k < n; ++k) taps[k] = symmetric ? 0.2f / float(1 + std::abs(k - half)) : u(rng);
             INFO(n << " taps, symmetric " << symmetric);
-            std::vector<float> in(width + n), out(width);
+            std::vector<float> in(width + n + 3), out(width);
             for (float& v : in) v = u(rng);
             convolve_row(in.data(), taps, width, out.data());
             std::vector<const float*> rows;
-            for (int k = 0; k <= n; ++k) rows.push_back(in.data() + k);  // the same sums, as a column pass
+            for (int k = 0; k < n + 3; ++k) rows.push_back(in.data() + k);  // the same sums, as a column pass
             std::vector<float> column(width, 0.5f), column_written(width, 0.5f);
             convolve_column_add(rows.data(), taps, width, column.data());
             convolve_column(rows.data(), taps, width, column_written.data());
-            // Two rows at once: the second reads rows 1-n, i.e. `in` one further along.
-            std::vector<float> pair_added[2] = {std::vector<float>(width, 0.5f), std::vector<float>(width + 1, 0.5f)};
-            std::vector<float> pair_written[2] = {std::vector<float>(width, 0.5f), std::vector<float>(width + 1, 0.5f)};
-            float* added[2] = {pair_added[0].data(), pair_added[1].data()};
-            float* written[2] = {pair_written[0].data(), pair_written[1].data()};
-            convolve_columns(rows.data(), taps, width, added, true);
-            convolve_columns(rows.data(), taps, width, written, false);
+            // 1, 2 and 4 rows at once: row o reads rows o to o + n - 1, i.e. `in` o further along.
+            std::vector<float> group_added[3][4], group_written[3][4];
+            const int group_rows[3] = {1, 2, 4};
+            for (int g = 0; g < 3; ++g) {
+                float *added[4], *written[4];
+                for (int o = 0; o < group_rows[g]; ++o) {
+                    group_added[g][o].assign(width, 0.5f), group_written[g][o].assign(width, 0.5f);
+                    added[o] = group_added[g][o].data(), written[o] = group_written[g][o].data();
+                }
+                convolve_columns(rows.data(), taps, width, added, group_rows[g], true);
+                convolve_columns(rows.data(), taps, width, written, group_rows[g], false);
+            }
             for (int x = 0; x < width; ++x) {
-                // The definition, in float from `start`: mirrored taps folded when symmetric, else in order.
-                auto definition = [&](float start) {
+                // The definition at x + o, in float from `start`: mirrored taps folded when symmetric, else in order.
+                auto definition = [&](float start, int o = 0) {
                     float sum = start;
+                    const float* at = in.data() + x + o;
                     if (symmetric) {
-                        for (int k = 0; k < half; ++k) sum += taps[k] * (in[x + k] + in[x + n - 1 - k]);
-                        return sum + taps[half] * in[x + half];
+                        for (int k = 0; k < half; ++k) sum += taps[k] * (at[k] + at[n - 1 - k]);
+                        return sum + taps[half] * at[half];
                     }
-                    for (int k = 0; k < n; ++k) sum += taps[k] * in[x + k];
+                    for (int k = 0; k < n; ++k) sum += taps[k] * at[k];
                     return sum;
                 };
                 REQUIRE(out[x] == definition(0.0f));
                 REQUIRE(column[x] == definition(0.5f));
                 REQUIRE(column_written[x] == definition(0.0f));
-                REQUIRE(pair_added[0][x] == definition(0.5f));
-                REQUIRE(pair_written[0][x] == definition(0.0f));
-                if (x + 1 < width) {
-                    REQUIRE(pair_added[1][x] == pair_added[0][x + 1]);
-                    REQUIRE(pair_written[1][x] == pair_written[0][x + 1]);
-                }
+                for (int g = 0; g < 3; ++g)
+                    for (int o = 0; o < group_rows[g]; ++o) {
+                        INFO(group_rows[g] << " rows at once, row " << o);
+                        REQUIRE(group_added[g][o][x] == definition(0.5f, o));
+                        REQUIRE(group_written[g][o][x] == definition(0.0f, o));
+                    }
                 double exact = 0;
                 for (int k = 0; k < n; ++k) exact += double(taps[k]) * in[x + k];
                 CHECK(out[x] == Approx(exact).margin(1e-5));
@@ -334,4 +341,54 @@ TEST_CASE("separable_approximation: a kernel's singular-value terms, largest fir
     CHECK(one.terms.size() == 1);
     const std::vector<double> outer_back = applied(one);
     for (int i = 0; i < side * side; ++i) CHECK(outer_back[i] == Approx(outer[i]).epsilon(1e-5));
+}
+
+TEST_CASE("a separable stream gives the same rows however many it sums at once, wherever it starts and stops",
+          "[scatter][filters]") {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0, 1);
+    const int width = 37, height = 29;
+    std::vector<std::vector<float>> image(3, std::vector<float>(size_t(width) * height));
+    for (auto& plane : image)
+        for (float& v : plane) v = u(rng);
+    // Three planes: two 7-tap terms (symmetric, and not) with a centre; a 3-tap term; the identity.
+    const std::vector<float> three = {0.25f, 0.5f, 0.25f};
+    const std::vector<SeparableFilter> filters = {
+        SeparableFilter{{{0.02f, 0.08f, 0.2f, 0.4f, 0.2f, 0.08f, 0.02f}, {0.1f, 0, 0.3f, 0.4f, 0.2f, 0, 0}}, {1.0f, -1.0f}, 0.25f},
+        SeparableFilter{{three}, {1.0f}}, SeparableFilter{}};
+    auto stream_rows = [&](int together, int first, int last, int step) {
+        std::vector<std::vector<float>> rows;  // rows first, first + step, ... below last, three planes each
+        SeparableStream s(width, filters, 0, height, last, [&](int y, float* const* padded) {
+            for (int p = 0; p < 3; ++p) {
+                for (int x = 0; x < width; ++x) padded[p][x + 3] = image[p][size_t(y) * width + x];
+                hold_frame_edges(padded[p], -3, width + 3, Window{0, 0, width, height});
+            }
+        }, together);
+        for (int y = first; y < last; y += step) {
+            float* const* r = s.row(y);
+            for (int p = 0; p < 3; ++p) rows.emplace_back(r[p], r[p] + width);
+        }
+        return rows;
+    };
+    for (int first : {0, 5})
+        for (int last : {height, 18, 19})  // (at 19, from 0 or 5, a last group of three: two rows and one)
+            for (int step : {1, 3}) {
+                INFO("rows " << first << " to " << last << " step " << step);
+                const auto one_at_a_time = stream_rows(1, first, last, step);
+                CHECK(stream_rows(2, first, last, step) == one_at_a_time);
+                CHECK(stream_rows(4, first, last, step) == one_at_a_time);
+                // The definitions on the first row: the 3-tap plane's sum (rows and columns clamped
+                // to the frame), the identity's input.
+                for (int x = 0; x < width; ++x) {
+                    double sum = 0;
+                    for (int dy = -1; dy <= 1; ++dy)
+                        for (int dx = -1; dx <= 1; ++dx)
+                            sum += double(three[dy + 1]) * three[dx + 1] *
+                                   image[1][size_t(std::clamp(first + dy, 0, height - 1)) * width + std::clamp(x + dx, 0, width - 1)];
+                    CHECK(one_at_a_time[1][x] == Approx(sum).margin(1e-6));
+                    CHECK(one_at_a_time[2][x] == image[2][size_t(first) * width + x]);
+                }
+            }
+    CHECK_THROWS_AS(SeparableStream(width, filters, 0, height, height, [](int, float* const*) {}, 5),
+                    std::invalid_argument);
 }
