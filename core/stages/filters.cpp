@@ -48,9 +48,11 @@ constexpr int kVecs = 8;
 // quarter of the arithmetic.
 // kTaps: n, known when compiled (the taps then symmetric), so that the loops over the taps
 // unroll; 0: n and pairs as given.
-template <int lanes, int vecs, int outputs, bool accumulate, int kTaps, typename RowOf>
+// kCentred: then centre times centre_rows[o][x] is added to each sum last.
+template <int lanes, int vecs, int outputs, bool accumulate, bool kCentred, int kTaps, typename RowOf>
 __attribute__((always_inline)) inline int tap_blocks(const float* tap, int n, int pairs, int x, int width,
-                                                     float* const* __restrict out, RowOf row_of) {
+                                                     float* const* __restrict out, RowOf row_of, float centre,
+                                                     const float* const* centre_rows) {
     if constexpr (kTaps > 0) n = kTaps, pairs = kTaps / 2;
     using Vec = typename simd::Lanes<lanes>::F;
     constexpr int block = lanes * vecs;
@@ -96,6 +98,15 @@ __attribute__((always_inline)) inline int tap_blocks(const float* tap, int n, in
                 }
             }
         }
+        if constexpr (kCentred) {
+            const Vec c = Vec{} + centre;
+            for (int o = 0; o < outputs; ++o)
+                for (int v = 0; v < vecs; ++v) {
+                    Vec pixel;
+                    load(pixel, centre_rows[o] + x + v * lanes);
+                    sum[o][v] += c * pixel;
+                }
+        }
         for (int o = 0; o < outputs; ++o)
             for (int v = 0; v < vecs; ++v) store(out[o] + x + v * lanes, sum[o][v]);
     }
@@ -105,9 +116,10 @@ __attribute__((always_inline)) inline int tap_blocks(const float* tap, int n, in
 // out[o][x] (+)= sum_k taps[k] row_of(k + o)[x] for each of `outputs` outputs (1, or 2: a
 // column pass's two consecutive rows, which share all but one of their input rows, so that
 // each is read from memory once for both).
-template <int lanes, int outputs, bool accumulate, typename RowOf>
+template <int lanes, int outputs, bool accumulate, bool kCentred = false, typename RowOf>
 __attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int width, float* const* __restrict out,
-                                                    RowOf row_of) {
+                                                    RowOf row_of, float centre = 0,
+                                                    const float* const* centre_rows = nullptr) {
     const bool symmetric = std::equal(tap, tap + n / 2, std::reverse_iterator<const float*>(tap + n));
     const int pairs = symmetric ? n / 2 : 0;  // taps k and n-1-k for k < pairs; then k in [pairs, n - pairs)
     // (taps: std::integral_constant, kTaps. Inlined like the rest: a lambda called from
@@ -115,9 +127,11 @@ __attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int
     // kernels, whose 8 lanes share their instantiation with the baseline's, called that.)
     auto run = [&](auto taps) __attribute__((always_inline)) {
         constexpr int kTaps = decltype(taps)::value;
-        int x = tap_blocks<lanes, kVecs / outputs, outputs, accumulate, kTaps>(tap, n, pairs, 0, width, out, row_of);
-        x = tap_blocks<lanes, 1, outputs, accumulate, kTaps>(tap, n, pairs, x, width, out, row_of);
-        tap_blocks<1, 1, outputs, accumulate, kTaps>(tap, n, pairs, x, width, out, row_of);
+        int x = tap_blocks<lanes, kVecs / outputs, outputs, accumulate, kCentred, kTaps>(tap, n, pairs, 0, width, out,
+                                                                                         row_of, centre, centre_rows);
+        x = tap_blocks<lanes, 1, outputs, accumulate, kCentred, kTaps>(tap, n, pairs, x, width, out, row_of, centre,
+                                                                       centre_rows);
+        tap_blocks<1, 1, outputs, accumulate, kCentred, kTaps>(tap, n, pairs, x, width, out, row_of, centre, centre_rows);
     };
     // The fast tiers' kernels: the MTF's 7 taps (radius 3; preview's 5), the grain's 3.
     if (symmetric && n == 7)
@@ -137,14 +151,28 @@ struct ConvolveRow {
     }
 };
 
-template <int outputs, bool accumulate>
+template <int outputs, bool accumulate, bool centred = false>
 struct ConvolveColumn {
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* const* rows, const float* taps, int n, int width,
-                                                   float* const* out) {
-        tap_sums<lanes, outputs, accumulate>(taps, n, width, out, [rows](int k) { return rows[k]; });
+                                                   float* const* out, float centre = 0,
+                                                   const float* const* centre_rows = nullptr) {
+        tap_sums<lanes, outputs, accumulate, centred>(taps, n, width, out, [rows](int k) { return rows[k]; }, centre,
+                                                      centre_rows);
     }
 };
+
+// convolve_columns with its group's size, accumulation and centre known when compiled.
+template <int outputs>
+void columns_of(const float* const* rows, const float* taps, int n, int width, float* const* out, bool add,
+                float centre, const float* const* centre_rows) {
+    if (centre_rows)
+        add ? simd::dispatch<ConvolveColumn<outputs, true, true>>(rows, taps, n, width, out, centre, centre_rows)
+            : simd::dispatch<ConvolveColumn<outputs, false, true>>(rows, taps, n, width, out, centre, centre_rows);
+    else
+        add ? simd::dispatch<ConvolveColumn<outputs, true>>(rows, taps, n, width, out, 0.0f, centre_rows)
+            : simd::dispatch<ConvolveColumn<outputs, false>>(rows, taps, n, width, out, 0.0f, centre_rows);
+}
 
 }  // namespace
 
@@ -161,18 +189,15 @@ void convolve_column_add(const float* const* rows, const std::vector<float>& tap
 }
 
 void convolve_columns(const float* const* rows, const std::vector<float>& taps, int width, float* const* out,
-                      int outputs, bool add) {
+                      int outputs, bool add, float centre, const float* const* centre_rows) {
     const float* t = taps.data();
     const int n = int(taps.size());
     if (outputs == 4)
-        add ? simd::dispatch<ConvolveColumn<4, true>>(rows, t, n, width, out)
-            : simd::dispatch<ConvolveColumn<4, false>>(rows, t, n, width, out);
+        columns_of<4>(rows, t, n, width, out, add, centre, centre_rows);
     else if (outputs == 2)
-        add ? simd::dispatch<ConvolveColumn<2, true>>(rows, t, n, width, out)
-            : simd::dispatch<ConvolveColumn<2, false>>(rows, t, n, width, out);
+        columns_of<2>(rows, t, n, width, out, add, centre, centre_rows);
     else if (outputs == 1)
-        add ? simd::dispatch<ConvolveColumn<1, true>>(rows, t, n, width, out)
-            : simd::dispatch<ConvolveColumn<1, false>>(rows, t, n, width, out);
+        columns_of<1>(rows, t, n, width, out, add, centre, centre_rows);
     else
         throw std::invalid_argument("convolve_columns: 1, 2 or 4 rows at once");
 }
@@ -325,23 +350,27 @@ float* const* SeparableStream::row(int y) {
             for (int o = 0; o < rows; ++o) out_rows_[o][p] = padded_row(p, y + o) + radius_;
             continue;
         }
+        const float* pixels[kMaxRowsTogether];  // the rows' own input pixels, for the centre
+        for (int o = 0; o < rows; ++o) pixels[o] = padded_row(p, y + o) + radius_;
+        if (f.terms.empty()) {
+            for (int o = 0; o < rows; ++o) convolve_column(&pixels[o], centre_[p], width_, out_rows_[o][p]);
+            continue;
+        }
         const int r = f.radius();
         for (size_t t = 0; t < f.terms.size(); ++t) {
             for (int k = -r; k <= r + rows - 1; ++k)
                 column_[k + r] = ring_row(p, int(t), std::clamp(y + k, row_begin_, row_end_ - 1));
+            // After the last term's taps, the centre: one order of the sum for every row.
+            const bool last = t + 1 == f.terms.size() && f.centre != 0;
             // The rows in runs of 4, 2 and 1, each value summed alike in any of them.
             for (int o = 0; o < rows;) {
                 const int run = rows - o >= 4 ? 4 : rows - o >= 2 ? 2 : 1;
                 float* out[kMaxRowsTogether];  // (the plane's own output rows)
                 for (int i = 0; i < run; ++i) out[i] = out_rows_[o + i][p];
-                convolve_columns(column_.data() + o, vertical_[p][t], width_, out, run, t > 0);
+                convolve_columns(column_.data() + o, vertical_[p][t], width_, out, run, t > 0, f.centre,
+                                 last ? pixels + o : nullptr);
                 o += run;
             }
-        }
-        if (f.centre == 0) continue;
-        for (int o = 0; o < rows; ++o) {  // after the terms: one order of the sum for every row
-            const float* pixels = padded_row(p, y + o) + radius_;
-            (f.terms.empty() ? convolve_column : convolve_column_add)(&pixels, centre_[p], width_, out_rows_[o][p]);
         }
     }
     group_y_ = y, group_rows_ = rows;

@@ -24,9 +24,11 @@ void convolve_column(const float* const* rows, const std::vector<float>& taps, i
 void convolve_column_add(const float* const* rows, const std::vector<float>& taps, int width, float* out);
 // Consecutive rows of a vertical pass at once (outputs 1, 2 or 4): out[o][x] (+)= sum_k
 // taps[k] rows[k + o][x] for o < outputs (rows holds taps + outputs - 1 rows), each value as
-// convolve_column sums it; the rows are read from memory once for all of them.
+// convolve_column sums it; the rows are read from memory once for all of them. With
+// centre_rows, centre * centre_rows[o][x] is then added to each sum, as convolve_column_add
+// of the one tap `centre` would add it to the stored row (the same value, without a pass).
 void convolve_columns(const float* const* rows, const std::vector<float>& taps, int width, float* const* out,
-                      int outputs, bool add);
+                      int outputs, bool add, float centre = 0, const float* const* centre_rows = nullptr);
 
 // A sum of separable filters, sum_t sign_t (taps_t in x, then taps_t in y), all of 2r + 1
 // taps, plus `centre` times the pixel itself (a delta, which costs a multiply and an add where

@@ -252,16 +252,23 @@ TEST_CASE("row and column convolutions sum their taps in the documented order, i
             convolve_column_add(rows.data(), taps, width, column.data());
             convolve_column(rows.data(), taps, width, column_written.data());
             // 1, 2 and 4 rows at once: row o reads rows o to o + n - 1, i.e. `in` o further along.
-            std::vector<float> group_added[3][4], group_written[3][4];
+            // With a centre, each row o also adds 0.3 times the row `in` + 3 - o (any row of its own).
+            const float centre = 0.3f;
+            const float* centre_rows[4];
+            for (int o = 0; o < 4; ++o) centre_rows[o] = in.data() + 3 - o;
+            std::vector<float> group_added[3][4], group_written[3][4], group_centred[3][4];
             const int group_rows[3] = {1, 2, 4};
             for (int g = 0; g < 3; ++g) {
-                float *added[4], *written[4];
+                float *added[4], *written[4], *centred[4];
                 for (int o = 0; o < group_rows[g]; ++o) {
                     group_added[g][o].assign(width, 0.5f), group_written[g][o].assign(width, 0.5f);
+                    group_centred[g][o].assign(width, 0.5f);
                     added[o] = group_added[g][o].data(), written[o] = group_written[g][o].data();
+                    centred[o] = group_centred[g][o].data();
                 }
                 convolve_columns(rows.data(), taps, width, added, group_rows[g], true);
                 convolve_columns(rows.data(), taps, width, written, group_rows[g], false);
+                convolve_columns(rows.data(), taps, width, centred, group_rows[g], true, centre, centre_rows);
             }
             for (int x = 0; x < width; ++x) {
                 // The definition at x + o, in float from `start`: mirrored taps folded when symmetric, else in order.
@@ -283,6 +290,8 @@ TEST_CASE("row and column convolutions sum their taps in the documented order, i
                         INFO(group_rows[g] << " rows at once, row " << o);
                         REQUIRE(group_added[g][o][x] == definition(0.5f, o));
                         REQUIRE(group_written[g][o][x] == definition(0.0f, o));
+                        // (as convolve_column_add of the one tap would add it to the stored sum)
+                        REQUIRE(group_centred[g][o][x] == definition(0.5f, o) + centre * centre_rows[o][x]);
                     }
                 double exact = 0;
                 for (int k = 0; k < n; ++k) exact += double(taps[k]) * in[x + k];
