@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
-#include <limits>
 #include <stdexcept>
 #include <type_traits>
 
@@ -113,9 +112,9 @@ __attribute__((always_inline)) inline int tap_blocks(const float* tap, int n, in
     return x;
 }
 
-// out[o][x] (+)= sum_k taps[k] row_of(k + o)[x] for each of `outputs` outputs (1, or 2: a
-// column pass's two consecutive rows, which share all but one of their input rows, so that
-// each is read from memory once for both).
+// out[o][x] (+)= sum_k taps[k] row_of(k + o)[x] for each of `outputs` outputs (1, or 2 or 4: a
+// column pass's consecutive rows, which share all but a few of their input rows, so that
+// each is read from memory once for all).
 template <int lanes, int outputs, bool accumulate, bool kCentred = false, typename RowOf>
 __attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int width, float* const* __restrict out,
                                                     RowOf row_of, float centre = 0,
