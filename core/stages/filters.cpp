@@ -179,14 +179,6 @@ void convolve_row(const float* in, const std::vector<float>& taps, int width, fl
     simd::dispatch<ConvolveRow>(in, taps.data(), int(taps.size()), width, out);
 }
 
-void convolve_column(const float* const* rows, const std::vector<float>& taps, int width, float* out) {
-    simd::dispatch<ConvolveColumn<1, false>>(rows, taps.data(), int(taps.size()), width, &out);
-}
-
-void convolve_column_add(const float* const* rows, const std::vector<float>& taps, int width, float* out) {
-    simd::dispatch<ConvolveColumn<1, true>>(rows, taps.data(), int(taps.size()), width, &out);
-}
-
 void convolve_columns(const float* const* rows, const std::vector<float>& taps, int width, float* const* out,
                       int outputs, bool add, float centre, const float* const* centre_rows) {
     const float* t = taps.data();
@@ -352,7 +344,7 @@ float* const* SeparableStream::row(int y) {
         const float* pixels[kMaxRowsTogether];  // the rows' own input pixels, for the centre
         for (int o = 0; o < rows; ++o) pixels[o] = padded_row(p, y + o) + radius_;
         if (f.terms.empty()) {
-            for (int o = 0; o < rows; ++o) convolve_column(&pixels[o], centre_[p], width_, out_rows_[o][p]);
+            for (int o = 0; o < rows; ++o) convolve_columns(&pixels[o], centre_[p], width_, &out_rows_[o][p], 1, false);
             continue;
         }
         const int r = f.radius();

@@ -19,14 +19,12 @@ std::vector<float> pixel_integrated_gaussian(double sigma_px);
 // independent of where the row starts): the order of k, except that symmetric taps sum
 // taps[k] (in[x + k] + in[x + n-1-k]) for k < n/2 first, then the middle tap.
 void convolve_row(const float* in, const std::vector<float>& taps, int width, float* out);
-// One row of a vertical pass: out[x] = sum_k taps[k] rows[k][x], or added to out.
-void convolve_column(const float* const* rows, const std::vector<float>& taps, int width, float* out);
-void convolve_column_add(const float* const* rows, const std::vector<float>& taps, int width, float* out);
-// Consecutive rows of a vertical pass at once (outputs 1, 2 or 4): out[o][x] (+)= sum_k
-// taps[k] rows[k + o][x] for o < outputs (rows holds taps + outputs - 1 rows), each value as
-// convolve_column sums it; the rows are read from memory once for all of them. With
-// centre_rows, centre * centre_rows[o][x] is then added to each sum, as convolve_column_add
-// of the one tap `centre` would add it to the stored row (the same value, without a pass).
+// Rows of a vertical pass (outputs 1, 2 or 4 consecutive rows at once): out[o][x] (+)= sum_k
+// taps[k] rows[k + o][x] for o < outputs (rows holds taps + outputs - 1 rows), added to out
+// when `add`; each value summed in convolve_row's order of the taps, however many rows are
+// summed together, and the rows read from memory once for all of them. With centre_rows,
+// centre * centre_rows[o][x] is then added to each sum last (as a second, one-tap pass added
+// to the stored row would add it: the same value, without the pass).
 void convolve_columns(const float* const* rows, const std::vector<float>& taps, int width, float* const* out,
                       int outputs, bool add, float centre = 0, const float* const* centre_rows = nullptr);
 

@@ -249,8 +249,9 @@ TEST_CASE("row and column convolutions sum their taps in the documented order, i
             std::vector<const float*> rows;
             for (int k = 0; k < n + 3; ++k) rows.push_back(in.data() + k);  // the same sums, as a column pass
             std::vector<float> column(width, 0.5f), column_written(width, 0.5f);
-            convolve_column_add(rows.data(), taps, width, column.data());
-            convolve_column(rows.data(), taps, width, column_written.data());
+            float *column_row = column.data(), *column_written_row = column_written.data();
+            convolve_columns(rows.data(), taps, width, &column_row, 1, true);
+            convolve_columns(rows.data(), taps, width, &column_written_row, 1, false);
             // 1, 2 and 4 rows at once: row o reads rows o to o + n - 1, i.e. `in` o further along.
             // With a centre, each row o also adds 0.3 times the row `in` + 3 - o (any row of its own).
             const float centre = 0.3f;
@@ -290,7 +291,7 @@ TEST_CASE("row and column convolutions sum their taps in the documented order, i
                         INFO(group_rows[g] << " rows at once, row " << o);
                         REQUIRE(group_added[g][o][x] == definition(0.5f, o));
                         REQUIRE(group_written[g][o][x] == definition(0.0f, o));
-                        // (as convolve_column_add of the one tap would add it to the stored sum)
+                        // (as a one-tap pass added to the stored sum would add it)
                         REQUIRE(group_centred[g][o][x] == definition(0.5f, o) + centre * centre_rows[o][x]);
                     }
                 double exact = 0;
