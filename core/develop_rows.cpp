@@ -6,6 +6,8 @@
 #include <type_traits>
 #include <utility>
 
+#include <xmmintrin.h>
+
 #include "core/stages/print.h"
 #include "core/simd.h"
 
@@ -121,26 +123,32 @@ __attribute__((always_inline)) inline void exposure_lanes(const float* px, int s
     }
 }
 
-// Stores a vector of 16 floats to p, 64-byte aligned, past the caches (a non-temporal store):
-// the pass never reads the result back, and its cache line need not be read from memory
-// before it is written (a frame's result is far larger than the caches). Not the intrinsic,
-// which needs a target attribute this template (compiled for each instruction set) lacks:
-// clang's builtin, or for GCC the instruction itself (clang rejects a 512-bit asm operand
-// outside an AVX-512 function).
+// Stores a vector of 8 or 16 floats to p, 16-byte aligned, past the caches (a non-temporal
+// store): the pass never reads the result back, and its cache line need not be read from
+// memory before it is written (a frame's result is far larger than the caches). Eight floats
+// as two SSE stores, which every instruction set these kernels are compiled for has (a 32-byte
+// one would need AVX, and eight lanes also run in the baseline's SSE2); sixteen, not by the
+// intrinsic, which needs a target attribute this template lacks: clang's builtin, or for GCC
+// the instruction itself (clang rejects a 512-bit asm operand outside an AVX-512 function).
 template <typename V>
 __attribute__((always_inline)) inline void stream_store(float* p, const V& v) {
-    static_assert(sizeof(V) == 64, "a whole cache line");
+    if constexpr (sizeof(V) == 32) {
+        _mm_stream_ps(p, __builtin_shufflevector(v, v, 0, 1, 2, 3));
+        _mm_stream_ps(p + 4, __builtin_shufflevector(v, v, 4, 5, 6, 7));
+    } else {
+        static_assert(sizeof(V) == 64, "a whole cache line");
 #if defined(__clang__)
-    __builtin_nontemporal_store(v, reinterpret_cast<V*>(p));
+        __builtin_nontemporal_store(v, reinterpret_cast<V*>(p));
 #else
-    asm("vmovntps %1, %0" : "=m"(*reinterpret_cast<V*>(p)) : "v"(v));
+        asm("vmovntps %1, %0" : "=m"(*reinterpret_cast<V*>(p)) : "v"(v));
 #endif
+    }
 }
 
 // Pixels x ... of the result's three rows into RGB (out_stride 3) or RGB and alpha (4, the
 // alpha from the input's channel `alpha`, its pixels in_stride apart) in vector registers;
-// other layouts a value at a time: the same values. `streaming`: RGB pixels at a 64-byte
-// aligned address, stored past the caches.
+// other layouts a value at a time: the same values. `streaming`: RGB pixels stored past the
+// caches (out_px + 3 x 16-byte aligned).
 template <typename V, bool streaming = false>
 __attribute__((always_inline)) inline void write_lanes(const float* const* result, const float* in_px, int in_stride,
                                                        int alpha, float* out_px, int out_stride, int x) {
@@ -183,17 +191,16 @@ struct WriteRow {
     __attribute__((always_inline)) static void run(const float* const* result, const float* in_px, int in_stride,
                                                    int alpha, float* out_px, int out_stride, int width) {
         int x = 0;
-        if constexpr (lanes == 16) {
-            // RGB pixels: from the first whose address is 64-byte aligned, every 16 pixels are three
-            // aligned lines, streamed (the same values; 3-4 % of a 4K frame's time here).
-            if (out_stride == 3 && !in_px && width >= 4 * lanes) {
-                const uintptr_t offset = reinterpret_cast<uintptr_t>(out_px) % 64;  // (a float's: a multiple of 4)
-                const int head = int((64 - offset) / 4 % 16 * 11 % 16);  // 3 head = (64 - offset) / 4 mod 16
-                for (; x < head; ++x) write_lanes<simd::Float1>(result, in_px, in_stride, alpha, out_px, out_stride, x);
-                for (; x + lanes <= width; x += lanes)
-                    write_lanes<typename simd::Lanes<lanes>::F, true>(result, in_px, in_stride, alpha, out_px, 3, x);
-                asm volatile("sfence" ::: "memory");  // (ordered before whatever reads the result)
-            }
+        // RGB pixels: from the first whose address is 64-byte aligned on, streamed, each 16 pixels
+        // three whole lines (the same values; with AVX-512 3-4 % of a 4K frame's time; with AVX2
+        // on a Zen 3, two threads, the write 5.2 -> 3.8 ms).
+        if (out_stride == 3 && !in_px && width >= 4 * lanes) {
+            const uintptr_t offset = reinterpret_cast<uintptr_t>(out_px) % 64;  // (a float's: a multiple of 4)
+            const int head = int((64 - offset) / 4 % 16 * 11 % 16);  // 3 head = (64 - offset) / 4 mod 16
+            for (; x < head; ++x) write_lanes<simd::Float1>(result, in_px, in_stride, alpha, out_px, out_stride, x);
+            for (; x + lanes <= width; x += lanes)
+                write_lanes<typename simd::Lanes<lanes>::F, true>(result, in_px, in_stride, alpha, out_px, 3, x);
+            _mm_sfence();  // (ordered before whatever reads the result)
         }
         for (; x + lanes <= width; x += lanes) {
             simd::prefetch_ahead<true>(out_px + size_t(x) * out_stride, lanes * out_stride * int(sizeof(float)));

@@ -16,15 +16,17 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 namespace darkroom::simd {
 
-// The vector types of `lanes` floats (and as many int32, uint32 and double lanes).
+// The vector types of `lanes` floats (and as many int32, uint32, int64 and double lanes).
 template <int lanes>
 struct Lanes {
     typedef float F __attribute__((vector_size(4 * lanes)));
     typedef int32_t I __attribute__((vector_size(4 * lanes)));
     typedef uint32_t U __attribute__((vector_size(4 * lanes)));
+    typedef int64_t L __attribute__((vector_size(8 * lanes)));
     typedef double D __attribute__((vector_size(8 * lanes)));
 };
 using Float8 = Lanes<8>::F;
@@ -50,14 +52,21 @@ __attribute__((always_inline)) inline void store(T* p, const V& v) {
     *reinterpret_cast<Unaligned*>(p) = v;
 }
 
-// The lanes of v stored to `lanes` (an array of its element type) to be read one at a time:
-// a scalar load of each is cheaper than extracting it from the register, which the compiler
-// would otherwise do (the empty asm says the stored values may have changed, so they are
-// loaded back).
-template <typename T, size_t n, typename V>
-__attribute__((always_inline)) inline void store_for_lanes(T (&lanes)[n], const V& v) {
-    store(lanes, v);
-    asm("" : "+m"(lanes));
+// The int32 lanes of v into `lanes`, to be read one at a time: two at a time by 64-bit
+// register moves, each pair split by a shift. (Storing the vector and loading the lanes back
+// waited on store forwarding, which stalls for the lanes past a vector's first 16 bytes: the
+// 3D table's lookups are 5 % faster this way with AVX2 on a Zen 3, 25 % with AVX-512 on a
+// Xeon; an extract a lane costs two instructions.)
+template <int n, typename I>
+__attribute__((always_inline)) inline void int32_lanes(int32_t (&lanes)[n], const I& v) {
+    static_assert(n % 2 == 0 && sizeof(I) == 4 * n, "an even number of int32 lanes");
+    typename Lanes<n / 2>::L pairs;
+    std::memcpy(&pairs, &v, sizeof pairs);
+    for (int k = 0; k < n / 2; ++k) {
+        const int64_t pair = pairs[k];
+        lanes[2 * k] = int32_t(pair);  // (x86 is little-endian: lane 2k is the low half)
+        lanes[2 * k + 1] = int32_t(pair >> 32);
+    }
 }
 
 // Asks for the cache lines of the `bytes` from p + kPrefetchAheadBytes on, to be read (or,
