@@ -61,7 +61,9 @@ private:
 };
 
 // 2^x in float from the exponent and a polynomial in the fraction (relative error below
-// 3e-7, a few float roundings, for |x| < 126); the fast tiers' exp10(x) = exp2(x log2 10).
+// 3e-7, a few float roundings, for |x| < kExp2Reach, beyond which x is held at it); the fast
+// tiers' exp10(x) = exp2(x log2 10).
+constexpr float kExp2Reach = 126.0f;
 float fast_exp2(float x);
 
 // A function of three variables on a uniform grid (nodes^3 over [lo, hi] per axis),
@@ -91,6 +93,7 @@ private:
     int nodes_ = 0;
     std::array<float, 3> lo_{}, scale_{};
     std::vector<std::array<float, 4>> values_;  // x fastest; 3 values and a pad, one 16-byte load per node
+    bool exp2_clamps_ = true;  // apply_row_exp2 holds values within +-kExp2Reach (else none reaches it)
 };
 
 }  // namespace darkroom

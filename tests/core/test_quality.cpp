@@ -207,30 +207,34 @@ TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions 
         table(point, one);
         for (int c = 0; c < 3; ++c) REQUIRE(results[c][i] == one[c]);
     }
-    // Read as log2 values: 2^v of each (values from -200 to 400 on this table's third
-    // channel, past exp2's clamps at +-126), then times a matrix, in the same float operations.
-    const Table3D wide({-2, -2, -2}, {4, 4, 4}, 9, 0, [](const int*, const double* v, double* out) {
-        out[0] = v[0] - v[1];
-        out[1] = 0.5 * v[2];
-        out[2] = 100 * v[0];
-    });
-    table = wide;
-    table.apply_row(in_rows, out_rows, n);
-    const float matrix[9] = {0.5f, -0.25f, 2.0f, 1.5f, 0.75f, -1.0f, 0.125f, 3.0f, 0.0f};
-    std::vector<float> linear[3], mixed[3];
-    for (int c = 0; c < 3; ++c) linear[c].resize(n), mixed[c].resize(n);
-    float* linear_rows[3] = {linear[0].data(), linear[1].data(), linear[2].data()};
-    float* mixed_rows[3] = {mixed[0].data(), mixed[1].data(), mixed[2].data()};
-    table.apply_row_exp2(in_rows, linear_rows, n);
-    table.apply_row_exp2(in_rows, mixed_rows, n, matrix);
-    for (int i = 0; i < n; ++i) {
-        float v[3];
-        for (int c = 0; c < 3; ++c) {
-            v[c] = fast_exp2(results[c][i]);
-            REQUIRE(linear[c][i] == v[c]);
+    // Read as log2 values: 2^v of each, then times a matrix, in the same float operations.
+    // On a table whose values reach past exp2's clamps at +-126 (-200 to 400 on the third
+    // channel), and on one whose values all lie within them, which the row reads unclamped.
+    for (double third_scale : {100.0, 20.0}) {
+        const Table3D log2_values({-2, -2, -2}, {4, 4, 4}, 9, 0, [&](const int*, const double* v, double* out) {
+            out[0] = v[0] - v[1];
+            out[1] = 0.5 * v[2];
+            out[2] = third_scale * v[0];
+        });
+        INFO("third channel x " << third_scale);
+        table = log2_values;
+        table.apply_row(in_rows, out_rows, n);
+        const float matrix[9] = {0.5f, -0.25f, 2.0f, 1.5f, 0.75f, -1.0f, 0.125f, 3.0f, 0.0f};
+        std::vector<float> linear[3], mixed[3];
+        for (int c = 0; c < 3; ++c) linear[c].resize(n), mixed[c].resize(n);
+        float* linear_rows[3] = {linear[0].data(), linear[1].data(), linear[2].data()};
+        float* mixed_rows[3] = {mixed[0].data(), mixed[1].data(), mixed[2].data()};
+        table.apply_row_exp2(in_rows, linear_rows, n);
+        table.apply_row_exp2(in_rows, mixed_rows, n, matrix);
+        for (int i = 0; i < n; ++i) {
+            float v[3];
+            for (int c = 0; c < 3; ++c) {
+                v[c] = fast_exp2(results[c][i]);
+                REQUIRE(linear[c][i] == v[c]);
+            }
+            for (int c = 0; c < 3; ++c)
+                REQUIRE(mixed[c][i] == matrix[3 * c] * v[0] + matrix[3 * c + 1] * v[1] + matrix[3 * c + 2] * v[2]);
         }
-        for (int c = 0; c < 3; ++c)
-            REQUIRE(mixed[c][i] == matrix[3 * c] * v[0] + matrix[3 * c + 1] * v[1] + matrix[3 * c + 2] * v[2]);
     }
 }
 
