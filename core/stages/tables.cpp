@@ -141,7 +141,7 @@ __attribute__((always_inline)) inline U lane_everywhere(const U& v, std::index_s
 // Whether any lane of v is `bound` or more: the comparison's lanes (all ones where so) read
 // by the sign bits of each 16 bytes (SSE's movmskps, which every instruction set here has).
 // (Was: the lanes ORed by halving shuffles, then compared: a longer chain before the branch
-// that the lookups wait on; the H&D lookups 13-17 % faster so with AVX2 on a Zen 3, 4-8 %
+// that the lookups wait on; the H&D lookups 9-18 % faster so with AVX2 on a Zen 3, 3-8 %
 // on a Xeon, the same with its AVX-512.)
 template <typename U>
 __attribute__((always_inline)) inline bool any_lane_at_least(const U& v, uint32_t bound) {
@@ -417,7 +417,7 @@ __attribute__((always_inline)) inline void exp2_times(const float* matrix, float
 
 // exp2_times at points begin ... end - 1: vectors of V's lanes, then one at a time.
 template <typename V, typename I, bool kClamp>
-__attribute__((always_inline)) inline void raise(const float* matrix, float* const* out, int begin, int end) {
+__attribute__((always_inline)) inline void exp2_times_points(const float* matrix, float* const* out, int begin, int end) {
     constexpr int lanes = sizeof(V) / sizeof(float);
     int i = begin;
     for (; i + lanes <= end; i += lanes) exp2_times<V, I, kClamp>(matrix, out, i);
@@ -427,7 +427,7 @@ __attribute__((always_inline)) inline void raise(const float* matrix, float* con
 // The table at a row of points, then (exp2) 2^v of each value times `matrix`, a block of
 // points at a time: interpolated, then raised. (In one loop a point's chain of dependent
 // steps, lookups to store, was longer than the processor could overlap with the next
-// point's: the block's two loops 5-10 % faster, the same values.)
+// point's: the block's two loops 3-12 % faster, the same values.)
 struct TetrahedralRow {
     static constexpr int kBlock = 256;  // points: their three rows in and out within L1
     template <int lanes>
@@ -442,9 +442,9 @@ struct TetrahedralRow {
             for (; i + lanes <= end; i += lanes) tetrahedral<V, I>(values, nodes, lo, scale, in, out, i);
             for (; i < end; ++i) tetrahedral<Float1, Int1>(values, nodes, lo, scale, in, out, i);
             if (exp2 && clamp)
-                raise<V, I, true>(matrix, out, begin, end);
+                exp2_times_points<V, I, true>(matrix, out, begin, end);
             else if (exp2)
-                raise<V, I, false>(matrix, out, begin, end);
+                exp2_times_points<V, I, false>(matrix, out, begin, end);
         }
     }
 };
