@@ -184,11 +184,12 @@ __attribute__((always_inline)) inline bool window_values(const LogAxisTable::Sam
     return false;
 }
 
-// The lookup of LogAxisTable at the lanes of v: f in place, and g into *g when asked (V
-// any number of float lanes, U its uint32 lanes): one piece of code for vector blocks and scalar
-// tails. (No vector passes through a call by value: its ABI would differ with and without AVX.)
+// The lookup of LogAxisTable at the lanes of v (V any number of float lanes, U its uint32
+// lanes): one piece of code for vector blocks and scalar tails. (No vector passes through a
+// call by value: its ABI would differ with and without AVX.) In two steps: each lane's sample
+// and its place within it (t from 0 to 1), then the samples' f and g, interpolated.
 template <typename V, typename U>
-__attribute__((always_inline)) inline void log_axis_lookup(const LogAxisTable::Samples& table, V& v, V* g) {
+__attribute__((always_inline)) inline void log_axis_position(const LogAxisTable::Samples& table, V v, U& index, V& t) {
     // Non-negative floats order like their bit patterns; NaN and negatives count as 0.
     v = v > 0.0f ? v : V{} + 0.0f;
     U b;
@@ -196,43 +197,74 @@ __attribute__((always_inline)) inline void log_axis_lookup(const LogAxisTable::S
     b = b < table.first_bits ? U{} + table.first_bits : b;
     b = b > table.last_bits ? U{} + table.last_bits : b;
     b -= table.first_bits;
-    const U index = b >> table.shift;
+    index = b >> table.shift;
     // The position within the sample, converted as signed (it is under 2^23; AVX2 converts
     // only signed integers to floats), times 2^-shift.
     using I = typename simd::Lanes<int(sizeof(U) / sizeof(uint32_t))>::I;
-    const V t = __builtin_convertvector(I(b & ((1u << table.shift) - 1)), V) * bits_float((127u - table.shift) << 23);
+    t = __builtin_convertvector(I(b & ((1u << table.shift) - 1)), V) * bits_float((127u - table.shift) << 23);
+}
+
+template <typename V, typename U>
+__attribute__((always_inline)) inline void log_axis_values(const LogAxisTable::Samples& table, const U& index,
+                                                           const V& t, V& v, V* g) {
     V node[4];  // f_i, g_i, f_i+1, g_i+1
     if (!window_values(table, index, node)) node_values<4>(table.nodes, index * 4u, node);
     v = node[0] + t * (node[2] - node[0]);
     if (g) *g = node[1] + t * (node[3] - node[1]);
 }
 
-// max(floor, f + g noise) at the lanes of v, in place: a density with its grain.
+// Both steps: f in place, and g into *g when asked.
 template <typename V, typename U>
-__attribute__((always_inline)) inline void log_axis_with_noise(const LogAxisTable::Samples& table, const float* noise,
-                                                               float floor, V& v) {
-    V g, n;
-    log_axis_lookup<V, U>(table, v, &g);
+__attribute__((always_inline)) inline void log_axis_lookup(const LogAxisTable::Samples& table, V& v, V* g) {
+    U index;
+    V t;
+    log_axis_position<V, U>(table, v, index, t);
+    log_axis_values<V, U>(table, index, t, v, g);
+}
+
+// max(floor, f + g noise), f in v, in place: a density with its grain.
+template <typename V>
+__attribute__((always_inline)) inline void add_grain(const V& g, const float* noise, float floor, V& v) {
+    V n;
     load(n, noise);
     v = v + g * n;
     v = floor < v ? v : V{} + floor;  // as std::max(floor, v): NaN gives floor
 }
 
+// The lookups with grain of a row, a block of points at a time: each vector's position, then
+// its samples' values and grain, each a loop over the block. (In one loop a vector's chain of
+// dependent steps, from its exposure through the window's check to the store, was longer
+// than the processor overlapped with the next one's: 12-14 % faster with AVX2 on a Zen 3 in
+// most runs, 3-16 % on a Xeon, 11-12 % with its AVX-512; the same values.)
 struct LogAxisNoiseRow {
+    static constexpr int kBlock = 256;  // points
     template <int lanes>
     __attribute__((always_inline)) static void run(LogAxisTable::Samples table, const float* in, const float* noise,
                                                    float floor, float* out, int n) {
         using V = typename simd::Lanes<lanes>::F;
+        using U = typename simd::Lanes<lanes>::U;
         int i = 0;
-        for (; i + lanes <= n; i += lanes) {
-            V v;
-            load(v, in + i);
-            log_axis_with_noise<V, typename simd::Lanes<lanes>::U>(table, noise + i, floor, v);
-            store(out + i, v);
+        while (n - i >= lanes) {
+            const int vectors = std::min(n - i, kBlock) / lanes;
+            U index[kBlock / lanes];
+            V t[kBlock / lanes];
+            for (int k = 0; k < vectors; ++k) {
+                V v;
+                load(v, in + i + k * lanes);
+                log_axis_position<V, U>(table, v, index[k], t[k]);
+            }
+            for (int k = 0; k < vectors; ++k) {
+                V v, g;
+                log_axis_values<V, U>(table, index[k], t[k], v, &g);
+                add_grain(g, noise + i + k * lanes, floor, v);
+                store(out + i + k * lanes, v);
+            }
+            i += vectors * lanes;
         }
         for (; i < n; ++i) {
-            Float1 lane{in[i]};
-            log_axis_with_noise<Float1, Uint1>(table, noise + i, floor, lane);
+            Float1 lane{in[i]}, g;
+            log_axis_lookup<Float1, Uint1>(table, lane, &g);
+            add_grain(g, noise + i, floor, lane);
             out[i] = lane[0];
         }
     }
