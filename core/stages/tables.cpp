@@ -231,66 +231,68 @@ __attribute__((always_inline)) inline void add_grain(const V& g, const float* no
     v = floor < v ? v : V{} + floor;  // as std::max(floor, v): NaN gives floor
 }
 
-// The lookups with grain of a row, a block of points at a time: each vector's position, then
-// its samples' values and grain, each a loop over the block. (In one loop a vector's chain of
-// dependent steps, from its exposure through the window's check to the store, was longer
-// than the processor overlapped with the next one's: 12-14 % faster with AVX2 on a Zen 3 in
-// most runs, 3-16 % on a Xeon, 11-12 % with its AVX-512; the same values.)
-struct LogAxisNoiseRow {
-    static constexpr int kBlock = 256;  // points
-    template <int lanes>
-    __attribute__((always_inline)) static void run(LogAxisTable::Samples table, const float* in, const float* noise,
-                                                   float floor, float* out, int n) {
-        using V = typename simd::Lanes<lanes>::F;
-        using U = typename simd::Lanes<lanes>::U;
-        int i = 0;
-        while (n - i >= lanes) {
-            const int vectors = std::min(n - i, kBlock) / lanes;
-            U index[kBlock / lanes];
-            V t[kBlock / lanes];
-            for (int k = 0; k < vectors; ++k) {
-                V v;
-                load(v, in + i + k * lanes);
-                log_axis_position<V, U>(table, v, index[k], t[k]);
-            }
-            for (int k = 0; k < vectors; ++k) {
-                V v, g;
-                log_axis_values<V, U>(table, index[k], t[k], v, &g);
-                add_grain(g, noise + i + k * lanes, floor, v);
-                store(out + i + k * lanes, v);
-            }
-            i += vectors * lanes;
-        }
-        for (; i < n; ++i) {
-            Float1 lane{in[i]}, g;
-            log_axis_lookup<Float1, Uint1>(table, lane, &g);
-            add_grain(g, noise + i, floor, lane);
-            out[i] = lane[0];
-        }
-    }
-};
+// The points a row's kernels take a block at a time, each of their steps a loop over the
+// block (LogAxisRow, TetrahedralRow): the block's rows in and out stay within L1.
+constexpr int kRowBlock = 256;
 
-// A row of lookups (g_out may be null: f only), in vectors of `lanes`, then one at a time.
+// The lookups of a row, a block of points at a time: each vector's position, then its
+// samples' values, each a loop over the block; finish(i, f, g) then takes the values at
+// points i ... (g computed where with_g). (In one loop a vector's chain of dependent steps,
+// from its exposure through the window's check to the store, was longer than the processor
+// overlapped with the next one's: with grain 12-14 % faster with AVX2 on a Zen 3 in most
+// runs, 3-16 % on a Xeon, 11-12 % with its AVX-512; without grain, as fast as in one loop
+// (0.70 ns a value, Zen 3 AVX2); the same values.)
+template <int lanes, typename Finish>
+__attribute__((always_inline)) inline void log_axis_blocks(const LogAxisTable::Samples& table, const float* in, int n,
+                                                           bool with_g, Finish finish) {
+    using V = typename simd::Lanes<lanes>::F;
+    using U = typename simd::Lanes<lanes>::U;
+    int i = 0;
+    while (n - i >= lanes) {
+        const int vectors = std::min(n - i, kRowBlock) / lanes;
+        U index[kRowBlock / lanes];
+        V t[kRowBlock / lanes];
+        for (int k = 0; k < vectors; ++k) {
+            V v;
+            load(v, in + i + k * lanes);
+            log_axis_position<V, U>(table, v, index[k], t[k]);
+        }
+        for (int k = 0; k < vectors; ++k) {
+            V v, g{};
+            log_axis_values<V, U>(table, index[k], t[k], v, with_g ? &g : nullptr);
+            finish(i + k * lanes, v, g);
+        }
+        i += vectors * lanes;
+    }
+    for (; i < n; ++i) {
+        Float1 lane{in[i]}, g{};
+        log_axis_lookup<Float1, Uint1>(table, lane, with_g ? &g : nullptr);
+        finish(i, lane, g);
+    }
+}
+
+// f at a row's points, and g where g_out is given.
 struct LogAxisRow {
     template <int lanes>
     __attribute__((always_inline)) static void run(LogAxisTable::Samples table, const float* in, float* out,
                                                    float* g_out, int n) {
-        using V = typename simd::Lanes<lanes>::F;
-        using U = typename simd::Lanes<lanes>::U;
-        int i = 0;
-        for (; i + lanes <= n; i += lanes) {
-            V v, g{};
-            load(v, in + i);
-            log_axis_lookup<V, U>(table, v, g_out ? &g : nullptr);
+        log_axis_blocks<lanes>(table, in, n, g_out != nullptr,
+                               [&](int i, const auto& v, const auto& g) __attribute__((always_inline)) {
+                                   store(out + i, v);
+                                   if (g_out) store(g_out + i, g);
+                               });
+    }
+};
+
+// f with grain at a row's points.
+struct LogAxisNoiseRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(LogAxisTable::Samples table, const float* in, const float* noise,
+                                                   float floor, float* out, int n) {
+        log_axis_blocks<lanes>(table, in, n, true, [&](int i, auto v, const auto& g) __attribute__((always_inline)) {
+            add_grain(g, noise + i, floor, v);
             store(out + i, v);
-            if (g_out) store(g_out + i, g);
-        }
-        for (; i < n; ++i) {
-            Float1 lane{in[i]}, g{};
-            log_axis_lookup<Float1, Uint1>(table, lane, g_out ? &g : nullptr);
-            out[i] = lane[0];
-            if (g_out) g_out[i] = g[0];
-        }
+        });
     }
 };
 
@@ -477,6 +479,10 @@ __attribute__((always_inline)) inline void exp2_times_points(const float* matrix
     for (; i < end; ++i) exp2_times<Float1, Int1, kClamp>(matrix, out, i);
 }
 
+// What TetrahedralRow then does with the values: nothing, or 2^v (held within +-kExp2Reach
+// first where a node's value reaches it).
+enum class Exp2 { none, unclamped, clamped };
+
 // The table at a row of points, then (exp2) 2^v of each value times `matrix`, a block of
 // points at a time: each vector's cell and weights, then its corners' sum, then 2^v, each a
 // loop over the block. (In one loop a point's chain of dependent steps, from its coordinates
@@ -484,24 +490,23 @@ __attribute__((always_inline)) inline void exp2_times_points(const float* matrix
 // apart 3-12 % faster, then the weights apart 13-15 % with AVX2 on a Zen 3, 25 % on a Xeon,
 // 11-25 % with its AVX-512; the same values.)
 struct TetrahedralRow {
-    static constexpr int kBlock = 256;  // points: their three rows in and out within L1
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* values, int nodes, const float* lo, const float* scale,
-                                                   bool exp2, bool clamp, const float* matrix, const float* const* in,
+                                                   Exp2 exp2, const float* matrix, const float* const* in,
                                                    float* const* out, int n) {
         using V = typename simd::Lanes<lanes>::F;
         using I = typename simd::Lanes<lanes>::I;
-        for (int begin = 0; begin < n; begin += kBlock) {
-            const int end = std::min(n, begin + kBlock);
+        for (int begin = 0; begin < n; begin += kRowBlock) {
+            const int end = std::min(n, begin + kRowBlock);
             const int vectors = (end - begin) / lanes;
-            I corner[kBlock / lanes][3];
-            V w[kBlock / lanes][4];
+            I corner[kRowBlock / lanes][3];
+            V w[kRowBlock / lanes][4];
             for (int k = 0; k < vectors; ++k) cell_weights<V, I>(nodes, lo, scale, in, begin + k * lanes, corner[k], w[k]);
             for (int k = 0; k < vectors; ++k) corner_sums<V, I>(values, nodes, corner[k], w[k], out, begin + k * lanes);
             for (int i = begin + vectors * lanes; i < end; ++i) tetrahedral<Float1, Int1>(values, nodes, lo, scale, in, out, i);
-            if (exp2 && clamp)
+            if (exp2 == Exp2::clamped)
                 exp2_times_points<V, I, true>(matrix, out, begin, end);
-            else if (exp2)
+            else if (exp2 == Exp2::unclamped)
                 exp2_times_points<V, I, false>(matrix, out, begin, end);
         }
     }
@@ -516,13 +521,13 @@ void Table3D::operator()(const float* in, float* out) const {
 }
 
 void Table3D::apply_row(const float* const* in, float* const* out, int n) const {
-    simd::dispatch<TetrahedralRow>(&values_[0][0], nodes_, lo_.data(), scale_.data(), false, false, (const float*)nullptr,
-                                   in, out, n);
+    simd::dispatch<TetrahedralRow>(&values_[0][0], nodes_, lo_.data(), scale_.data(), Exp2::none,
+                                   (const float*)nullptr, in, out, n);
 }
 
 void Table3D::apply_row_exp2(const float* const* in, float* const* out, int n, const float* matrix) const {
-    simd::dispatch<TetrahedralRow>(&values_[0][0], nodes_, lo_.data(), scale_.data(), true, exp2_clamps_, matrix, in,
-                                   out, n);
+    simd::dispatch<TetrahedralRow>(&values_[0][0], nodes_, lo_.data(), scale_.data(),
+                                   exp2_clamps_ ? Exp2::clamped : Exp2::unclamped, matrix, in, out, n);
 }
 
 }  // namespace darkroom
