@@ -232,7 +232,7 @@ __attribute__((always_inline)) inline void add_grain(const V& g, const float* no
 }
 
 // The points a row's kernels take a block at a time, each of their steps a loop over the
-// block (LogAxisRow, TetrahedralRow): the block's rows in and out stay within L1.
+// block (the H&D lookups' log_axis_blocks, TetrahedralRow): its rows in and out stay within L1.
 constexpr int kRowBlock = 256;
 
 // The lookups of a row, a block of points at a time: each vector's position, then its
