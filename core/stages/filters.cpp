@@ -132,7 +132,8 @@ __attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int
                                                                        centre_rows);
         tap_blocks<1, 1, outputs, accumulate, kCentred, kTaps>(tap, n, pairs, x, width, out, row_of, centre, centre_rows);
     };
-    // The fast tiers' kernels: the MTF's 7 taps (radius 3; preview's 5), the grain's 3.
+    // The fast tiers' kernels: the MTF's 5 taps where tapered (up to 7 where not; preview's 3
+    // to 5), the grain's 3.
     if (symmetric && n == 7)
         run(std::integral_constant<int, 7>());
     else if (symmetric && n == 5)

@@ -210,25 +210,28 @@ void make_separable(ScatterKernel& kernel, const ScatterDesign& design) {
 }
 
 // Tapers the kernel to zero at max_radius (a raised cosine from half of it) and
-// renormalises it to unit sum.
+// renormalises it to unit sum. The taper is zero on the whole ring at max_radius (each of
+// its taps is at least max_radius from the centre), so the tapered kernel's taps reach
+// max_radius - 1: its radius, the ring of zeros not kept (a pair of zero taps in each pass
+// of each term would cost two loads and a multiply-add a pixel and add nothing).
 void taper(ScatterKernel& kernel, int max_radius) {
-    const int r = kernel.radius, side = 2 * r + 1, side_new = 2 * max_radius + 1;
+    const int r = kernel.radius, side = 2 * r + 1, r_new = max_radius - 1, side_new = 2 * r_new + 1;
     std::vector<float> taps(side_new * side_new);
     double sum = 0;
-    for (int y = -max_radius; y <= max_radius; ++y)
-        for (int x = -max_radius; x <= max_radius; ++x) {
+    for (int y = -r_new; y <= r_new; ++y)
+        for (int x = -r_new; x <= r_new; ++x) {
             double rho = std::hypot(x, y) / max_radius, weight = 1.0;
             if (rho >= 1.0)
                 weight = 0.0;
             else if (rho > 0.5)
                 weight = 0.5 * (1.0 + std::cos(M_PI * (rho - 0.5) / 0.5));
             double v = weight * kernel.taps[(y + r) * side + (x + r)];
-            taps[(y + max_radius) * side_new + (x + max_radius)] = float(v);
+            taps[(y + r_new) * side_new + (x + r_new)] = float(v);
             sum += v;
         }
     for (float& v : taps) v = float(v / sum);
     kernel.taps = std::move(taps);
-    kernel.radius = max_radius;
+    kernel.radius = r_new;
 }
 
 }  // namespace

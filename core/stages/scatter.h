@@ -48,8 +48,9 @@ double mtf_deviation_to_nyquist(const Curve& mtf, double pixel_pitch_um);
 // How a kernel is designed (core/quality.h picks one per tier).
 struct ScatterDesign {
     // 0: the PSF's own extent (until its tail holds under 1e-3 of its weight); otherwise
-    // the PSF is tapered to zero at this radius (a raised cosine over its outer half) and
-    // renormalised: a compact approximation, measured by `darkroom bench`.
+    // a PSF that reaches further is tapered to zero at this radius (a raised cosine over its
+    // outer half), its taps then reaching this radius less one, and renormalised: a compact
+    // approximation, measured by `darkroom bench`. At least 2 (at 1 it would be a delta).
     int max_radius_px = 0;
     // Split into separable terms within this fraction of the largest tap; 0: never (the
     // direct 2D sum).

@@ -131,18 +131,20 @@ static double separable_residual(const ScatterKernel& k) {
 TEST_CASE("a design limited to k separable terms keeps the k largest, where the tolerance alone would sum directly",
           "[scatter]") {
     Curve mtf = make_curve({0, 5, 10, 20, 40, 60, 80}, {1, 1, 1, 0.95, 0.75, 0.55, 0.4}, "mtf");
-    // A tolerance no 7x7 kernel's 3 cheap terms reach: the direct sum.
+    // A tolerance no 5x5 kernel's 2 cheap terms reach (tapered to zero at 3 px, the taps reach
+    // 2 px): the direct sum.
     CHECK(design_scatter_kernel(mtf, 6.0, {3, 1e-12}).separable.empty());
     const ScatterKernel one = design_scatter_kernel(mtf, 6.0, {3, 1e-12, 1});
     const ScatterKernel two = design_scatter_kernel(mtf, 6.0, {3, 1e-12, 2});
     REQUIRE(one.separable.size() == 1);
     REQUIRE(two.separable.size() == 2);
+    REQUIRE(one.radius == 2);
     // The same first (largest) term, up to the unit-gain scale.
-    const double scale = two.separable[0][3] / one.separable[0][3];
-    for (int i = 0; i < 7; ++i) CHECK(two.separable[0][i] == Approx(scale * one.separable[0][i]).margin(1e-7));
-    // Each term takes off the residual's largest part; at most 3 terms are cheaper than 49 taps.
+    const double scale = two.separable[0][2] / one.separable[0][2];
+    for (int i = 0; i < 5; ++i) CHECK(two.separable[0][i] == Approx(scale * one.separable[0][i]).margin(1e-7));
+    // Each term takes off the residual's largest part; at most 2 terms are cheaper than 25 taps.
     CHECK(separable_residual(two) < 0.5 * separable_residual(one));
-    CHECK(design_scatter_kernel(mtf, 6.0, {3, 1e-12, 4}).separable.empty());
+    CHECK(design_scatter_kernel(mtf, 6.0, {3, 1e-12, 3}).separable.empty());
     for (const ScatterKernel& k : {one, two}) {
         double gain = 0;
         for (size_t t = 0; t < k.separable.size(); ++t) {
@@ -155,15 +157,16 @@ TEST_CASE("a design limited to k separable terms keeps the k largest, where the 
 }
 
 TEST_CASE("a compact PSF as a centre delta and one term: as close as two terms, and applied as designed", "[scatter]") {
-    // Vision3-like at a 4K frame's pitch, tapered to 3 px as the fast tier designs it: a sharp
-    // centre (0.7 of the weight) over a smooth spread.
+    // Vision3-like at a 4K frame's pitch, tapered to zero at 3 px as the fast tier designs it: a
+    // sharp centre (0.7 of the weight) over a smooth spread.
     const Curve mtf = make_curve({0, 5, 10, 20, 40, 60, 80}, {1, 1, 1, 0.95, 0.75, 0.55, 0.4}, "mtf");
     const ScatterKernel two = design_scatter_kernel(mtf, 6.0, {3, 1e-3, 2});
     const ScatterKernel centred = design_scatter_kernel(mtf, 6.0, {3, 1e-3, 2, true});
     REQUIRE(two.separable.size() == 2);
     REQUIRE(centred.separable.size() == 1);
     CHECK(centred.centre > 0.3f);
-    CHECK(centred.centre < centred.taps[size_t(3) * 7 + 3]);
+    const int side = 2 * centred.radius + 1;
+    CHECK(centred.centre < centred.taps[size_t(centred.radius) * side + centred.radius]);
     // Every tap within the tolerance, as the two terms are; the gain exactly 1.
     double largest = 0, gain = 0, worst = 0, worst_two = 0;
     const std::vector<double> applied = centred.applied_taps(), applied_two = two.applied_taps();
@@ -192,6 +195,35 @@ TEST_CASE("a compact PSF as a centre delta and one term: as close as two terms, 
         Plane again(frame);
         scatter(src, again, centred, frame, threads);
         CHECK(again.pixels == streamed.pixels);
+    }
+}
+
+TEST_CASE("a PSF tapered to zero at R px keeps its taps to R - 1 px, where they end, and its response", "[scatter]") {
+    // A wide PSF (a soft MTF at a 4K frame's pitch) for the fast and preview tiers' radii.
+    const Curve mtf = make_curve({0, 5, 10, 20, 40, 60, 80}, {1, 0.95, 0.85, 0.6, 0.3, 0.15, 0.08}, "soft");
+    const ScatterKernel whole = design_scatter_kernel(mtf, 6.0, {0, 0.0});
+    for (int max_radius : {2, 3}) {
+        INFO("tapered to zero at " << max_radius << " px");
+        REQUIRE(whole.radius > max_radius);
+        const ScatterKernel k = design_scatter_kernel(mtf, 6.0, {max_radius, 0.0});
+        // The ring at R - 1 carries weight (the ring at R, all zero, is not kept).
+        REQUIRE(k.radius == max_radius - 1);
+        const int side = 2 * k.radius + 1;
+        double ring = 0;
+        for (int i = 0; i < side; ++i) ring += std::abs(k.taps[size_t(i)]) + std::abs(k.taps[size_t(i) * side]);
+        CHECK(ring > 1e-4);
+        // The taper's definition: the PSF's taps times the raised cosine from R / 2 to R, to unit sum.
+        const int r = whole.radius, whole_side = 2 * r + 1;
+        std::vector<double> tapered;
+        double sum = 0;
+        for (int y = -k.radius; y <= k.radius; ++y)
+            for (int x = -k.radius; x <= k.radius; ++x) {
+                const double rho = std::hypot(x, y) / max_radius;
+                const double weight = rho <= 0.5 ? 1.0 : 0.5 * (1.0 + std::cos(M_PI * (rho - 0.5) / 0.5));
+                tapered.push_back(weight * whole.taps[size_t(y + r) * whole_side + (x + r)]);
+                sum += tapered.back();
+            }
+        for (size_t i = 0; i < tapered.size(); ++i) CHECK(k.taps[i] == Approx(tapered[i] / sum).margin(1e-6));
     }
 }
 
