@@ -97,9 +97,11 @@ CoarseHalationStream::CoarseHalationStream(const std::vector<const HalationKerne
     read_x0_ = std::min(std::max(out.x0, frame.x0), inside0_), read_x1_ = std::max(std::min(out.x1, frame.x1), inside1_);
     // The columns' blocks and weights of the interpolation along x (the same on every row).
     for (int x = out.x0; x < out.x1; ++x) {
-        const int i = floor_div(2 * x + 1 - d_, 2 * d_);
+        const int i = floor_div(2 * x + 1 - d_, 2 * d_), column = x - out.x0;
         tx_.push_back(float(2 * x + 1 - d_ - 2 * d_ * i) / float(2 * d_));
-        column0_.push_back(i - blurred_window_.x0);
+        if (column_runs_.empty() || column_runs_.back().block != i - blurred_window_.x0)
+            column_runs_.push_back({column, column, i - blurred_window_.x0});
+        column_runs_.back().end = column + 1;
     }
     std::vector<SeparableFilter> filters;
     for (size_t p : halated_) {
@@ -179,10 +181,11 @@ void CoarseHalationStream::interpolate(int j) {
     if (across_row_[j & 1] == j) return;
     const float* const* blurred_rows = blur_->row(j);
     for (size_t h = 0; h < halated_.size(); ++h) {
-        std::vector<float>& row = planes_[halated_[h]].across[j & 1];
-        for (size_t i = 0; i < row.size(); ++i) {
-            const float* b = blurred_rows[h] + column0_[i];
-            row[i] = b[0] + tx_[i] * (b[1] - b[0]);
+        float* row = planes_[halated_[h]].across[j & 1].data();
+        // A run's two coarse values once, then a loop without indirection (which vectorises).
+        for (const ColumnRun& run : column_runs_) {
+            const float b0 = blurred_rows[h][run.block], step = blurred_rows[h][run.block + 1] - b0;
+            for (int i = run.begin; i < run.end; ++i) row[i] = b0 + tx_[size_t(i)] * step;
         }
     }
     across_row_[j & 1] = j;

@@ -69,8 +69,14 @@ private:
     int d_ = 0;                    // their decimation
     Window means_window_, blurred_window_;
     int inside0_ = 0, inside1_ = 0;  // the frame's columns the block means read
+    // Interpolation along x: out's column i (from out.x0) lies tx_[i] of the way from a coarse
+    // column to the next; the runs of columns between the same two (d columns each, within).
+    struct ColumnRun {
+        int begin, end;  // out's columns [begin, end), from out.x0
+        int block;       // the first coarse column, from blurred_window_.x0
+    };
     std::vector<float> tx_;
-    std::vector<int> column0_;
+    std::vector<ColumnRun> column_runs_;
     std::unique_ptr<SeparableStream> blur_;
     int across_row_[2] = {INT32_MIN, INT32_MIN};
     int read_x0_ = 0, read_x1_ = 0, slots_ = 0;
