@@ -219,7 +219,9 @@ TEST_CASE("a PSF tapered to zero at R px keeps its taps to R - 1 px, where they 
         for (int y = -k.radius; y <= k.radius; ++y)
             for (int x = -k.radius; x <= k.radius; ++x) {
                 const double rho = std::hypot(x, y) / max_radius;
-                const double weight = rho <= 0.5 ? 1.0 : 0.5 * (1.0 + std::cos(M_PI * (rho - 0.5) / 0.5));
+                const double weight = rho >= 1.0   ? 0.0
+                                      : rho <= 0.5 ? 1.0
+                                                   : 0.5 * (1.0 + std::cos(M_PI * (rho - 0.5) / 0.5));
                 tapered.push_back(weight * whole.taps[size_t(y + r) * whole_side + (x + r)]);
                 sum += tapered.back();
             }
