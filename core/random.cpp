@@ -39,14 +39,13 @@ struct HashedNoiseRun {
     template <int lanes>
     __attribute__((always_inline)) static void run(uint32_t row_hash, int x0, int n, float* out) {
         using U = typename simd::Lanes<lanes>::U;
+        auto column_hash = [x0](int i) { return (uint32_t(x0) + uint32_t(i)) * kNoiseColumnStep; };
         U columns;
-        for (int k = 0; k < lanes; ++k) columns[k] = (uint32_t(x0) + uint32_t(k)) * kNoiseColumnStep;
+        for (int k = 0; k < lanes; ++k) columns[k] = column_hash(k);
         int i = 0;
         for (; i + lanes <= n; i += lanes, columns += uint32_t(lanes) * kNoiseColumnStep)
             hashed_noise_lanes<U, typename simd::Lanes<lanes>::F>(row_hash, columns, out + i);
-        for (; i < n; ++i)
-            hashed_noise_lanes<simd::Uint1, simd::Float1>(row_hash, simd::Uint1{(uint32_t(x0) + uint32_t(i)) * kNoiseColumnStep},
-                                                          out + i);
+        for (; i < n; ++i) hashed_noise_lanes<simd::Uint1, simd::Float1>(row_hash, simd::Uint1{column_hash(i)}, out + i);
     }
 };
 

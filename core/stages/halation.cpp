@@ -97,10 +97,9 @@ CoarseHalationStream::CoarseHalationStream(const std::vector<const HalationKerne
     read_x0_ = std::min(std::max(out.x0, frame.x0), inside0_), read_x1_ = std::max(std::min(out.x1, frame.x1), inside1_);
     // The columns' blocks and weights of the interpolation along x (the same on every row).
     for (int x = out.x0; x < out.x1; ++x) {
-        const int i = floor_div(2 * x + 1 - d_, 2 * d_), column = x - out.x0;
+        const int i = floor_div(2 * x + 1 - d_, 2 * d_), column = x - out.x0, block = i - blurred_window_.x0;
         tx_.push_back(float(2 * x + 1 - d_ - 2 * d_ * i) / float(2 * d_));
-        if (column_runs_.empty() || column_runs_.back().block != i - blurred_window_.x0)
-            column_runs_.push_back({column, column, i - blurred_window_.x0});
+        if (column_runs_.empty() || column_runs_.back().block != block) column_runs_.push_back({column, column, block});
         column_runs_.back().end = column + 1;
     }
     std::vector<SeparableFilter> filters;
