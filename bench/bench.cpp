@@ -88,12 +88,22 @@ struct Timing {
     Image& out;
 };
 // The copy pass of the scene into `out`, `per_round` times at the start of each round: its
-// fastest after the warm-up round and how many that was.
+// times after the warm-up round.
 struct CopyInTurn {
     Image& out;
     int per_round = 0;
-    double seconds = INFINITY;
-    int runs = 0;
+    std::vector<double> seconds;
+    // Into the report: the fastest, the median (how far the machine's memory speed moved
+    // between moments) and how many runs.
+    void report(BenchReport& r) const {
+        std::vector<double> sorted = seconds;
+        std::sort(sorted.begin(), sorted.end());
+        const size_t n = sorted.size();
+        r.copy_runs = int(n);
+        r.copy_seconds = sorted.front();
+        r.copy_median_seconds = n % 2 ? sorted[n / 2] : (sorted[n / 2 - 1] + sorted[n / 2]) / 2;
+        r.copy_bytes = 2.0 * double(r.width) * r.height * 3 * sizeof(float);
+    }
 };
 std::vector<Timed> time_in_turn(const std::vector<Timing>& timings, const Image& scene, int runs, int threads,
                                 CopyInTurn* copy = nullptr) {
@@ -101,7 +111,7 @@ std::vector<Timed> time_in_turn(const std::vector<Timing>& timings, const Image&
     for (int r = 0; r <= runs; ++r) {
         for (int k = 0; copy && k < copy->per_round; ++k) {
             const double s = copy_pass_seconds(scene.view(), copy->out.view(), threads);
-            if (r > 0) copy->seconds = std::min(copy->seconds, s), ++copy->runs;
+            if (r > 0) copy->seconds.push_back(s);
         }
         for (size_t i = 0; i < timings.size(); ++i) {
             StageTimes times;
@@ -263,9 +273,9 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
     r.copy_in_turn_with_fast = std::find(tiers.begin(), tiers.end(), Quality::fast) != tiers.end();
     if (!r.copy_in_turn_with_fast) {
         say("copy pass");
-        CopyInTurn copy{copied, kCopyRuns};
+        CopyInTurn copy{copied, kCopyRuns, {}};
         time_in_turn({}, scene, 1, o.threads, &copy);
-        r.copy_seconds = copy.seconds, r.copy_runs = copy.runs;
+        copy.report(r);
     }
 
     // Per tier, the sample windows' print and density (grain off) and the measurements.
@@ -305,11 +315,11 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
             const bool with_copy = q == Quality::fast;
             say(tr.name + ": whole frame, " + std::to_string(o.runs + 1) + " runs" +
                 (with_copy ? ", the copy pass in turn" : ""));
-            CopyInTurn copy{copied, (kCopyRuns + o.runs - 1) / o.runs};  // (kCopyRuns or more in all)
+            CopyInTurn copy{copied, (kCopyRuns + o.runs - 1) / o.runs, {}};  // (kCopyRuns or more in all)
             Timed timed = time_frame(plan, scene, out, o.runs, o.threads, with_copy ? &copy : nullptr);
             tr.seconds = timed.seconds;
             tr.stages = timed.stages;
-            if (with_copy) r.copy_seconds = copy.seconds, r.copy_runs = copy.runs;
+            if (with_copy) copy.report(r);
         }
 
         say(tr.name + ": errors on the sample windows, MTF, grain wedge" + (o.print_grain ? ", printed grain wedge" : ""));

@@ -133,6 +133,8 @@ struct BenchReport {
     int runs = 0;
     int copy_runs = 0;  // the copy pass: fastest of this many after a warm-up
     double copy_seconds = 0;
+    double copy_median_seconds = 0;  // (the machine's memory speed moves: the ratios use the fastest)
+    double copy_bytes = 0;           // read and written by one copy pass
     bool copy_in_turn_with_fast = false;  // timed in the rounds of the fast tier's frame runs
     std::vector<Window> sample_windows;
     double pixel_pitch_um = 0;

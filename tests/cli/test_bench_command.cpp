@@ -24,6 +24,10 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
     // Four tiers, fast among them: the copy pass is timed in turn with its frame runs.
     CHECK(doc["copy_in_turn_with_fast"] == true);
     CHECK(doc["copy_runs"].get<int>() >= 20);
+    // The fastest copy pass is at most their median, and it reads and writes the frame's float RGB once.
+    CHECK(doc["copy_seconds"].get<double>() <= doc["copy_median_seconds"].get<double>());
+    CHECK(doc["copy_bytes"].get<double>() ==
+          2.0 * doc["frame"]["width"].get<double>() * doc["frame"]["height"].get<double>() * 3 * sizeof(float));
     REQUIRE(doc["tiers"].size() == 4);
     CHECK(doc["tiers"][0]["name"] == "reference");
     CHECK(doc["tiers"][0]["extrapolated_from_sample_windows"] == true);
