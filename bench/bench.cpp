@@ -102,7 +102,6 @@ struct CopyInTurn {
         r.copy_runs = int(n);
         r.copy_seconds = sorted.front();
         r.copy_median_seconds = n % 2 ? sorted[n / 2] : (sorted[n / 2 - 1] + sorted[n / 2]) / 2;
-        r.copy_bytes = 2.0 * double(r.width) * r.height * 3 * sizeof(float);
     }
 };
 std::vector<Timed> time_in_turn(const std::vector<Timing>& timings, const Image& scene, int runs, int threads,

@@ -134,7 +134,8 @@ struct BenchReport {
     int copy_runs = 0;  // the copy pass: fastest of this many after a warm-up
     double copy_seconds = 0;
     double copy_median_seconds = 0;  // (the machine's memory speed moves: the ratios use the fastest)
-    double copy_bytes = 0;           // read and written by one copy pass
+    // What one copy pass reads and writes: the frame's float RGB, once each.
+    double copy_bytes() const { return 2.0 * double(width) * height * 3 * sizeof(float); }
     bool copy_in_turn_with_fast = false;  // timed in the rounds of the fast tier's frame runs
     std::vector<Window> sample_windows;
     double pixel_pitch_um = 0;

@@ -64,7 +64,7 @@ nlohmann::json report_json(const bench::BenchReport& r) {
         {"copy_seconds", r.copy_seconds},
         {"copy_runs", r.copy_runs},
         {"copy_median_seconds", r.copy_median_seconds},
-        {"copy_bytes", r.copy_bytes},
+        {"copy_bytes", r.copy_bytes()},
         {"copy_in_turn_with_fast", r.copy_in_turn_with_fast},
         {"sample_windows", windows},
         {"mtf_cycles_per_px", r.mtf_cycles_per_px},
@@ -160,7 +160,7 @@ void print_report(const bench::BenchReport& r) {
     std::printf("copy pass (float RGB, same threads, parallel over rows): %.2f ms (%.1f GB/s read and written), "
                 "fastest of %d%s; their median %.2f ms. Develop times: fastest of %d runs after 1 warm-up, in ms "
                 "and x the fastest copy pass\n\n",
-                copy_s * 1e3, r.copy_bytes / copy_s * 1e-9, r.copy_runs,
+                copy_s * 1e3, r.copy_bytes() / copy_s * 1e-9, r.copy_runs,
                 r.copy_in_turn_with_fast ? ", timed in turn with the fast tier's frame" : "", r.copy_median_seconds * 1e3,
                 r.runs);
 
