@@ -287,8 +287,8 @@ void print_densities(const PrintExposure& enlarger, const Stock& paper, const do
     develop_paper(paper, h, paper_density);
 }
 
-// The one print table of a colour negative on colour paper: the negative's densities -> log2
-// XYZ of the print. A plan compiled again for another exposure, grain, MTF or halation (a
+// The one print table of a colour negative on colour paper: the negative's densities -> the
+// print's linear Rec.709, the high tier's print at each node. A plan compiled again for another exposure, grain, MTF or halation (a
 // slider dragged in a host) prints the same: its table, about a tenth of a second of spectral
 // sums on two cores, is taken from the last few built, found by the bytes of everything it reads.
 std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock& paper, const PrintExposure& enlarger,
@@ -325,16 +325,15 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
             transmittance[a].push_back(
                 enlarger.layer_transmittance(a, Table3D::node_coordinate(lo[a], hi[a], nodes, i)));
     const PrintView view(paper);
-    auto table = std::make_shared<const Table3D>(lo, hi, nodes, threads, [&](const int* node, const double* d, double* log2_xyz) {
+    auto table = std::make_shared<const Table3D>(lo, hi, nodes, threads, [&](const int* node, const double* d, double* rgb) {
         double h[3], paper_density[3];
         if (enlarger.spectral())
             enlarger.expose({&transmittance[0][node[0]], &transmittance[1][node[1]], &transmittance[2][node[2]]}, h);
         else
             enlarger.expose(d, h);
         develop_paper(paper, h, paper_density);
-        Xyz xyz = view.xyz(paper_density);
-        for (int c = 0; c < 3; ++c) log2_xyz[c] = std::log2(std::max(xyz[c], 1e-30));
-    });
+        view.rgb(paper_density, rgb);
+    }, Table3D::Encoding::cube_root);
     std::lock_guard<std::mutex> lock(mutex);  // (another compile may have built it meanwhile: either serves)
     if (recent.size() == kKept) recent.erase(recent.begin());
     recent.emplace_back(std::move(key), table);
@@ -698,7 +697,7 @@ std::vector<Plane> Plan::print(std::vector<Plane> negative, const Window& out, i
         }
         StageTimer timer(times, "print table");
         return per_row(negative, out, 3, threads, [&](const float* const* d, float* const* rgb, int width) {
-            xyz_table_to_rgb(*print_table_, d, rgb, width);
+            print_table_->apply_row(d, rgb, width);
         });
     }
     const PrintExposure& enlarger = *print_;

@@ -181,7 +181,7 @@ private:
     MaterialStages film_stages_, paper_stages_;
     std::optional<PrintExposure> print_;     // set when the output is a print
     // The fast tiers' print of a colour negative on colour paper: the negative's densities
-    // -> log2 XYZ of the print (QualityTier::print_table_nodes, stages/tables.h). Shared by
+    // -> the print's linear Rec.709 (QualityTier::print_table_nodes, stages/tables.h). Shared by
     // the copies of a plan (one per frame and image window) and by plans whose print is the
     // same (develop.cpp, shared_print_table).
     std::shared_ptr<const Table3D> print_table_;

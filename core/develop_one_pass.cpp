@@ -212,7 +212,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         for (int y = band_begin; y < band_end; ++y) {
             float* const* spread = paper_scatter.row(y);
             clock.mark(paper.stage);
-            xyz_table_to_rgb(*print_table_, spread, result.data(), out_window.width());
+            print_table_->apply_row(spread, result.data(), out_window.width());
             clock.mark("print table");
             write_row(result.data(), 3, in, out, y, out_window.x0, out_window.width());
             clock.mark("write");

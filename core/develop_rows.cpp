@@ -273,16 +273,6 @@ void convert_row(OutputMode output, double d_min, float* row, int width) {
     }
 }
 
-void xyz_table_to_rgb(const Table3D& table, const float* const* d, float* const* rgb, int width) {
-    static const std::array<float, 9> matrix = [] {
-        const Matrix3& m = print_xyz_to_rgb();
-        std::array<float, 9> f;
-        for (int i = 0; i < 9; ++i) f[size_t(i)] = float(m[i / 3][i % 3]);
-        return f;
-    }();
-    table.apply_row_exp2(d, rgb, width, matrix.data());
-}
-
 void write_row(const float* const* result, size_t planes, const ConstImageView& in, const ImageView& out, int y, int x0,
                int width) {
     const int alpha = colour_channel_count(in);  // the channel after the colour

@@ -8,7 +8,6 @@
 
 #include "core/develop.h"
 #include "core/image.h"
-#include "core/stages/tables.h"
 
 namespace darkroom {
 
@@ -44,10 +43,6 @@ private:
 // A row of developed densities as `output` writes them: the negative's transmittance 10^-D,
 // the scan's code values (d_min the layer's base + fog), or (density, print) unchanged.
 void convert_row(OutputMode output, double d_min, float* row, int width);
-
-// Print densities (or, through the one print table, the negative's) -> linear Rec.709
-// through a table of log2 XYZ, for one row.
-void xyz_table_to_rgb(const Table3D& table, const float* const* d, float* const* rgb, int width);
 
 // Row y of the result into channels 0-2 of `out` from x0 on (a single plane serves all
 // three), and the input's alpha (the channel after its colour) where both have one.

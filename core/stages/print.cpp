@@ -192,41 +192,4 @@ void PrintView::rgb(const double* paper_density, double* rgb) const {
     for (int k = 0; k < 3; ++k) rgb[k] = out[k];
 }
 
-Xyz PrintView::xyz(const double* paper_density) const {
-    static const Spectrum d65 = illuminant_d65();
-    return reflectance_to_xyz(reflectance(paper_density), d65);
-}
-
-namespace {
-
-Matrix3 inverse(const Matrix3& a) {
-    Matrix3 c;  // cofactors, transposed
-    for (int r = 0; r < 3; ++r)
-        for (int k = 0; k < 3; ++k)
-            c[k][r] = a[(r + 1) % 3][(k + 1) % 3] * a[(r + 2) % 3][(k + 2) % 3] -
-                      a[(r + 1) % 3][(k + 2) % 3] * a[(r + 2) % 3][(k + 1) % 3];
-    double det = a[0][0] * c[0][0] + a[0][1] * c[1][0] + a[0][2] * c[2][0];
-    for (auto& row : c)
-        for (double& v : row) v /= det;
-    return c;
-}
-
-}  // namespace
-
-// Both views are linear in the reflectance, so the matrix follows from any three
-// reflectances with independent XYZ: the RGB basis spectra's Rec.709 (the identity)
-// times the inverse of their XYZ.
-const Matrix3& print_xyz_to_rgb() {
-    static const Matrix3 m = [] {
-        const auto& basis = rgb_basis_spectra();
-        Matrix3 xyz{};  // column c: XYZ of basis c
-        for (int c = 0; c < 3; ++c) {
-            Xyz v = reflectance_to_xyz(basis[c], illuminant_d65());
-            for (int r = 0; r < 3; ++r) xyz[r][c] = v[r];
-        }
-        return inverse(xyz);
-    }();
-    return m;
-}
-
 }  // namespace darkroom

@@ -84,15 +84,11 @@ public:
     explicit PrintView(const Stock& paper);
     // Linear Rec.709 (a perfect white is (1, 1, 1)). Per pixel.
     void rgb(const double* paper_density, double* rgb) const;
-    // CIE XYZ (always positive where the print reflects any light); print_xyz_to_rgb()
-    // takes it to rgb(): the fast tiers tabulate log XYZ.
-    Xyz xyz(const double* paper_density) const;
 
 private:
     Spectrum reflectance(const double* paper_density) const;
     const Stock* paper_;
     std::array<double, 3> d_min_{};
 };
-const Matrix3& print_xyz_to_rgb();
 
 }  // namespace darkroom

@@ -316,46 +316,9 @@ void LogAxisTable::apply_row_with_noise(const float* in, const float* noise, flo
     simd::dispatch<LogAxisNoiseRow>(samples(), in, noise, floor, out, n);
 }
 
-namespace {
-
-// 2^x at the lanes of x, in place (V any number of float lanes, I its int32 lanes): one
-// piece of code for fast_exp2 and the 3D tables' rows. x = n + f, n the nearest integer and
-// |f| <= 1/2: 2^n from the exponent bits, 2^f from a degree-5 polynomial fitted for the least
-// largest relative error on [-1/2, 1/2] (Lawson's iteration; 2.3e-7 evaluated in float).
-template <typename V, typename I, bool kClamp = true>
-__attribute__((always_inline)) inline void exp2_in_place(V& x) {
-    if constexpr (kClamp) {
-        x = x < -kExp2Reach ? V{} - kExp2Reach : x;
-        x = x > kExp2Reach ? V{} + kExp2Reach : x;
-    }
-    // Adding 1.5 * 2^23 rounds x to an integer (to even at ties), which the sum's low
-    // mantissa bits then hold: its bit pattern is kRoundBits + n.
-    constexpr float kRound = 12582912.0f;
-    constexpr int32_t kRoundBits = 0x4B400000;
-    const V rounded = x + kRound;
-    const V f = x - (rounded - kRound);
-    const V p = 1.00000012f +
-                f * (0.693146944f + f * (0.240221202f + f * (0.0555071309f + f * (0.00967554096f + f * 0.00132764713f))));
-    I scale_bits;
-    std::memcpy(&scale_bits, &rounded, sizeof scale_bits);
-    scale_bits = (scale_bits - (kRoundBits - 127)) << 23;
-    V scale;
-    std::memcpy(&scale, &scale_bits, sizeof scale);
-    x = p * scale;
-}
-
-}  // namespace
-
-float fast_exp2(float x) {
-    Float1 lane{x};
-    exp2_in_place<Float1, Int1>(lane);
-    return lane[0];
-}
-
-
 Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, int threads,
-                 const Function& f)
-    : nodes_(nodes) {
+                 const Function& f, Encoding encoding)
+    : nodes_(nodes), cubed_(encoding == Encoding::cube_root) {
     for (int a = 0; a < 3; ++a) {
         lo_[a] = float(lo[a]);
         scale_[a] = float(1.0 / ((hi[a] - lo[a]) / (nodes - 1)));  // 1 / the node spacing
@@ -370,13 +333,10 @@ Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& h
                     double in[3], out[3];
                     for (int a = 0; a < 3; ++a) in[a] = node_coordinate(lo[a], hi[a], nodes, node[a]);
                     f(node, in, out);
+                    if (cubed_)
+                        for (double& v : out) v = std::cbrt(v);
                     values_[(size_t(k) * nodes + j) * nodes + i] = {float(out[0]), float(out[1]), float(out[2]), 0.0f};
                 }
-    });
-    // An interpolated value lies between its corners' (to a rounding), so when every node's
-    // does, 2^v of it needs no clamp (kExp2Reach less a margin for that rounding).
-    exp2_clamps_ = !std::all_of(values_.begin(), values_.end(), [](const std::array<float, 4>& v) {
-        return std::all_of(v.begin(), v.begin() + 3, [](float x) { return std::fabs(x) <= kExp2Reach - 1; });
     });
 }
 
@@ -433,8 +393,8 @@ __attribute__((always_inline)) inline void cell_weights(int nodes, const float* 
     w[0] = 1.0f - t_max, w[1] = t_max - t_mid, w[2] = t_mid - t_min, w[3] = t_min;
 }
 
-// Then each lane's four corners' values weighted and summed, into out[c] + i.
-template <typename V, typename I>
+// Then each lane's four corners' values weighted and summed (and cubed, kCubed), into out[c] + i.
+template <typename V, typename I, bool kCubed>
 __attribute__((always_inline)) inline void corner_sums(const float* values, int nodes, const I* corner, const V* w,
                                                        float* const* out, int i) {
     const int diagonal = 4 * (1 + nodes + nodes * nodes);
@@ -443,57 +403,41 @@ __attribute__((always_inline)) inline void corner_sums(const float* values, int 
     node_values<3>(values, corner[1], v_a);
     node_values<3>(values, corner[2], v_ab);
     node_values<3>(values + diagonal, corner[0], v111);
-    for (int c = 0; c < 3; ++c) store(out[c] + i, w[0] * v000[c] + w[1] * v_a[c] + w[2] * v_ab[c] + w[3] * v111[c]);
+    for (int c = 0; c < 3; ++c) {
+        const V v = w[0] * v000[c] + w[1] * v_a[c] + w[2] * v_ab[c] + w[3] * v111[c];
+        store(out[c] + i, kCubed ? v * v * v : v);
+    }
 }
 
 // Both steps.
-template <typename V, typename I>
+template <typename V, typename I, bool kCubed>
 __attribute__((always_inline)) inline void tetrahedral(const float* values, int nodes, const float* lo,
                                                        const float* scale, const float* const* in, float* const* out,
                                                        int i) {
     I corner[3];
     V w[4];
     cell_weights<V, I>(nodes, lo, scale, in, i, corner, w);
-    corner_sums<V, I>(values, nodes, corner, w, out, i);
+    corner_sums<V, I, kCubed>(values, nodes, corner, w, out, i);
 }
 
-// The three values at out[c][i .. i + lanes) each v -> 2^v (exp2_in_place, kClamp: held
-// within +-kExp2Reach first), then multiplied by `matrix` (row-major 3x3) when given, in place.
-template <typename V, typename I, bool kClamp>
-__attribute__((always_inline)) inline void exp2_times(const float* matrix, float* const* out, int i) {
-    V v[3];
-    for (int c = 0; c < 3; ++c) {
-        load(v[c], out[c] + i);
-        exp2_in_place<V, I, kClamp>(v[c]);
-    }
-    for (int c = 0; c < 3; ++c)
-        store(out[c] + i, matrix ? matrix[3 * c] * v[0] + matrix[3 * c + 1] * v[1] + matrix[3 * c + 2] * v[2] : v[c]);
-}
-
-// exp2_times at points begin ... end - 1: vectors of V's lanes, then one at a time.
-template <typename V, typename I, bool kClamp>
-__attribute__((always_inline)) inline void exp2_times_points(const float* matrix, float* const* out, int begin, int end) {
-    constexpr int lanes = sizeof(V) / sizeof(float);
-    int i = begin;
-    for (; i + lanes <= end; i += lanes) exp2_times<V, I, kClamp>(matrix, out, i);
-    for (; i < end; ++i) exp2_times<Float1, Int1, kClamp>(matrix, out, i);
-}
-
-// What TetrahedralRow then does with the values: nothing, or 2^v (held within +-kExp2Reach
-// first where a node's value reaches it).
-enum class Exp2 { none, unclamped, clamped };
-
-// The table at a row of points, then (exp2) 2^v of each value times `matrix`, a block of
-// points at a time: each vector's cell and weights, then its corners' sum, then 2^v, each a
-// loop over the block. (In one loop a point's chain of dependent steps, from its coordinates
-// to the store, was longer than the processor could overlap with the next point's: the 2^v
-// apart 3-12 % faster, then the weights apart 13-15 % with AVX2 on a Zen 3, 25 % on a Xeon,
-// 11-25 % with its AVX-512; the same values.)
+// The table at a row of points, a block of points at a time: each vector's cell and
+// weights, then its corners' sum, each a loop over the block. (In one loop a point's chain of
+// dependent steps, from its coordinates to the store, was longer than the processor could
+// overlap with the next point's: the weights apart 13-15 % faster with AVX2 on a Zen 3, 25 %
+// on a Xeon, 11-25 % with its AVX-512; the same values.)
 struct TetrahedralRow {
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* values, int nodes, const float* lo, const float* scale,
-                                                   Exp2 exp2, const float* matrix, const float* const* in,
-                                                   float* const* out, int n) {
+                                                   bool cubed, const float* const* in, float* const* out, int n) {
+        if (cubed)
+            blocks<lanes, true>(values, nodes, lo, scale, in, out, n);
+        else
+            blocks<lanes, false>(values, nodes, lo, scale, in, out, n);
+    }
+    template <int lanes, bool kCubed>
+    __attribute__((always_inline)) static void blocks(const float* values, int nodes, const float* lo,
+                                                      const float* scale, const float* const* in, float* const* out,
+                                                      int n) {
         using V = typename simd::Lanes<lanes>::F;
         using I = typename simd::Lanes<lanes>::I;
         for (int begin = 0; begin < n; begin += kRowBlock) {
@@ -502,12 +446,10 @@ struct TetrahedralRow {
             I corner[kRowBlock / lanes][3];
             V w[kRowBlock / lanes][4];
             for (int k = 0; k < vectors; ++k) cell_weights<V, I>(nodes, lo, scale, in, begin + k * lanes, corner[k], w[k]);
-            for (int k = 0; k < vectors; ++k) corner_sums<V, I>(values, nodes, corner[k], w[k], out, begin + k * lanes);
-            for (int i = begin + vectors * lanes; i < end; ++i) tetrahedral<Float1, Int1>(values, nodes, lo, scale, in, out, i);
-            if (exp2 == Exp2::clamped)
-                exp2_times_points<V, I, true>(matrix, out, begin, end);
-            else if (exp2 == Exp2::unclamped)
-                exp2_times_points<V, I, false>(matrix, out, begin, end);
+            for (int k = 0; k < vectors; ++k)
+                corner_sums<V, I, kCubed>(values, nodes, corner[k], w[k], out, begin + k * lanes);
+            for (int i = begin + vectors * lanes; i < end; ++i)
+                tetrahedral<Float1, Int1, kCubed>(values, nodes, lo, scale, in, out, i);
         }
     }
 };
@@ -517,17 +459,14 @@ struct TetrahedralRow {
 void Table3D::operator()(const float* in, float* out) const {
     const float* in_rows[3] = {&in[0], &in[1], &in[2]};
     float* out_rows[3] = {&out[0], &out[1], &out[2]};
-    tetrahedral<Float1, Int1>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows, 0);
+    if (cubed_)
+        tetrahedral<Float1, Int1, true>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows, 0);
+    else
+        tetrahedral<Float1, Int1, false>(&values_[0][0], nodes_, lo_.data(), scale_.data(), in_rows, out_rows, 0);
 }
 
 void Table3D::apply_row(const float* const* in, float* const* out, int n) const {
-    simd::dispatch<TetrahedralRow>(&values_[0][0], nodes_, lo_.data(), scale_.data(), Exp2::none,
-                                   (const float*)nullptr, in, out, n);
-}
-
-void Table3D::apply_row_exp2(const float* const* in, float* const* out, int n, const float* matrix) const {
-    simd::dispatch<TetrahedralRow>(&values_[0][0], nodes_, lo_.data(), scale_.data(),
-                                   exp2_clamps_ ? Exp2::clamped : Exp2::unclamped, matrix, in, out, n);
+    simd::dispatch<TetrahedralRow>(&values_[0][0], nodes_, lo_.data(), scale_.data(), cubed_, in, out, n);
 }
 
 }  // namespace darkroom

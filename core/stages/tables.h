@@ -60,16 +60,14 @@ private:
     int shift_ = 0;                             // 23 - mantissa_bits
 };
 
-// 2^x in float from the exponent and a polynomial in the fraction (relative error below
-// 3e-7, a few float roundings, for |x| < kExp2Reach, beyond which x is held at it); the fast
-// tiers' exp10(x) = exp2(x log2 10).
-constexpr float kExp2Reach = 126.0f;
-float fast_exp2(float x);
-
 // A function of three variables on a uniform grid (nodes^3 over [lo, hi] per axis),
 // interpolated tetrahedrally; inputs outside the grid are clamped to its faces.
 class Table3D {
 public:
+    // What the nodes hold: the function's values, or their cube roots, interpolated and then
+    // cubed (for values spanning decades, such as a print's light: the interpolant's relative
+    // error within a cell is then that of the cube root, as in CIE L*, not of the values).
+    enum class Encoding { linear, cube_root };
     // f(node, in, out): the values at the node whose indices along x, y and z are node[0..3),
     // at in = lo + node (hi - lo) / (nodes - 1) (the indices let f use what it computed once
     // per axis node).
@@ -77,23 +75,21 @@ public:
     Table3D() = default;
     // f is evaluated at the nodes on `threads` threads (0: every core), so it must be safe to
     // call from several at once; the values do not depend on how many.
-    Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, int threads, const Function& f);
+    Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, int threads, const Function& f,
+            Encoding encoding = Encoding::linear);
     // Node i's coordinate on an axis over [lo, hi] (the in that f is given).
     static double node_coordinate(double lo, double hi, int nodes, int i) { return lo + i * ((hi - lo) / (nodes - 1)); }
     void operator()(const float* in, float* out) const;
     // The table at n points given as three rows (in[a][i] is axis a of point i), into three
     // rows: operator() at each point, a vector of points at a time, bit for bit the same values.
     void apply_row(const float* const* in, float* const* out, int n) const;
-    // The same, each point's values v then written as 2^v (fast_exp2), times `matrix` (3x3,
-    // row-major) when given: a table of log2 values read as linear ones.
-    void apply_row_exp2(const float* const* in, float* const* out, int n, const float* matrix = nullptr) const;
     int nodes() const { return nodes_; }
 
 private:
     int nodes_ = 0;
     std::array<float, 3> lo_{}, scale_{};
     std::vector<std::array<float, 4>> values_;  // x fastest; 3 values and a pad, one 16-byte load per node
-    bool exp2_clamps_ = true;  // apply_row_exp2 holds values within +-kExp2Reach (else none reaches it)
+    bool cubed_ = false;                        // Encoding::cube_root
 };
 
 }  // namespace darkroom

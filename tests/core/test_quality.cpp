@@ -102,13 +102,6 @@ TEST_CASE("a tabulated curve's rows read their nodes' values however near the la
     }
 }
 
-TEST_CASE("fast_exp2 is 2^x within 3e-7", "[quality][tables]") {
-    double worst = 0;
-    for (double x = -120.0; x <= 120.0; x += 0.00377)
-        worst = std::max(worst, std::abs(double(fast_exp2(float(x))) / std::exp2(double(float(x))) - 1.0));
-    CHECK(worst < 3e-7);
-}
-
 // Tetrahedral interpolation by its six cases (Kasson et al. 1995, table 1): in the cell's
 // unit cube, with fractions x >= y >= z, f = f000 + x (f100 - f000) + y (f110 - f100) +
 // z (f111 - f110), and likewise for each other order of the fractions.
@@ -207,33 +200,57 @@ TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions 
         table(point, one);
         for (int c = 0; c < 3; ++c) REQUIRE(results[c][i] == one[c]);
     }
-    // Read as log2 values: 2^v of each, then times a matrix, in the same float operations.
-    // On a table whose values reach past exp2's clamps at +-126 (-200 to 400 on the third
-    // channel), and on one whose values all lie within them, which the row reads unclamped.
-    for (double third_scale : {100.0, 20.0}) {
-        const Table3D log2_values({-2, -2, -2}, {4, 4, 4}, 9, 0, [&](const int*, const double* v, double* out) {
-            out[0] = v[0] - v[1];
-            out[1] = 0.5 * v[2];
-            out[2] = third_scale * v[0];
-        });
-        INFO("third channel x " << third_scale);
-        table = log2_values;
-        table.apply_row(in_rows, out_rows, n);
-        const float matrix[9] = {0.5f, -0.25f, 2.0f, 1.5f, 0.75f, -1.0f, 0.125f, 3.0f, 0.0f};
-        std::vector<float> linear[3], mixed[3];
-        for (int c = 0; c < 3; ++c) linear[c].resize(n), mixed[c].resize(n);
-        float* linear_rows[3] = {linear[0].data(), linear[1].data(), linear[2].data()};
-        float* mixed_rows[3] = {mixed[0].data(), mixed[1].data(), mixed[2].data()};
-        table.apply_row_exp2(in_rows, linear_rows, n);
-        table.apply_row_exp2(in_rows, mixed_rows, n, matrix);
-        for (int i = 0; i < n; ++i) {
-            float v[3];
-            for (int c = 0; c < 3; ++c) {
-                v[c] = fast_exp2(results[c][i]);
-                REQUIRE(linear[c][i] == v[c]);
+}
+
+TEST_CASE("a 3D table of cube roots reads back its function at the nodes and the cube of its interpolant between",
+          "[quality][tables]") {
+    // Values over six decades and of either sign, as a print's light and an out-of-gamut channel.
+    auto f = [](const double* v, double* out) {
+        out[0] = std::pow(10.0, -v[0] - v[1] - v[2]);
+        out[1] = -0.02 * std::pow(10.0, -2 * v[1]);
+        out[2] = 0.5 * v[0] - v[2];
+    };
+    const std::array<double, 3> lo{0, 0, 0}, hi{2, 2, 2};
+    const int nodes = 5;
+    const Table3D cubed(lo, hi, nodes, 1, [&](const int*, const double* v, double* out) { f(v, out); },
+                        Table3D::Encoding::cube_root);
+    const Table3D roots(lo, hi, nodes, 1, [&](const int*, const double* v, double* out) {
+        f(v, out);
+        for (int c = 0; c < 3; ++c) out[c] = std::cbrt(out[c]);
+    });
+    // At every node the function, to a few float roundings of its magnitude.
+    for (int k = 0; k < nodes; ++k)
+        for (int j = 0; j < nodes; ++j)
+            for (int i = 0; i < nodes; ++i) {
+                const int node[3] = {i, j, k};
+                double at[3], expected[3];
+                float in[3], out[3];
+                for (int a = 0; a < 3; ++a) at[a] = Table3D::node_coordinate(lo[a], hi[a], nodes, node[a]);
+                for (int a = 0; a < 3; ++a) in[a] = float(at[a]);
+                f(at, expected);
+                cubed(in, out);
+                for (int c = 0; c < 3; ++c) CHECK(out[c] == Approx(expected[c]).epsilon(1e-6).margin(1e-30));
             }
-            for (int c = 0; c < 3; ++c)
-                REQUIRE(mixed[c][i] == matrix[3 * c] * v[0] + matrix[3 * c + 1] * v[1] + matrix[3 * c + 2] * v[2]);
+    // Between them the cube of the cube roots' interpolant; a row the same as a point at a time.
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-0.5f, 2.5f);
+    const int n = 1000 + 3;
+    std::vector<float> axes[3], results[3];
+    for (int a = 0; a < 3; ++a) {
+        for (int i = 0; i < n; ++i) axes[a].push_back(u(rng));
+        results[a].resize(n);
+    }
+    const float* in_rows[3] = {axes[0].data(), axes[1].data(), axes[2].data()};
+    float* out_rows[3] = {results[0].data(), results[1].data(), results[2].data()};
+    cubed.apply_row(in_rows, out_rows, n);
+    for (int i = 0; i < n; ++i) {
+        const float point[3] = {axes[0][i], axes[1][i], axes[2][i]};
+        float one[3], root[3];
+        cubed(point, one);
+        roots(point, root);
+        for (int c = 0; c < 3; ++c) {
+            REQUIRE(results[c][i] == one[c]);
+            REQUIRE(one[c] == root[c] * root[c] * root[c]);
         }
     }
 }
