@@ -41,11 +41,12 @@ struct QualityTier {
     GrainMethod grain;
     // Printing a colour negative on colour paper: 0 = per-pixel spectral integration in
     // double; otherwise one 3D table of this many nodes per axis from the negative's densities
-    // to the print's log XYZ: the enlarger, the paper's H&D curves and the viewing composed,
-    // which needs the paper's stages between them to be pointwise. So the paper's MTF is
-    // applied before, to the negative's densities (as accurate as on its transmittance against
-    // the reference, measured, and two passes cheaper), the paper's grain is folded into the
-    // film's (develop.cpp, fold_paper_grain), and its halation is left out.
+    // to the print's linear Rec.709 (held as cube roots): the enlarger, the paper's H&D curves
+    // and the viewing composed, which needs the paper's stages between them to be pointwise.
+    // So the paper's MTF is applied before, to the negative's densities (as accurate as on
+    // its transmittance against the reference, measured, and two passes cheaper), the paper's
+    // grain is folded into the film's (develop.cpp, fold_paper_grain), and its halation is
+    // left out.
     int print_table_nodes;
     // H&D curves: 0 = evaluated per pixel; otherwise a table with 2^bits samples per
     // octave of exposure (stages/tables.h).
