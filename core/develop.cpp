@@ -288,9 +288,10 @@ void print_densities(const PrintExposure& enlarger, const Stock& paper, const do
 }
 
 // The one print table of a colour negative on colour paper: the negative's densities -> the
-// print's linear Rec.709, the high tier's print at each node. A plan compiled again for another exposure, grain, MTF or halation (a
-// slider dragged in a host) prints the same: its table, about a tenth of a second of spectral
-// sums on two cores, is taken from the last few built, found by the bytes of everything it reads.
+// print's linear Rec.709, the high tier's print at each node, held as cube roots (tables.h).
+// A plan compiled again for another exposure, grain, MTF or halation (a slider dragged in a
+// host) prints the same: its table, about a tenth of a second of spectral sums on two cores,
+// is taken from the last few built, found by the bytes of everything it reads.
 std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock& paper, const PrintExposure& enlarger,
                                                   int nodes, int threads) {
     std::array<double, 3> lo, hi;
