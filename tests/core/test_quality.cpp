@@ -120,6 +120,29 @@ static double tetrahedral_by_cases(const std::function<double(int, int, int)>& n
     return f;
 }
 
+// n points drawn axis by axis (all x, then y, then z), through table.apply_row as three rows,
+// in vector blocks and the scalar tail: each the same as the table at that point, bit for bit.
+// Returns the points.
+static std::vector<std::array<float, 3>> require_row_as_points(const Table3D& table, int n,
+                                                                const std::function<float()>& draw) {
+    std::vector<float> axes[3], results[3];
+    for (int a = 0; a < 3; ++a) {
+        for (int i = 0; i < n; ++i) axes[a].push_back(draw());
+        results[a].resize(n);
+    }
+    const float* in_rows[3] = {axes[0].data(), axes[1].data(), axes[2].data()};
+    float* out_rows[3] = {results[0].data(), results[1].data(), results[2].data()};
+    table.apply_row(in_rows, out_rows, n);
+    std::vector<std::array<float, 3>> points;
+    for (int i = 0; i < n; ++i) {
+        points.push_back({axes[0][i], axes[1][i], axes[2][i]});
+        float one[3];
+        table(points.back().data(), one);
+        for (int c = 0; c < 3; ++c) REQUIRE(results[c][i] == one[c]);
+    }
+    return points;
+}
+
 TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions and clamps outside its box",
           "[quality][tables]") {
     auto f = [](const double* v, double* out) {
@@ -183,23 +206,8 @@ TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions 
     table(clamped, b);
     for (int c = 0; c < 3; ++c) CHECK(a[c] == b[c]);
 
-    // A row of points, inside and outside the box, in vector blocks and the scalar tail:
-    // the same values as one point at a time, bit for bit.
-    const int n = 1000 + 5;
-    std::vector<float> axes[3], results[3];
-    for (int a_ = 0; a_ < 3; ++a_) {
-        for (int i = 0; i < n; ++i) axes[a_].push_back(float(-2 + 6 * u(rng)));
-        results[a_].resize(n);
-    }
-    const float* in_rows[3] = {axes[0].data(), axes[1].data(), axes[2].data()};
-    float* out_rows[3] = {results[0].data(), results[1].data(), results[2].data()};
-    table.apply_row(in_rows, out_rows, n);
-    for (int i = 0; i < n; ++i) {
-        const float point[3] = {axes[0][i], axes[1][i], axes[2][i]};
-        float one[3];
-        table(point, one);
-        for (int c = 0; c < 3; ++c) REQUIRE(results[c][i] == one[c]);
-    }
+    // A row of points, inside and outside the box: the same values as one point at a time.
+    require_row_as_points(table, 1000 + 5, [&] { return float(-2 + 6 * u(rng)); });
 }
 
 TEST_CASE("a 3D table of cube roots reads back its function at the nodes and the cube of its interpolant between",
@@ -234,24 +242,11 @@ TEST_CASE("a 3D table of cube roots reads back its function at the nodes and the
     // Between them the cube of the cube roots' interpolant; a row the same as a point at a time.
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> u(-0.5f, 2.5f);
-    const int n = 1000 + 3;
-    std::vector<float> axes[3], results[3];
-    for (int a = 0; a < 3; ++a) {
-        for (int i = 0; i < n; ++i) axes[a].push_back(u(rng));
-        results[a].resize(n);
-    }
-    const float* in_rows[3] = {axes[0].data(), axes[1].data(), axes[2].data()};
-    float* out_rows[3] = {results[0].data(), results[1].data(), results[2].data()};
-    cubed.apply_row(in_rows, out_rows, n);
-    for (int i = 0; i < n; ++i) {
-        const float point[3] = {axes[0][i], axes[1][i], axes[2][i]};
+    for (const auto& point : require_row_as_points(cubed, 1000 + 3, [&] { return u(rng); })) {
         float one[3], root[3];
-        cubed(point, one);
-        roots(point, root);
-        for (int c = 0; c < 3; ++c) {
-            REQUIRE(results[c][i] == one[c]);
-            REQUIRE(one[c] == root[c] * root[c] * root[c]);
-        }
+        cubed(point.data(), one);
+        roots(point.data(), root);
+        for (int c = 0; c < 3; ++c) REQUIRE(one[c] == root[c] * root[c] * root[c]);
     }
 }
 
