@@ -61,7 +61,7 @@ GrainSpec layer_grain(const GrainSpec& stock, const DevelopSettings& s, size_t c
 constexpr double kMinPixelPitchUm = 0.1;
 
 MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width_px, const DevelopSettings& s,
-                            uint32_t stream_base, const char* role, std::vector<std::string>& skipped) {
+                            uint32_t stream_base, const char* role, std::vector<std::string>& skipped, int threads) {
     const QualityTier& tier = quality_tier(s.quality);
     MaterialStages m;
     m.stock = stock;
@@ -92,7 +92,7 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
             skipped.push_back("scatter (" + where + "): MTF turned off");
         } else {
             double deviation = mtf_deviation_to_nyquist(layer.mtf, m.pixel_pitch_um);
-            ScatterKernel kernel = design_scatter_kernel(layer.mtf, m.pixel_pitch_um, tier.scatter);
+            ScatterKernel kernel = design_scatter_kernel(layer.mtf, m.pixel_pitch_um, tier.scatter, threads);
             m.scatter.push_back(kernel);
             if (deviation < kMtfNoOpTolerance)
                 skipped.push_back("scatter (" + where + "): MTF within " + fmt(deviation, 2) + " of 1 up to Nyquist" +
@@ -615,7 +615,7 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     const double film_width_mm = settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm;
     const double print_width_mm =
         !printing ? 0.0 : settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm;
-    p.film_stages_ = build_stages(film, film_width_mm, p.film_width_px_, settings, 0, "film", p.skipped_);
+    p.film_stages_ = build_stages(film, film_width_mm, p.film_width_px_, settings, 0, "film", p.skipped_, threads);
     p.monochrome_input_ = frame.monochrome && settings.skip_noop_stages;
     if (p.monochrome_input_ && settings.output != OutputMode::texture)
         p.skipped_.push_back("spectral sensitivity: the input is grey, so each layer's exposure is one scale of it");
@@ -624,7 +624,8 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
                                  : mid_grey_exposure_lux_s(film.iso_speed) / 0.18 * std::exp2(settings.exposure_ev);
 
     if (printing) {
-        p.paper_stages_ = build_stages(*paper, print_width_mm, p.film_width_px_, settings, 16, "paper", p.skipped_);
+        p.paper_stages_ = build_stages(*paper, print_width_mm, p.film_width_px_, settings, 16, "paper", p.skipped_,
+                                       threads);
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev});

@@ -154,7 +154,10 @@ public:
         DenseLu admm = kkt(std::vector<char>(n, 0), rho);
         if (!admm.factor()) throw std::logic_error("spectral basis: singular ADMM system");
         int iterations = 0;
-        for (double tolerance : {1e-7, 1e-9, 1e-11}) {
+        // The polish (exact, checked against the KKT conditions) needs only the zero set, which
+        // a rough ADMM estimate already has: 16 iterations at 1e-2 on this grid, where 1e-7
+        // took 929 (a tenth of a second) for the same basis bit for bit. Tighter where it fails.
+        for (double tolerance : {1e-2, 1e-7, 1e-9, 1e-11}) {
             for (; iterations < 200000; ++iterations) {
                 for (int i = 0; i < n; ++i) rhs[i] = rho * (z[i] - u[i]);
                 for (int r = 0; r < kRows; ++r) rhs[n + r] = c_[r];

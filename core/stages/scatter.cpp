@@ -54,7 +54,8 @@ double mtf_deviation_to_nyquist(const Curve& mtf, double pixel_pitch_um) {
 // periodised over the sampling frequency, H(f) = sum_j MTF(f + j/pitch), so h is the
 // continuous PSF sampled at pixel centres: compact even where the MTF is still high at
 // Nyquist, where a band-limited design would ring across the whole grid.
-static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, int N) {
+// Each value is summed by one thread in one order, so the kernel is the same on any number.
+static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, int N, int threads) {
     const MtfResponse response_at(mtf);
     const double sampling = 1.0 / pitch_mm;  // cycles/mm
     int alias_orders = 0;                      // replicas beyond which the MTF is negligible
@@ -67,8 +68,14 @@ static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, in
     std::vector<double> axis(size_t(N / 2 + 1) * replicas);
     for (int k = 0; k <= N / 2; ++k)
         for (int j = 0; j < replicas; ++j) axis[k * replicas + j] = double(k) / (N * pitch_mm) + (j - alias_orders) * sampling;
+    // (k, l) pairs shared out evenly (rows of the triangle differ in length); each writes
+    // its own mirrored places.
+    std::vector<std::pair<int, int>> pairs;
     for (int k = 0; k <= N / 2; ++k)
-        for (int l = 0; l <= k; ++l) {
+        for (int l = 0; l <= k; ++l) pairs.emplace_back(k, l);
+    parallel_for(0, int(pairs.size()), threads, [&](int begin, int end) {
+        for (int p = begin; p < end; ++p) {
+            const auto [k, l] = pairs[size_t(p)];
             double sum = 0;
             for (int jx = 0; jx < replicas; ++jx)
                 for (int jy = 0; jy < replicas; ++jy) {
@@ -78,15 +85,31 @@ static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, in
             for (int kk : {k, (N - k) % N})
                 for (int ll : {l, (N - l) % N}) response[kk * N + ll] = response[ll * N + kk] = sum;
         }
+    });
     for (int k = 0; k < N; ++k)
         for (int m = 0; m < N; ++m) cosines[k * N + m] = std::cos(2.0 * M_PI * double((long long)k * m % N) / N);
-    for (int k = 0; k < N; ++k)
-        for (int l = 0; l < N; ++l)
-            for (int n = 0; n < N; ++n) partial[k * N + n] += response[k * N + l] * cosines[l * N + n];
+    // The kernel is even in x and in y and symmetric in the two, as H is: the part 0 <= n <= m
+    // <= N/2 is summed (from the rows of `partial` with k <= N/2, the rest being their mirror
+    // images), then mirrored and transposed, so that its taps are symmetric exactly.
+    const int half = N / 2;
+    auto mirrored = [N](int i) { return std::min(i, N - i); };
+    parallel_for(0, half + 1, threads, [&](int begin, int end) {
+        for (int k = begin; k < end; ++k)
+            for (int l = 0; l < N; ++l)
+                for (int n = 0; n <= half; ++n) partial[k * N + n] += response[k * N + l] * cosines[l * N + n];
+    });
+    parallel_for(0, half + 1, threads, [&](int begin, int end) {
+        for (int m = begin; m < end; ++m)
+            for (int k = 0; k < N; ++k)
+                for (int n = 0; n <= m; ++n) h[m * N + n] += cosines[k * N + m] * partial[mirrored(k) * N + n];
+    });
+    for (int m = 0; m <= half; ++m)
+        for (int n = 0; n <= m; ++n) h[m * N + n] /= double(N) * N;
     for (int m = 0; m < N; ++m)
-        for (int k = 0; k < N; ++k)
-            for (int n = 0; n < N; ++n) h[m * N + n] += cosines[k * N + m] * partial[k * N + n];
-    for (double& v : h) v /= double(N) * N;
+        for (int n = 0; n < N; ++n) {
+            const int a = std::max(mirrored(m), mirrored(n)), b = std::min(mirrored(m), mirrored(n));
+            if (a != m || b != n) h[m * N + n] = h[a * N + b];
+        }
     return h;
 }
 
@@ -238,7 +261,7 @@ void taper(ScatterKernel& kernel, int max_radius) {
 
 namespace {
 
-ScatterKernel design_uncached(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design) {
+ScatterKernel design_uncached(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design, int threads) {
     if (!(mtf_response(mtf, 0.0) > 0))
         throw std::invalid_argument("the MTF's response at 0 cycles/mm must be positive (it is normalised to 1 there)");
     ScatterKernel kernel;
@@ -248,7 +271,7 @@ ScatterKernel design_uncached(const Curve& mtf, double pixel_pitch_um, const Sca
     }
     double pitch_mm = pixel_pitch_um / 1000.0;
     for (int N = 32;; N *= 2) {
-        std::vector<double> h = periodic_kernel(mtf, pitch_mm, N);
+        std::vector<double> h = periodic_kernel(mtf, pitch_mm, N, threads);
         auto tap = [&](int x, int y) { return h[((y + N) % N) * N + (x + N) % N]; };
         // Weight outside each radius r, from the outermost ring inwards.
         double total = 0;
@@ -278,7 +301,8 @@ ScatterKernel design_uncached(const Curve& mtf, double pixel_pitch_um, const Sca
 
 // A design takes up to seconds (the DFT grid and the eigen-terms) and every frame of a
 // sequence asks for the same few: each is computed once per process.
-ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design) {
+ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design,
+                                    int threads) {
     using Key = std::tuple<std::vector<double>, std::vector<double>, double, int, double, int, bool>;
     static std::mutex mutex;
     static std::map<Key, ScatterKernel> cache;
@@ -289,7 +313,7 @@ ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, con
         auto it = cache.find(key);
         if (it != cache.end()) return it->second;
     }
-    ScatterKernel kernel = design_uncached(mtf, pixel_pitch_um, design);
+    ScatterKernel kernel = design_uncached(mtf, pixel_pitch_um, design, threads);
     std::lock_guard<std::mutex> lock(mutex);
     // A long session (a plugin across many pitches and stocks) must not grow it without bound.
     if (cache.size() >= kMaxCachedKernels) cache.clear();

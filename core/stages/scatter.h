@@ -69,8 +69,10 @@ struct ScatterDesign {
 // Throws std::invalid_argument for an MTF whose response at 0 is not positive (scattering
 // is normalised to MTF(0) = 1: there is nothing to normalise). Designs are kept per process
 // for the frames of a sequence; the cache is emptied when it holds kMaxCachedKernels.
+// Computed on `threads` threads (0: every core), the same kernel on any number.
 constexpr size_t kMaxCachedKernels = 64;
-ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design = {});
+ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, const ScatterDesign& design = {},
+                                    int threads = 0);
 
 // dst = src convolved with the kernel (through its separable terms when it has them), for
 // dst.window. Reads src with coordinates clamped

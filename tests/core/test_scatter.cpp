@@ -265,6 +265,26 @@ TEST_CASE("the kernel cache gives the design of the same inputs, beyond its size
     CHECK(again.separable == first.separable);
 }
 
+TEST_CASE("a PSF's taps are even in x and in y and the same transposed, on one thread or several", "[scatter]") {
+    // The direct taps (no separable terms). max_terms is unused without them, so the two
+    // designs have other cache keys and are each computed, on 1 and on 3 threads.
+    const Curve mtf = test::test_film().layers[0].mtf;
+    for (double pitch_um : {2.0, 6.0}) {
+        INFO("pitch " << pitch_um << " um");
+        const ScatterKernel one = design_scatter_kernel(mtf, pitch_um, {0, 0.0, 0}, 1);
+        const ScatterKernel three = design_scatter_kernel(mtf, pitch_um, {0, 0.0, 5}, 3);
+        CHECK(three.taps == one.taps);
+        const int r = one.radius, side = 2 * r + 1;
+        REQUIRE(r > 1);
+        auto tap = [&](int x, int y) { return one.taps[size_t(y + r) * side + x + r]; };
+        int asymmetric = 0;
+        for (int y = -r; y <= r; ++y)
+            for (int x = -r; x <= r; ++x)
+                if (tap(x, y) != tap(-x, y) || tap(x, y) != tap(x, -y) || tap(x, y) != tap(y, x)) ++asymmetric;
+        CHECK(asymmetric == 0);
+    }
+}
+
 TEST_CASE("row and column convolutions sum their taps in the documented order, in vector blocks and the tail",
           "[scatter][filters]") {
     std::mt19937 rng(5);
