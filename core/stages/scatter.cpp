@@ -61,17 +61,23 @@ static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, in
     int alias_orders = 0;                      // replicas beyond which the MTF is negligible
     while (alias_orders < 32 && response_at((alias_orders + 0.5) * sampling) > 1e-5) ++alias_orders;
     // H at frequency index (k, l) is even in each (the replicas are symmetric) and symmetric
-    // in the two (the MTF is radial): summed for 0 <= l <= k <= N/2, mirrored to the rest.
-    std::vector<double> response(N * N, 0.0), cosines(N * N), partial(N * N, 0.0), h(N * N, 0.0);
+    // in the two (the MTF is radial): summed for 0 <= l <= k <= N/2. The kernel then has the
+    // same symmetries: its part 0 <= n <= m <= N/2 is summed, then mirrored and transposed, so
+    // that its taps are symmetric exactly; the sums read H's rows k <= N/2 only (the others
+    // are their mirror images), kept in `response`, and `partial` holds k, n <= N/2.
+    const int half = N / 2, quarter = half + 1;  // (quarter: the indices 0 ... N/2)
+    auto mirrored = [N](int i) { return std::min(i, N - i); };
+    std::vector<double> response(size_t(quarter) * N), cosines(size_t(N) * N), partial(size_t(quarter) * quarter, 0.0),
+        h(size_t(N) * N, 0.0);
     // One axis's frequency at index k in each replica j: axis[k * replicas + j].
     const int replicas = 2 * alias_orders + 1;
-    std::vector<double> axis(size_t(N / 2 + 1) * replicas);
-    for (int k = 0; k <= N / 2; ++k)
+    std::vector<double> axis(size_t(quarter) * replicas);
+    for (int k = 0; k <= half; ++k)
         for (int j = 0; j < replicas; ++j) axis[k * replicas + j] = double(k) / (N * pitch_mm) + (j - alias_orders) * sampling;
     // (k, l) pairs shared out evenly (rows of the triangle differ in length); each writes
-    // its own mirrored places.
+    // its own places: row k at columns l and N - l, row l at columns k and N - k.
     std::vector<std::pair<int, int>> pairs;
-    for (int k = 0; k <= N / 2; ++k)
+    for (int k = 0; k <= half; ++k)
         for (int l = 0; l <= k; ++l) pairs.emplace_back(k, l);
     parallel_for(0, int(pairs.size()), threads, [&](int begin, int end) {
         for (int p = begin; p < end; ++p) {
@@ -82,26 +88,21 @@ static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, in
                     const double fx = axis[k * replicas + jx], fy = axis[l * replicas + jy];
                     sum += response_at(std::sqrt(fx * fx + fy * fy));
                 }
-            for (int kk : {k, (N - k) % N})
-                for (int ll : {l, (N - l) % N}) response[kk * N + ll] = response[ll * N + kk] = sum;
+            for (int ll : {l, (N - l) % N}) response[k * N + ll] = sum;
+            for (int kk : {k, (N - k) % N}) response[l * N + kk] = sum;
         }
     });
     for (int k = 0; k < N; ++k)
         for (int m = 0; m < N; ++m) cosines[k * N + m] = std::cos(2.0 * M_PI * double((long long)k * m % N) / N);
-    // The kernel is even in x and in y and symmetric in the two, as H is: the part 0 <= n <= m
-    // <= N/2 is summed (from the rows of `partial` with k <= N/2, the rest being their mirror
-    // images), then mirrored and transposed, so that its taps are symmetric exactly.
-    const int half = N / 2;
-    auto mirrored = [N](int i) { return std::min(i, N - i); };
-    parallel_for(0, half + 1, threads, [&](int begin, int end) {
+    parallel_for(0, quarter, threads, [&](int begin, int end) {
         for (int k = begin; k < end; ++k)
             for (int l = 0; l < N; ++l)
-                for (int n = 0; n <= half; ++n) partial[k * N + n] += response[k * N + l] * cosines[l * N + n];
+                for (int n = 0; n <= half; ++n) partial[k * quarter + n] += response[k * N + l] * cosines[l * N + n];
     });
-    parallel_for(0, half + 1, threads, [&](int begin, int end) {
+    parallel_for(0, quarter, threads, [&](int begin, int end) {
         for (int m = begin; m < end; ++m)
             for (int k = 0; k < N; ++k)
-                for (int n = 0; n <= m; ++n) h[m * N + n] += cosines[k * N + m] * partial[mirrored(k) * N + n];
+                for (int n = 0; n <= m; ++n) h[m * N + n] += cosines[k * N + m] * partial[mirrored(k) * quarter + n];
     });
     for (int m = 0; m <= half; ++m)
         for (int n = 0; n <= m; ++n) h[m * N + n] /= double(N) * N;
