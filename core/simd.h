@@ -82,6 +82,66 @@ __attribute__((always_inline)) inline void prefetch_ahead(const void* p, int byt
     for (int b = 0; b < bytes; b += 64) __builtin_prefetch(reinterpret_cast<const void*>(ahead + b), for_writing);
 }
 
+// 2^n for integer-valued lanes n within a normal double's exponents (|n| < 1023), from
+// its bits: n + 1.5 * 2^52 holds n in its low bits.
+template <typename D, typename L>
+__attribute__((always_inline)) inline void power_of_two(const D& n, D& power) {
+    constexpr double kRound = 0x1.8p52;
+    const D shifted = n + kRound;
+    L bits;
+    std::memcpy(&bits, &shifted, sizeof bits);
+    bits = (bits - int64_t(0x4338000000000000) + 1023) << 52;  // (0x4338... is kRound's bits)
+    std::memcpy(&power, &bits, sizeof power);
+}
+
+// result = e^x in each double lane (D the lanes, L as many int64), within 1 ulp of std::exp
+// (every 1e-4 from -746 to 709.78: tests/core/test_simd.cpp), for the spectral stages'
+// transmittances, where std::exp a sample was a third of the high tier's time and most of the
+// fast tiers' table build. x = k ln 2 + r with |r| <= ln 2 / 2 (ln 2 in two parts, the first
+// with trailing zero bits so that k times it is exact: fdlibm's split), e^r by its Taylor
+// series to r^13 (truncation under 0.05 ulp), and 2^k as the product of two powers of two
+// built from their bits, so that results down to the subnormals and up to the largest double
+// need no special case; x is clamped to [-746, 710], beyond which e^x is 0 or +inf anyway.
+// NaN stays NaN. Lane by lane without FMA, so every processor computes the same values.
+template <typename D, typename L>
+__attribute__((always_inline)) inline void exp_lanes(const D& x, D& result) {
+    constexpr double kLog2e = 1.4426950408889634, kLn2High = 6.93147180369123816490e-01,
+                     kLn2Low = 1.90821492927058770002e-10;
+    constexpr double kRound = 0x1.8p52;  // adding it rounds a double below 2^51 to an integer
+    constexpr double kInverseFactorial[14] = {1.0,
+                                              1.0,
+                                              1.0 / 2,
+                                              1.0 / 6,
+                                              1.0 / 24,
+                                              1.0 / 120,
+                                              1.0 / 720,
+                                              1.0 / 5040,
+                                              1.0 / 40320,
+                                              1.0 / 362880,
+                                              1.0 / 3628800,
+                                              1.0 / 39916800,
+                                              1.0 / 479001600,
+                                              1.0 / 6227020800};
+    D clamped = x < -746.0 ? D{} - 746.0 : x;
+    clamped = clamped > 710.0 ? D{} + 710.0 : clamped;
+    const D k = (clamped * kLog2e + kRound) - kRound;
+    const D r = (clamped - k * kLn2High) - k * kLn2Low;
+    // The terms from r^4 on by Estrin's scheme (in pairs, then pairs of pairs by r^2, r^4 and
+    // r^8), the first four by Horner's, which keeps the sum within 1 ulp: the chain of
+    // dependent steps is 14 long where Horner's alone is 26 (the loops were bound by it).
+    const D r2 = r * r, r4 = r2 * r2, r8 = r4 * r4;
+    D pair[5];
+    for (int n = 0; n < 5; ++n) pair[n] = r * kInverseFactorial[2 * n + 5] + kInverseFactorial[2 * n + 4];
+    const D high = (pair[0] + pair[1] * r2) + (pair[2] + pair[3] * r2) * r4 + pair[4] * r8;
+    D p = high;
+    for (int n = 3; n >= 0; --n) p = p * r + kInverseFactorial[n];
+    // 2^k = 2^k1 2^(k - k1), each factor's exponent within a normal double's.
+    const D k1 = (k * 0.5 + kRound) - kRound, k2 = k - k1;
+    D power1, power2;
+    power_of_two<D, L>(k1, power1), power_of_two<D, L>(k2, power2);
+    result = p * power1 * power2;
+}
+
 // The instruction sets the kernels are compiled for, narrowest first.
 enum class Isa { baseline, avx2, avx512 };
 const char* isa_name(Isa isa);
@@ -94,20 +154,23 @@ Isa isa();
 // Uses `isa`, or the widest this processor runs if that is narrower; returns the one used.
 Isa set_isa(Isa isa);
 
-// The lanes each instruction set's kernels use.
+// The lanes each instruction set's kernels use, and for kernels of doubles a register's
+// width of them (in vectors wider than the registers GCC makes comparisons and selects
+// scalar, storing and reloading the lanes).
 constexpr int kAvx512Lanes = 16, kAvx2Lanes = 8, kBaselineLanes = 8;
+constexpr int kAvx512Doubles = 8, kAvx2Doubles = 4, kBaselineDoubles = 2;
 
-template <typename Kernel, typename... Args>
+template <typename Kernel, int lanes = kAvx512Lanes, typename... Args>
 __attribute__((target("avx512f,avx512bw,avx512dq,avx512vl"))) void run_avx512(Args... args) {
-    Kernel::template run<kAvx512Lanes>(args...);
+    Kernel::template run<lanes>(args...);
 }
-template <typename Kernel, typename... Args>
+template <typename Kernel, int lanes = kAvx2Lanes, typename... Args>
 __attribute__((target("avx2"))) void run_avx2(Args... args) {
-    Kernel::template run<kAvx2Lanes>(args...);
+    Kernel::template run<lanes>(args...);
 }
-template <typename Kernel, typename... Args>
+template <typename Kernel, int lanes = kBaselineLanes, typename... Args>
 void run_baseline(Args... args) {
-    Kernel::template run<kBaselineLanes>(args...);
+    Kernel::template run<lanes>(args...);
 }
 
 template <typename Kernel, typename... Args>
@@ -116,6 +179,16 @@ void dispatch(Args... args) {
         case Isa::avx512: run_avx512<Kernel>(args...); return;
         case Isa::avx2: run_avx2<Kernel>(args...); return;
         case Isa::baseline: run_baseline<Kernel>(args...); return;
+    }
+}
+
+// The same for a kernel of doubles: run<lanes> with a register's width of them.
+template <typename Kernel, typename... Args>
+void dispatch_doubles(Args... args) {
+    switch (isa()) {
+        case Isa::avx512: run_avx512<Kernel, kAvx512Doubles>(args...); return;
+        case Isa::avx2: run_avx2<Kernel, kAvx2Doubles>(args...); return;
+        case Isa::baseline: run_baseline<Kernel, kBaselineDoubles>(args...); return;
     }
 }
 

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/simd.h"
+
 namespace darkroom {
 
 namespace {
@@ -341,6 +343,34 @@ Spectrum from_log10(const Spectrum& log10_values, double missing_value) {
     Spectrum s;
     for (int i = 0; i < N; ++i) s[i] = std::isfinite(log10_values[i]) ? std::pow(10.0, log10_values[i]) : missing_value;
     return s;
+}
+
+namespace {
+
+struct TransmittanceRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const double* density, double* out, int n) {
+        int i = 0;
+        for (; i + lanes <= n; i += lanes)
+            transmittance_lanes<typename simd::Lanes<lanes>::D, typename simd::Lanes<lanes>::L>(density, out, i);
+        for (; i < n; ++i) transmittance_lanes<simd::Double1, simd::Lanes<1>::L>(density, out, i);
+    }
+    template <typename D, typename L>
+    __attribute__((always_inline)) static void transmittance_lanes(const double* density, double* out, int i) {
+        constexpr double kLn10 = 2.302585092994046;
+        D d, t;
+        simd::load(d, density + i);
+        simd::exp_lanes<D, L>(d * -kLn10, t);
+        simd::store(out + i, t);
+    }
+};
+
+}  // namespace
+
+Spectrum transmittance_of(const Spectrum& density) {
+    Spectrum t;
+    simd::dispatch_doubles<TransmittanceRow>(density.data(), t.data(), N);
+    return t;
 }
 
 double dot(const Spectrum& a, const Spectrum& b) {

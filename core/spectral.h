@@ -54,6 +54,11 @@ Spectrum resample_to_grid(const std::vector<double>& nm, const std::vector<doubl
 // Typical use: from_log10(resample_to_grid(nm, log_s, NAN), 0.0).
 Spectrum from_log10(const Spectrum& log10_values, double missing_value);
 
+// 10^-density per sample: the transmittance (or reflectance) of a spectral density, within
+// 1 ulp of std::exp(-ln 10 density) and the same on every processor (simd::exp_lanes, a
+// vector of samples at a time). Per pixel.
+Spectrum transmittance_of(const Spectrum& density);
+
 // sum_i a_i b_i, in four interleaved partial sums so that the additions overlap instead of
 // each waiting on the last (the per-pixel spectral stages are bound by that wait). Per pixel.
 double dot(const Spectrum& a, const Spectrum& b);

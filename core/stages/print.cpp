@@ -139,21 +139,18 @@ void PrintExposure::expose(const double* negative_density, double* paper_exposur
     }
     double net[3];
     for (int l = 0; l < film_layers_; ++l) net[l] = negative_density[l] - film_d_min_[l];
-    Spectrum t;
-    for (int i = 0; i < kSpectralSamples; ++i) {
-        double d = film_base_[i];
-        for (int l = 0; l < film_layers_; ++l) d += net[l] * film_dye_[l][i];
-        t[i] = std::exp(-kLn10 * d);
-    }
+    Spectrum d = film_base_;
+    for (int i = 0; i < kSpectralSamples; ++i)
+        for (int l = 0; l < film_layers_; ++l) d[i] += net[l] * film_dye_[l][i];
+    const Spectrum t = transmittance_of(d);
     for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = dot(weighted_light_[j], t);
 }
 
 Spectrum PrintExposure::layer_transmittance(int layer, double density) const {
     const double net = density - film_d_min_[layer];
-    Spectrum t;
-    for (int i = 0; i < kSpectralSamples; ++i)
-        t[i] = std::exp(-kLn10 * ((layer == 0 ? film_base_[i] : 0.0) + net * film_dye_[layer][i]));
-    return t;
+    Spectrum d;
+    for (int i = 0; i < kSpectralSamples; ++i) d[i] = (layer == 0 ? film_base_[i] : 0.0) + net * film_dye_[layer][i];
+    return transmittance_of(d);
 }
 
 void PrintExposure::expose(const std::array<const Spectrum*, 3>& layer_transmittance, double* paper_exposure) const {
@@ -177,9 +174,7 @@ PrintView::PrintView(const Stock& paper) : paper_(&paper) {
 }
 
 Spectrum PrintView::reflectance(const double* paper_density) const {
-    Spectrum d = spectral_density(*paper_, paper_density, d_min_.data());
-    for (double& v : d) v = std::exp(-kLn10 * v);
-    return d;
+    return transmittance_of(spectral_density(*paper_, paper_density, d_min_.data()));
 }
 
 void PrintView::rgb(const double* paper_density, double* rgb) const {

@@ -1,11 +1,14 @@
 // The vector kernels' dispatch (core/simd.h): every instruction set this machine runs gives
 // the same pixels, so a render farm of mixed processors renders one picture.
 #include <catch2/catch.hpp>
+#include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "core/demo_scene.h"
 #include "core/develop.h"
 #include "core/simd.h"
+#include "core/spectral.h"
 #include "core/stock.h"
 #include "test_support.h"
 
@@ -47,4 +50,56 @@ TEST_CASE("every instruction set develops the same pixels at every tier that use
             INFO(quality_name(q) << ", output " << int(output) << ", instruction sets " << results.size());
             for (size_t i = 1; i < results.size(); ++i) CHECK(results[i].pixels == results[0].pixels);
         }
+}
+
+namespace {
+
+// How many doubles lie between a and b (both >= 0): their bit patterns' distance.
+int64_t ulps_apart(double a, double b) {
+    int64_t ia, ib;
+    std::memcpy(&ia, &a, sizeof ia);
+    std::memcpy(&ib, &b, sizeof ib);
+    return ia > ib ? ia - ib : ib - ia;
+}
+
+}  // namespace
+
+TEST_CASE("the vector e^x is within 1 ulp of std::exp from the subnormals to overflow", "[simd][spectral]") {
+    auto exp_one_lane = [](double x) {
+        simd::Double1 e;
+        simd::exp_lanes<simd::Double1, simd::Lanes<1>::L>(simd::Double1{x}, e);
+        return e[0];
+    };
+    int64_t worst = 0;
+    double worst_at = 0;
+    // Every 1e-4 across the whole range (e^-745.13 is the smallest subnormal, e^709.78 the largest double).
+    for (double x = -746.0; x <= 709.78; x += 1e-4) {
+        const int64_t apart = ulps_apart(exp_one_lane(x), std::exp(x));
+        if (apart > worst) worst = apart, worst_at = x;
+    }
+    INFO("worst at x = " << worst_at);
+    CHECK(worst <= 1);
+    CHECK(exp_one_lane(0.0) == 1.0);
+    CHECK(exp_one_lane(-1000.0) == 0.0);
+    CHECK(exp_one_lane(-INFINITY) == 0.0);
+    CHECK(exp_one_lane(710.0) == INFINITY);
+    CHECK(exp_one_lane(INFINITY) == INFINITY);
+    CHECK(std::isnan(exp_one_lane(NAN)));
+}
+
+TEST_CASE("a spectral density's transmittance is 10^-D within 1 ulp, the same on every instruction set", "[simd][spectral]") {
+    IsaScope scope;
+    constexpr double kLn10 = 2.302585092994046;
+    Spectrum density;  // from a clear base's -0.2 to a deep shadow's 12, and the samples the vectors leave to the tail
+    for (int i = 0; i < kSpectralSamples; ++i) density[i] = -0.2 + 12.2 * std::pow(i / 80.0, 3.0);
+    std::vector<Spectrum> results;
+    for (simd::Isa isa : runnable_isas()) {
+        simd::set_isa(isa);
+        results.push_back(transmittance_of(density));
+    }
+    for (int i = 0; i < kSpectralSamples; ++i) {
+        INFO("density " << density[i]);
+        CHECK(ulps_apart(results[0][i], std::exp(-kLn10 * density[i])) <= 1);
+        for (const Spectrum& t : results) CHECK(t[i] == results[0][i]);
+    }
 }
