@@ -365,7 +365,26 @@ struct TransmittanceRow {
     }
 };
 
+struct AddScaledRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(double* sum, double weight, const double* term, int n) {
+        int i = 0;
+        for (; i + lanes <= n; i += lanes) add_scaled_lanes<typename simd::Lanes<lanes>::D>(sum, weight, term, i);
+        for (; i < n; ++i) add_scaled_lanes<simd::Double1>(sum, weight, term, i);
+    }
+    template <typename D>
+    __attribute__((always_inline)) static void add_scaled_lanes(double* sum, double weight, const double* term, int i) {
+        D s, t;
+        simd::load(s, sum + i), simd::load(t, term + i);
+        simd::store(sum + i, s + weight * t);
+    }
+};
+
 }  // namespace
+
+void add_scaled(Spectrum& sum, double weight, const Spectrum& term) {
+    simd::dispatch_doubles<AddScaledRow>(sum.data(), weight, term.data(), N);
+}
 
 Spectrum transmittance_of(const Spectrum& density) {
     Spectrum t;

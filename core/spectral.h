@@ -54,6 +54,10 @@ Spectrum resample_to_grid(const std::vector<double>& nm, const std::vector<doubl
 // Typical use: from_log10(resample_to_grid(nm, log_s, NAN), 0.0).
 Spectrum from_log10(const Spectrum& log10_values, double missing_value);
 
+// sum += weight * term per sample (a vector of samples at a time, the same values as one at a
+// time). Per pixel.
+void add_scaled(Spectrum& sum, double weight, const Spectrum& term);
+
 // 10^-density per sample: the transmittance (or reflectance) of a spectral density, within
 // 1 ulp of std::exp(-ln 10 density) and the same on every processor (simd::exp_lanes, a
 // vector of samples at a time). Per pixel.

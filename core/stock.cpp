@@ -269,7 +269,7 @@ Spectrum spectral_density(const Stock& stock, const double* layer_density, const
     Spectrum d = stock.base_density;
     for (size_t l = 0; l < stock.layers.size(); ++l) {
         double net = layer_density[l] - (layer_d_min ? layer_d_min[l] : stock.layers[l].density_curve.y_min());
-        for (int i = 0; i < kSpectralSamples; ++i) d[i] += net * stock.layers[l].dye_density[i];
+        add_scaled(d, net, stock.layers[l].dye_density);
     }
     return d;
 }

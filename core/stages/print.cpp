@@ -140,16 +140,15 @@ void PrintExposure::expose(const double* negative_density, double* paper_exposur
     double net[3];
     for (int l = 0; l < film_layers_; ++l) net[l] = negative_density[l] - film_d_min_[l];
     Spectrum d = film_base_;
-    for (int i = 0; i < kSpectralSamples; ++i)
-        for (int l = 0; l < film_layers_; ++l) d[i] += net[l] * film_dye_[l][i];
+    for (int l = 0; l < film_layers_; ++l) add_scaled(d, net[l], film_dye_[l]);
     const Spectrum t = transmittance_of(d);
     for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = dot(weighted_light_[j], t);
 }
 
 Spectrum PrintExposure::layer_transmittance(int layer, double density) const {
     const double net = density - film_d_min_[layer];
-    Spectrum d;
-    for (int i = 0; i < kSpectralSamples; ++i) d[i] = (layer == 0 ? film_base_[i] : 0.0) + net * film_dye_[layer][i];
+    Spectrum d = layer == 0 ? film_base_ : Spectrum{};
+    add_scaled(d, net, film_dye_[layer]);
     return transmittance_of(d);
 }
 
