@@ -4,7 +4,8 @@
 // A hot loop is written once, for any lane count, as a kernel: a struct whose static
 // member template run<lanes>(args...) is always inlined. dispatch<Kernel>(args...) runs it
 // compiled for AVX-512 (16 float lanes), AVX2 (8) or the baseline (8, in SSE2 halves),
-// chosen once per process. No build uses FMA (a product and a sum round separately, and
+// chosen once per process (dispatch_doubles: a kernel of doubles, a register's width of
+// them: 8, 4 or 2). No build uses FMA (a product and a sum round separately, and
 // the project builds with -ffp-contract=off), and every loop works lane by lane, so every
 // processor and lane count computes the same values: each kernel is tested bit for bit
 // against its one-lane definition, and whole renders against each other on every ISA the
@@ -82,15 +83,17 @@ __attribute__((always_inline)) inline void prefetch_ahead(const void* p, int byt
     for (int b = 0; b < bytes; b += 64) __builtin_prefetch(reinterpret_cast<const void*>(ahead + b), for_writing);
 }
 
-// 2^n for integer-valued lanes n within a normal double's exponents (|n| < 1023), from
-// its bits: n + 1.5 * 2^52 holds n in its low bits.
+// Added to a double of magnitude under 2^51 (and taken away), it rounds it to an integer,
+// which the sum then holds in its low bits.
+constexpr double kRoundToInteger = 0x1.8p52;
+
+// 2^n for integer-valued lanes n within a normal double's exponents (|n| < 1023), from its bits.
 template <typename D, typename L>
 __attribute__((always_inline)) inline void power_of_two(const D& n, D& power) {
-    constexpr double kRound = 0x1.8p52;
-    const D shifted = n + kRound;
+    const D shifted = n + kRoundToInteger;
     L bits;
     std::memcpy(&bits, &shifted, sizeof bits);
-    bits = (bits - int64_t(0x4338000000000000) + 1023) << 52;  // (0x4338... is kRound's bits)
+    bits = (bits - int64_t(0x4338000000000000) + 1023) << 52;  // (0x4338... is kRoundToInteger's bits)
     std::memcpy(&power, &bits, sizeof power);
 }
 
@@ -107,7 +110,6 @@ template <typename D, typename L>
 __attribute__((always_inline)) inline void exp_lanes(const D& x, D& result) {
     constexpr double kLog2e = 1.4426950408889634, kLn2High = 6.93147180369123816490e-01,
                      kLn2Low = 1.90821492927058770002e-10;
-    constexpr double kRound = 0x1.8p52;  // adding it rounds a double below 2^51 to an integer
     constexpr double kInverseFactorial[14] = {1.0,
                                               1.0,
                                               1.0 / 2,
@@ -124,7 +126,7 @@ __attribute__((always_inline)) inline void exp_lanes(const D& x, D& result) {
                                               1.0 / 6227020800};
     D clamped = x < -746.0 ? D{} - 746.0 : x;
     clamped = clamped > 710.0 ? D{} + 710.0 : clamped;
-    const D k = (clamped * kLog2e + kRound) - kRound;
+    const D k = (clamped * kLog2e + kRoundToInteger) - kRoundToInteger;
     const D r = (clamped - k * kLn2High) - k * kLn2Low;
     // The terms from r^4 on by Estrin's scheme (in pairs, then pairs of pairs by r^2, r^4 and
     // r^8), the first four by Horner's, which keeps the sum within 1 ulp: the chain of
@@ -132,11 +134,10 @@ __attribute__((always_inline)) inline void exp_lanes(const D& x, D& result) {
     const D r2 = r * r, r4 = r2 * r2, r8 = r4 * r4;
     D pair[5];
     for (int n = 0; n < 5; ++n) pair[n] = r * kInverseFactorial[2 * n + 5] + kInverseFactorial[2 * n + 4];
-    const D high = (pair[0] + pair[1] * r2) + (pair[2] + pair[3] * r2) * r4 + pair[4] * r8;
-    D p = high;
+    D p = (pair[0] + pair[1] * r2) + (pair[2] + pair[3] * r2) * r4 + pair[4] * r8;
     for (int n = 3; n >= 0; --n) p = p * r + kInverseFactorial[n];
     // 2^k = 2^k1 2^(k - k1), each factor's exponent within a normal double's.
-    const D k1 = (k * 0.5 + kRound) - kRound, k2 = k - k1;
+    const D k1 = (k * 0.5 + kRoundToInteger) - kRoundToInteger, k2 = k - k1;
     D power1, power2;
     power_of_two<D, L>(k1, power1), power_of_two<D, L>(k2, power2);
     result = p * power1 * power2;
