@@ -174,23 +174,21 @@ void run_baseline(Args... args) {
     Kernel::template run<lanes>(args...);
 }
 
-template <typename Kernel, typename... Args>
+// (lanes: the widths run<> is given, the floats' by default.)
+template <typename Kernel, int avx512_lanes = kAvx512Lanes, int avx2_lanes = kAvx2Lanes,
+          int baseline_lanes = kBaselineLanes, typename... Args>
 void dispatch(Args... args) {
     switch (isa()) {
-        case Isa::avx512: run_avx512<Kernel>(args...); return;
-        case Isa::avx2: run_avx2<Kernel>(args...); return;
-        case Isa::baseline: run_baseline<Kernel>(args...); return;
+        case Isa::avx512: run_avx512<Kernel, avx512_lanes>(args...); return;
+        case Isa::avx2: run_avx2<Kernel, avx2_lanes>(args...); return;
+        case Isa::baseline: run_baseline<Kernel, baseline_lanes>(args...); return;
     }
 }
 
 // The same for a kernel of doubles: run<lanes> with a register's width of them.
 template <typename Kernel, typename... Args>
 void dispatch_doubles(Args... args) {
-    switch (isa()) {
-        case Isa::avx512: run_avx512<Kernel, kAvx512Doubles>(args...); return;
-        case Isa::avx2: run_avx2<Kernel, kAvx2Doubles>(args...); return;
-        case Isa::baseline: run_baseline<Kernel, kBaselineDoubles>(args...); return;
-    }
+    dispatch<Kernel, kAvx512Doubles, kAvx2Doubles, kBaselineDoubles>(args...);
 }
 
 }  // namespace darkroom::simd

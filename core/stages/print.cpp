@@ -96,8 +96,7 @@ PrintExposure PrintExposure::design(const Stock& film, const Stock& paper, const
     double grey_density[3];
     for (int i = 0; i < p.film_layers_; ++i)
         grey_density[i] = film.layers[i].density_curve(std::log10(settings.mid_grey_film_exposure_lux_s));
-    Spectrum grey_transmittance = spectral_density(film, grey_density);
-    for (double& v : grey_transmittance) v = std::pow(10.0, -v);
+    const Spectrum grey_transmittance = transmittance_of(spectral_density(film, grey_density));
 
     p.aim_density_ = neutral_print_densities(paper, paper.mid_grey_aim_density);
     const std::array<Spectrum, 3> filters = filtration_densities();

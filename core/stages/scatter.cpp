@@ -65,13 +65,13 @@ static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, in
     // same symmetries: its part 0 <= n <= m <= N/2 is summed, then mirrored and transposed, so
     // that its taps are symmetric exactly; the sums read H's rows k <= N/2 only (the others
     // are their mirror images), kept in `response`, and `partial` holds k, n <= N/2.
-    const int half = N / 2, quarter = half + 1;  // (quarter: the indices 0 ... N/2)
+    const int half = N / 2, up_to_half = half + 1;  // (up_to_half: the indices 0 ... N/2)
     auto mirrored = [N](int i) { return std::min(i, N - i); };
-    std::vector<double> response(size_t(quarter) * N), cosines(size_t(N) * N), partial(size_t(quarter) * quarter, 0.0),
-        h(size_t(N) * N, 0.0);
+    std::vector<double> response(size_t(up_to_half) * N), cosines(size_t(N) * N),
+        partial(size_t(up_to_half) * up_to_half, 0.0), h(size_t(N) * N, 0.0);
     // One axis's frequency at index k in each replica j: axis[k * replicas + j].
     const int replicas = 2 * alias_orders + 1;
-    std::vector<double> axis(size_t(quarter) * replicas);
+    std::vector<double> axis(size_t(up_to_half) * replicas);
     for (int k = 0; k <= half; ++k)
         for (int j = 0; j < replicas; ++j) axis[k * replicas + j] = double(k) / (N * pitch_mm) + (j - alias_orders) * sampling;
     // (k, l) pairs shared out evenly (rows of the triangle differ in length); each writes
@@ -94,15 +94,15 @@ static std::vector<double> periodic_kernel(const Curve& mtf, double pitch_mm, in
     });
     for (int k = 0; k < N; ++k)
         for (int m = 0; m < N; ++m) cosines[k * N + m] = std::cos(2.0 * M_PI * double((long long)k * m % N) / N);
-    parallel_for(0, quarter, threads, [&](int begin, int end) {
+    parallel_for(0, up_to_half, threads, [&](int begin, int end) {
         for (int k = begin; k < end; ++k)
             for (int l = 0; l < N; ++l)
-                for (int n = 0; n <= half; ++n) partial[k * quarter + n] += response[k * N + l] * cosines[l * N + n];
+                for (int n = 0; n <= half; ++n) partial[k * up_to_half + n] += response[k * N + l] * cosines[l * N + n];
     });
-    parallel_for(0, quarter, threads, [&](int begin, int end) {
+    parallel_for(0, up_to_half, threads, [&](int begin, int end) {
         for (int m = begin; m < end; ++m)
             for (int k = 0; k < N; ++k)
-                for (int n = 0; n <= m; ++n) h[m * N + n] += cosines[k * N + m] * partial[mirrored(k) * quarter + n];
+                for (int n = 0; n <= m; ++n) h[m * N + n] += cosines[k * N + m] * partial[mirrored(k) * up_to_half + n];
     });
     for (int m = 0; m <= half; ++m)
         for (int n = 0; n <= m; ++n) h[m * N + n] /= double(N) * N;
