@@ -9,6 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <glm/glm.hpp>
+
 #include "core/develop_rows.h"
 #include "core/parallel.h"
 #include "core/stages/filters.h"
@@ -341,16 +343,30 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
     return table;
 }
 
-// The share of a grain field's variance that a scatter kernel keeps: sum (K * G)^2 / sum G^2,
-// G the grain's 2D kernel (its 1D kernel's outer product), K the scatter's as applied.
-double variance_kept_by_scatter(const GrainModel& grain, const ScatterKernel& scatter) {
-    const int rg = grain.radius, rs = scatter.radius, side_s = 2 * rs + 1, r = rg + rs;
+// A film layer's grain as the print table reads it: unit white noise through the grain's 2D
+// kernel G (its 1D kernel's outer product) and the paper's scatter K as applied, K * G, on lags
+// -radius ... radius in x and y.
+struct ScatteredGrain {
+    int radius = 0;
+    std::vector<double> taps;  // row-major
+    // sum (K * G)_a (K * G)_b over their common lags: the covariance of two such fields of one
+    // white noise (with itself: the field's variance).
+    double dot(const ScatteredGrain& o) const {
+        const int r = std::min(radius, o.radius);
+        double sum = 0;
+        for (int y = -r; y <= r; ++y)
+            for (int x = -r; x <= r; ++x) sum += at(x, y) * o.at(x, y);
+        return sum;
+    }
+    double at(int x, int y) const { return taps[size_t(y + radius) * (2 * radius + 1) + x + radius]; }
+};
+
+ScatteredGrain scattered_grain(const GrainModel& grain, const ScatterKernel& scatter) {
+    const int rg = grain.radius, rs = scatter.radius, side_s = 2 * rs + 1;
     const std::vector<double> taps = scatter.applied_taps();
-    double kept = 0, grain_sum = 0;
-    for (float a : grain.kernel)
-        for (float b : grain.kernel) grain_sum += double(a) * a * b * b;
-    for (int y = -r; y <= r; ++y)
-        for (int x = -r; x <= r; ++x) {
+    ScatteredGrain k{rg + rs, {}};
+    for (int y = -k.radius; y <= k.radius; ++y)
+        for (int x = -k.radius; x <= k.radius; ++x) {
             double v = 0;
             for (int sy = -rs; sy <= rs; ++sy)
                 for (int sx = -rs; sx <= rs; ++sx) {
@@ -358,9 +374,9 @@ double variance_kept_by_scatter(const GrainModel& grain, const ScatterKernel& sc
                     if (std::abs(gy) > rg || std::abs(gx) > rg) continue;
                     v += taps[size_t(sy + rs) * side_s + sx + rs] * grain.kernel[gy + rg] * grain.kernel[gx + rg];
                 }
-            kept += v * v;
+            k.taps.push_back(v);
         }
-    return kept / grain_sum;
+    return k;
 }
 
 // Gauss-Hermite quadrature for the standard normal: E[f(Z)] ~ sum_k weight_k f(node_k), exact
@@ -443,18 +459,37 @@ std::pair<double, double> solve_increasing(const F& f, double lo, double f_lo, d
 //     where the print is flat no spread carries the paper's grain). The variance that spread
 //     adds over the film's, per unit of added variance t_c, is the effective squared contrast g_c.
 //  3. With M_ci = d v_c / d D_i, the t_i >= 0 solve, in the least-squares sense,
-//       g_c t_c + sum_{i != c} M_ci^2 t_i = sigma_c^2   for each channel c
-//     (t_i = 0 where the film layer has no grain).
+//       g_c t_c + sum_{i != c} M_ci^2 t_i + X_c = sigma_c^2   for each channel c
+//     (t_i = 0 where the film layer has no grain), X_c the cross terms of 4.
+//  4. The extra grain reaches the channels through the negative's dyes, which mix them more
+//     than the paper's own dyes do: with the layers' grains independent the print's channels
+//     were 0.02 (at grey) to 0.13 (four stops under) more correlated than high's (0.049 from
+//     the reference's pooled over the benchmark's wedge, against the plate-matching tolerance
+//     of 0.05). So the layers' grains are correlated as the print needs: the film layers'
+//     covariance at the table's
+//     input that gives the print both grains' channel covariance, linearised,
+//       T = diag(s_i^2) + M^-1 V diag(sigma_paper^2) V^T M^-T,
+//     is taken at grey, its correlation taken back to the white noises (over the correlation
+//     two layers' kernels give one white noise) and factored (Cholesky, W = L L^T): each layer
+//     filters the white noises mixed by its row of L (GrainModel::mixed_noise), so the layers'
+//     grains have one correlation Q_ij along the whole scale. (T's correlations are weakest
+//     near grey, -0.01 to -0.05 on 250D and 2383, and grow towards the scale's ends, where the
+//     paper's grain outweighs the film's: those levels keep some of the excess, README.) Then
+//       X_c = sum_{i != j} M_ci M_cj s_i s_j Q_ij,  s_i^2 the layer's spread and t_i,
+//     and 3 is solved again until t settles.
 // What the negative cannot carry (README, "How preview prints") is measured there.
 constexpr double kMaxFoldedGrainD = 0.5;
 void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
                       double exposure_scale, int curve_table_bits, int threads) {
-    if (film.curve_tables.empty()) return;  // (the tiers that print through one table tabulate curves)
+    if (film.curve_tables.empty() || film.grain.size() != 3) return;  // (the tiers that print through one table tabulate curves)
     bool grained[3], any = false;
-    double gain[3] = {0, 0, 0};  // kappa_i sqrt(rho_i)
+    ScatteredGrain spread[3];
+    double gain[3] = {0, 0, 0};  // the spread at the table's input per unit amplitude: kappa_i sqrt(rho_i)
     for (size_t i = 0; i < 3; ++i) {
-        if (film.grain[i])
-            gain[i] = film.grain[i]->field_sigma() * std::sqrt(variance_kept_by_scatter(*film.grain[i], paper.scatter[i]));
+        if (film.grain[i]) {
+            spread[i] = scattered_grain(*film.grain[i], paper.scatter[i]);
+            gain[i] = std::sqrt(spread[i].dot(spread[i]));
+        }
         grained[i] = gain[i] > 0;
         any = any || (grained[i] && paper.grain[i]);
     }
@@ -462,6 +497,7 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
     // The grey scale's negative densities every quarter stop (beyond the film's curves, where
     // a step changes no density, once).
     std::vector<std::array<double, 3>> levels;
+    std::vector<double> level_stops;
     for (double stops = -16; stops <= 16; stops += 0.25) {
         std::array<double, 3> d;
         for (size_t l = 0; l < 3; ++l) {
@@ -469,7 +505,7 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
             const double h = 0.18 * std::exp2(stops) * exposure_scale * (w[0] + w[1] + w[2]);
             d[l] = film.stock.layers[l].density_curve(std::log10(std::max(h, 1e-30)));
         }
-        if (levels.empty() || d != levels.back()) levels.push_back(d);
+        if (levels.empty() || d != levels.back()) levels.push_back(d), level_stops.push_back(stops);
     }
     const NormalQuadrature normal(8);
     const PrintView view(paper.stock);
@@ -483,11 +519,18 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
         print_densities(enlarger, paper.stock, negative, dp);
         log_view(dp, out);
     };
-    std::vector<std::array<double, 3>> extra(levels.size());  // e_i at each level
+    // Each level's equations (3) and T (4).
+    struct Level {
+        double a[3][3], b[3], m[3][3], film_variance[3];
+        glm::dmat3 covariance{0.0};  // T (glm: column-major, [j][i] is T_ij)
+        bool linear = false;         // T is finite (M invertible)
+    };
+    std::vector<Level> equations(levels.size());
     parallel_for(0, int(levels.size()), threads, [&](int begin, int end) {
         for (int level = begin; level < end; ++level) {
             const double* d = levels[size_t(level)].data();
-            double dp[3], seen[3], v[3][3], m[3][3];  // V_cj, M_ci
+            Level& e = equations[size_t(level)];
+            double dp[3], seen[3], v[3][3];  // V_cj
             constexpr double kStep = 0.01;
             print_densities(enlarger, paper.stock, d, dp);
             log_view(dp, seen);
@@ -497,15 +540,30 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
                 log_view(dp_up, up);
                 for (int c = 0; c < 3; ++c) v[c][k] = (up[c] - seen[c]) / kStep;
                 log_print(d_up, up);
-                for (int c = 0; c < 3; ++c) m[c][k] = (up[c] - seen[c]) / kStep;
+                for (int c = 0; c < 3; ++c) e.m[c][k] = (up[c] - seen[c]) / kStep;
             }
-            double a[3][3], b[3];
+            double paper_variance[3];
+            for (int j = 0; j < 3; ++j)
+                paper_variance[j] = paper.grain[j] ? std::pow(grain_sigma_at(*paper.grain[j], dp[j]), 2) : 0.0;
+            for (int i = 0; i < 3; ++i)
+                e.film_variance[i] = grained[i] ? std::pow(film.grain[i]->amplitude_at(d[i]) * gain[i], 2) : 0.0;
+            glm::dmat3 m_inverse(0.0), paper_covariance(0.0);
+            for (int c = 0; c < 3; ++c)
+                for (int i = 0; i < 3; ++i) {
+                    m_inverse[i][c] = e.m[c][i];
+                    for (int j = 0; j < 3; ++j) paper_covariance[i][c] += v[c][j] * v[i][j] * paper_variance[j];
+                }
+            m_inverse = glm::inverse(m_inverse);
+            e.covariance = m_inverse * paper_covariance * glm::transpose(m_inverse);
+            for (int i = 0; i < 3; ++i) e.covariance[i][i] += e.film_variance[i];
+            e.linear = true;
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) e.linear = e.linear && std::isfinite(e.covariance[j][i]);
             for (int c = 0; c < 3; ++c) {
-                b[c] = 0;
-                for (int j = 0; j < 3; ++j)
-                    if (paper.grain[j]) b[c] += v[c][j] * v[c][j] * std::pow(grain_sigma_at(*paper.grain[j], dp[j]), 2);
-                for (int i = 0; i < 3; ++i) a[c][i] = m[c][i] * m[c][i];
-                if (!grained[c] || b[c] == 0) continue;
+                e.b[c] = 0;
+                for (int j = 0; j < 3; ++j) e.b[c] += v[c][j] * v[c][j] * paper_variance[j];
+                for (int i = 0; i < 3; ++i) e.a[c][i] = e.m[c][i] * e.m[c][i];
+                if (!grained[c] || e.b[c] == 0) continue;
                 // Var v_c(D + s Z e_c), the other layers' densities held.
                 auto print_variance = [&](double s) {
                     double mean = 0, square = 0;
@@ -518,14 +576,58 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
                     }
                     return std::max(0.0, square - mean * mean);
                 };
-                const double s_film = film.grain[c]->amplitude_at(d[c]) * gain[c];
+                const double s_film = std::sqrt(e.film_variance[c]);
                 const double film_variance = print_variance(s_film);
                 const double s_max = std::max(s_film, kMaxFoldedGrainD);
                 const auto [s, variance] = solve_increasing(print_variance, s_film, film_variance, s_max,
-                                                           film_variance + b[c], 1e-3 * b[c]);
-                if (s > s_film) a[c][c] = (variance - film_variance) / (s * s - s_film * s_film);
+                                                           film_variance + e.b[c], 1e-3 * e.b[c]);
+                if (s > s_film) e.a[c][c] = (variance - film_variance) / (s * s - s_film * s_film);
             }
-            const std::array<double, 3> t = nonnegative_least_squares(a, b, grained);
+        }
+    });
+    // 4: T at grey, its correlation over the kernels', factored. (Where that is not a
+    // correlation matrix, its correlations are shrunk until it is.)
+    // (The film's mid-grey exposure, which the printer lights print at the paper's aim: with the
+    // input in lux seconds, 0 stops above is 0.18 lux s, not grey.)
+    const double grey_stops = std::log2(mid_grey_exposure_lux_s(film.stock.iso_speed) / (0.18 * exposure_scale));
+    const size_t grey = size_t(std::min_element(level_stops.begin(), level_stops.end(), [&](double a, double b) {
+                                   return std::abs(a - grey_stops) < std::abs(b - grey_stops);
+                               }) - level_stops.begin());
+    const glm::dmat3 at_grey = equations[grey].linear ? equations[grey].covariance : glm::dmat3(1.0);
+    std::vector<double> wanted(9, 0.0), kernels(9, 1.0);  // the layers' grains' correlations, their kernels' overlaps
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            const size_t ij = size_t(i) * 3 + j;
+            if (i == j) wanted[ij] = 1.0;
+            if (i == j || !grained[i] || !grained[j] || !(at_grey[i][i] > 0 && at_grey[j][j] > 0)) continue;
+            kernels[ij] = spread[i].dot(spread[j]) / (gain[i] * gain[j]);
+            wanted[ij] = at_grey[j][i] / std::sqrt(at_grey[i][i] * at_grey[j][j]);
+        }
+    const std::vector<double> factor = white_noise_mixing(wanted, kernels, 3);  // L, row-major
+    double correlation[3][3];  // Q: the layers' grains' at the table's input
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            correlation[i][j] = 0;
+            for (int k = 0; k < 3; ++k) correlation[i][j] += factor[size_t(i) * 3 + k] * factor[size_t(j) * 3 + k];
+            correlation[i][j] *= kernels[size_t(i) * 3 + j];
+        }
+    // 3 with the cross terms, each level on its own.
+    std::vector<std::array<double, 3>> extra(levels.size());  // e_i at each level
+    parallel_for(0, int(levels.size()), threads, [&](int begin, int end) {
+        for (int level = begin; level < end; ++level) {
+            const Level& e = equations[size_t(level)];
+            std::array<double, 3> t = nonnegative_least_squares(e.a, e.b, grained);
+            for (int iteration = 0; iteration < 30; ++iteration) {
+                double s[3], b[3];
+                for (int i = 0; i < 3; ++i) s[i] = std::sqrt(e.film_variance[i] + t[i]);
+                for (int c = 0; c < 3; ++c) {
+                    b[c] = e.b[c];
+                    for (int i = 0; i < 3; ++i)
+                        for (int j = 0; j < 3; ++j)
+                            if (i != j) b[c] -= e.m[c][i] * e.m[c][j] * s[i] * s[j] * correlation[i][j];
+                }
+                t = nonnegative_least_squares(e.a, b, grained);
+            }
             for (int i = 0; i < 3; ++i) extra[size_t(level)][size_t(i)] = grained[i] ? std::sqrt(t[i]) / gain[i] : 0.0;
         }
     });
@@ -534,7 +636,10 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
         std::vector<double> density_i, extra_i;
         for (size_t level = 0; level < levels.size(); ++level)
             density_i.push_back(levels[level][i]), extra_i.push_back(extra[level][i]);
-        const GrainModel film_grain = *film.grain[i];
+        GrainModel& film_grain = *film.grain[i];
+        if (factor[i * 3 + i] != 1.0)
+            for (size_t j = 0; j <= i; ++j)
+                if (factor[i * 3 + j] != 0.0) film_grain.mixed_noise.push_back({film.grain[j]->key, float(factor[i * 3 + j])});
         const Curve extra_at = make_curve(std::move(density_i), std::move(extra_i), "paper grain on the film's densities");
         film.curve_tables[i] = LogAxisTable(film.stock.layers[i].density_curve, curve_table_bits,
                                             [film_grain, extra_at](double d) {
@@ -653,8 +758,11 @@ Plan Plan::for_frame(int frame) const {
     Plan p = *this;
     p.settings_.frame = frame;
     for (MaterialStages* m : {&p.film_stages_, &p.paper_stages_}) {
-        for (auto& g : m->grain)
-            if (g) g->key.frame = frame;
+        for (auto& g : m->grain) {
+            if (!g) continue;
+            g->key.frame = frame;
+            for (GrainModel::NoiseTerm& term : g->mixed_noise) term.key.frame = frame;  // (the film layers' keys)
+        }
         for (auto& g : m->boolean_grain)
             if (g) g->key.frame = frame;
     }

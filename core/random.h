@@ -32,6 +32,7 @@ struct NoiseKey {
     uint64_t seed = 0;
     int32_t frame = 0;
     uint32_t stream = 0;
+    bool operator==(const NoiseKey& o) const { return seed == o.seed && frame == o.frame && stream == o.stream; }
 };
 
 // Uniform in (0, 1], never 0, from the top 24 bits.

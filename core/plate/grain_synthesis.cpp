@@ -12,29 +12,6 @@
 
 namespace darkroom {
 
-namespace {
-
-// Lower-triangular L with L L^T = m (n x n, row-major), or false if m is not positive
-// semi-definite. A zero pivot (fully correlated channels) gives a zero column.
-bool cholesky(const std::vector<double>& m, int n, std::vector<double>& l) {
-    l.assign((size_t)n * n, 0.0);
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j <= i; ++j) {
-            double sum = m[(size_t)i * n + j];
-            for (int k = 0; k < j; ++k) sum -= l[(size_t)i * n + k] * l[(size_t)j * n + k];
-            if (i == j) {
-                if (sum < -1e-9) return false;
-                l[(size_t)i * n + i] = std::sqrt(std::max(sum, 0.0));
-            } else {
-                double pivot = l[(size_t)j * n + j];
-                l[(size_t)i * n + j] = pivot > 1e-6 ? sum / pivot : 0.0;
-            }
-        }
-    return true;
-}
-
-}  // namespace
-
 // Cells per segment of a response curve on average: a cell then rarely holds a level, so the
 // lookup's walk from the cell's segment is mostly no step.
 constexpr int kResponseCellsPerSegment = 16;
@@ -76,25 +53,18 @@ GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile) {
         plan.filters.push_back(separable_approximation(k.taps, k.radius, kGrainKernelResidualEnergy));
         plan.halo_px = std::max(plan.halo_px, k.radius);
     }
-    // Filtering mixed white noise scales the lag-0 correlation of channels a and b by the
-    // overlap of their kernels, so mix with target / overlap.
-    std::vector<double> mix_correlation((size_t)n * n);
+    std::vector<double> correlation((size_t)n * n), overlap((size_t)n * n);
     for (int a = 0; a < n; ++a)
         for (int b = 0; b < n; ++b) {
             const GrainKernel &ka = plan.kernels[a], &kb = plan.kernels[b];
             int r = std::min(ka.radius, kb.radius);
-            double overlap = 0;
+            double sum = 0;
             for (int y = -r; y <= r; ++y)
-                for (int x = -r; x <= r; ++x) overlap += ka.at(x, y) * kb.at(x, y);
-            double m = a == b ? 1.0 : profile.correlation(a, b) / std::max(overlap, 1e-6);
-            mix_correlation[(size_t)a * n + b] = std::clamp(m, -1.0, 1.0);
+                for (int x = -r; x <= r; ++x) sum += ka.at(x, y) * kb.at(x, y);
+            overlap[(size_t)a * n + b] = sum;
+            correlation[(size_t)a * n + b] = profile.correlation(a, b);
         }
-    // A measured matrix can be slightly indefinite (or ask for more correlation than the
-    // kernels allow): shrink the off-diagonal terms until it factors.
-    while (!cholesky(mix_correlation, n, plan.mixing))
-        for (int a = 0; a < n; ++a)
-            for (int b = 0; b < n; ++b)
-                if (a != b) mix_correlation[(size_t)a * n + b] *= 0.99;
+    plan.mixing = white_noise_mixing(correlation, overlap, n);
     return plan;
 }
 

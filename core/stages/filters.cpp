@@ -194,6 +194,41 @@ void convolve_columns(const float* const* rows, const std::vector<float>& taps, 
         throw std::invalid_argument("convolve_columns: 1, 2 or 4 rows at once");
 }
 
+// Lower-triangular L with L L^T = m (n x n, row-major), or false if m is not positive
+// semi-definite. A zero pivot (fully correlated channels) gives a zero column.
+static bool cholesky(const std::vector<double>& m, int n, std::vector<double>& l) {
+    l.assign((size_t)n * n, 0.0);
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j <= i; ++j) {
+            double sum = m[(size_t)i * n + j];
+            for (int k = 0; k < j; ++k) sum -= l[(size_t)i * n + k] * l[(size_t)j * n + k];
+            if (i == j) {
+                if (sum < -1e-9) return false;
+                l[(size_t)i * n + i] = std::sqrt(std::max(sum, 0.0));
+            } else {
+                double pivot = l[(size_t)j * n + j];
+                l[(size_t)i * n + j] = pivot > 1e-6 ? sum / pivot : 0.0;
+            }
+        }
+    return true;
+}
+
+std::vector<double> white_noise_mixing(const std::vector<double>& field_correlation,
+                                       const std::vector<double>& kernel_overlap, int n) {
+    std::vector<double> mix_correlation((size_t)n * n), l;
+    for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) {
+            const size_t ab = (size_t)a * n + b;
+            const double m = a == b ? 1.0 : field_correlation[ab] / std::max(kernel_overlap[ab], 1e-6);
+            mix_correlation[ab] = std::clamp(m, -1.0, 1.0);
+        }
+    while (!cholesky(mix_correlation, n, l))
+        for (int a = 0; a < n; ++a)
+            for (int b = 0; b < n; ++b)
+                if (a != b) mix_correlation[(size_t)a * n + b] *= 0.99;
+    return l;
+}
+
 // Eigenvalues and orthonormal eigenvectors of a symmetric n x n matrix `a` (row-major, used
 // as scratch) by cyclic Jacobi rotations: each rotation zeroes one off-diagonal element, and
 // sweeps repeat until the off-diagonal part is negligible. Exact to rounding for the small,

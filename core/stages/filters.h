@@ -42,6 +42,16 @@ struct SeparableFilter {
     bool is_identity() const { return terms.empty() && centre == 0; }
 };
 
+// How to mix n unit white noises, each then filtered by its own kernel, so that the n fields'
+// correlations at lag 0 are `field_correlation` (n x n, row-major): the lower-triangular L
+// (row-major) of L L^T = the white noises' correlation. Filtering scales the correlation of
+// fields a and b by their kernels' overlap (sum K_a K_b over the product of their norms,
+// `kernel_overlap`, n x n), so the white noises' is the fields' over the overlap; where that
+// is not positive semi-definite (a measured matrix slightly indefinite, or more correlation
+// than the kernels allow) its off-diagonal terms shrink until it factors.
+std::vector<double> white_noise_mixing(const std::vector<double>& field_correlation,
+                                       const std::vector<double>& kernel_overlap, int n);
+
 // Eigenvalues and orthonormal eigenvectors of a symmetric n x n matrix `a` (row-major, used
 // as scratch) by cyclic Jacobi rotations; vectors[i * n + k] is component i of eigenvector k.
 void symmetric_eigen(std::vector<double>& a, int n, std::vector<double>& values, std::vector<double>& vectors);

@@ -45,6 +45,15 @@ struct GrainModel {
     // moves by at most kFastGrainCorrelationTolerance (they are a few thousandths of the
     // centre at film pitches: 3 taps of 5).
     bool fast = false;
+    // Where a print's paper grain is folded into the film's (fold_paper_grain, develop.cpp):
+    // the white noise this layer filters is a weighted sum of the film layers' white noises,
+    // the weights' squares summing to 1 (unit variance still), which correlates the layers'
+    // grains as the print's channels need. Empty: its own key's noise alone.
+    struct NoiseTerm {
+        NoiseKey key;
+        float weight = 0;
+    };
+    std::vector<NoiseTerm> mixed_noise;
 
     // Below this standard deviation (in density) at net density 1 the stage is skipped:
     // it would change transmittance by less than 2.3e-6 relative.
@@ -62,8 +71,9 @@ struct GrainModel {
 GrainModel design_grain(const GrainSpec& spec, double d_min, double pixel_pitch_um, NoiseKey key, bool fast = false);
 
 // The filtered noise of several grains down the rows of `w`, for one thread: white noise at
-// absolute pixels (hashed_noise_run where the grain is fast, else Philox and Box-Muller)
-// through each grain's kernel in x and y, so any window and any first row agree.
+// absolute pixels (hashed_noise_run where the grain is fast, else Philox and Box-Muller; its
+// mixed_noise's sum where it has one) through each grain's kernel in x and y, so any window
+// and any first row agree.
 class GrainNoiseStream {
 public:
     GrainNoiseStream(const std::vector<const GrainModel*>& grains, const Window& w);

@@ -149,3 +149,30 @@ TEST_CASE("the fast tiers' develop and grain in one pass: the table's density pl
     CHECK(density == again);
     CHECK(std::all_of(amplitude.begin(), amplitude.end(), [](float a) { return a == 0.0f; }));
 }
+
+TEST_CASE("a grain that mixes white noises filters their weighted sum: correlated fields of unit-variance noise",
+          "[grain]") {
+    // Two fast grains of one kernel; the second filters 0.6 of the first's white noise plus 0.8
+    // of its own (fold_paper_grain's Cholesky row). The filter is linear, so its field is 0.6
+    // times the first's field plus 0.8 times the field of its own noise alone (to rounding),
+    // and the two fields correlate by 0.6 with equal variances.
+    const GrainModel first = design_grain(GrainSpec{0.01, 2.0}, 0.1, 4.0, NoiseKey{7, 3, 0}, true);
+    GrainModel own = design_grain(GrainSpec{0.01, 2.0}, 0.1, 4.0, NoiseKey{7, 3, 1}, true), mixed = own;
+    mixed.mixed_noise = {{first.key, 0.6f}, {own.key, 0.8f}};
+    const Window w{-50, 20, 206, 276};
+    GrainNoiseStream both({&first, &mixed}, w), alone({&own}, w);
+    double sum_aa = 0, sum_bb = 0, sum_ab = 0;
+    for (int y = w.y0; y < w.y1; ++y) {
+        const float* const* rows = both.row(y);
+        const float* own_row = alone.row(y)[0];
+        for (int i = 0; i < w.width(); ++i) {
+            REQUIRE(rows[1][i] == Approx(0.6 * rows[0][i] + 0.8 * own_row[i]).margin(1e-5));
+            sum_aa += double(rows[0][i]) * rows[0][i], sum_bb += double(rows[1][i]) * rows[1][i];
+            sum_ab += double(rows[0][i]) * rows[1][i];
+        }
+    }
+    const double pixels = double(w.width()) * w.height();
+    CHECK(std::sqrt(sum_bb / sum_aa) == Approx(1.0).margin(0.02));
+    CHECK(sum_ab / std::sqrt(sum_aa * sum_bb) == Approx(0.6).margin(0.02));
+    CHECK(std::sqrt(sum_aa / pixels) == Approx(first.field_sigma()).epsilon(0.03));
+}
