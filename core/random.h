@@ -83,4 +83,18 @@ constexpr float kHashedNoiseScale = 0.0067658751f;         // 1 / sqrt(4 (256^2 
 // mix32(row_hash ^ uint32(x) kNoiseColumnStep).
 void hashed_noise_run(uint32_t row_hash, int x0, int n, float* out);
 
+// A row of noise that is a weighted sum of several fields' (the fast tiers' film layers, whose
+// grains the print's fold correlates: GrainModel::mixed_noise): weight[t] times the noise of
+// field field[t], summed in the terms' order (one term of weight 1 is the field's own noise).
+constexpr int kMaxNoiseFields = 3;
+struct NoiseMix {
+    int terms = 0;
+    int field[kMaxNoiseFields] = {};
+    float weight[kMaxNoiseFields] = {};
+};
+// Rows of mixed noise at x0 ... x0 + n - 1: out[o] mixes[o]'s sum of the fields whose row
+// hashes are row_hashes[0 .. fields), each field's noise hashed once a pixel for all rows.
+void mixed_hashed_noise_run(const uint32_t* row_hashes, int fields, const NoiseMix* mixes, int rows, int x0, int n,
+                            float* const* out);
+
 }  // namespace darkroom

@@ -5,14 +5,10 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 
 #include "core/parallel.h"
-#include "core/simd.h"
 #include "core/stages/filters.h"
-
-// GCC warns that a vector value would be passed differently without AVX; the vector
-// helpers here are inlined, so no vector crosses a call.
-#pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace darkroom {
 
@@ -164,51 +160,6 @@ GrainModel design_grain(const GrainSpec& spec, double d_min, double pitch_um, No
     return g;
 }
 
-namespace {
-
-// White noise at x0 ... x0 + n - 1 of row y of the field `key` names.
-void white_noise_run(bool fast, const NoiseKey& key, int y, int x0, int n, float* out) {
-    if (fast) {
-        hashed_noise_run(hashed_noise_row(key, y), x0, n, out);
-    } else {
-        for (int i = 0; i < n; ++i) out[i] = standard_normal(key, x0 + i, y);
-    }
-}
-
-template <typename V>
-__attribute__((always_inline)) inline void lanes_of_weighted_sum(const float* const* rows, const float* weights,
-                                                                 int terms, int i, float* out) {
-    V row, sum;
-    simd::load(row, rows[0] + i);
-    sum = weights[0] * row;
-    for (int t = 1; t < terms; ++t) {
-        simd::load(row, rows[t] + i);
-        sum += weights[t] * row;
-    }
-    simd::store(out + i, sum);
-}
-
-// out[i] = sum over t of weights[t] rows[t][i], the terms in order.
-struct WeightedSumRow {
-    template <int lanes>
-    __attribute__((always_inline)) static void run(const float* const* rows, const float* weights, int terms, int n,
-                                                   float* out) {
-        int i = 0;
-        for (; i + lanes <= n; i += lanes)
-            lanes_of_weighted_sum<typename simd::Lanes<lanes>::F>(rows, weights, terms, i, out);
-        for (; i < n; ++i) lanes_of_weighted_sum<simd::Float1>(rows, weights, terms, i, out);
-    }
-};
-
-// A grain's white noise as the weighted sum of the stream's fields' rows
-// (GrainModel::mixed_noise).
-struct NoiseMix {
-    std::vector<const float*> rows;
-    std::vector<float> weights;
-};
-
-}  // namespace
-
 GrainNoiseStream::GrainNoiseStream(const std::vector<const GrainModel*>& grains, const Window& w) {
     int r = 0;
     std::vector<SeparableFilter> filters;
@@ -219,31 +170,37 @@ GrainNoiseStream::GrainNoiseStream(const std::vector<const GrainModel*>& grains,
     // White noise at absolute coordinates, from R before the window's first column: noise
     // exists at every coordinate, so the vertical pass reads real rows, never clamped ones.
     const int x0 = w.x0 - r, n = w.width() + 2 * r;
-    // The fields the mixes read, a row of each once (the film's layers' mixes share them).
+    const bool fast = grains.front()->fast;  // (one plan's grains are all fast or none)
+    if (!fast) {
+        for (const GrainModel* g : grains)
+            if (!g->mixed_noise.empty()) throw std::logic_error("GrainNoiseStream: only hashed noise mixes fields");
+        stream_ = std::make_unique<SeparableStream>(w.width(), std::move(filters), w.y0 - r, w.y1 + r, w.y1,
+                                                    [grains, x0, n](int y, float* const* noise) {
+            for (size_t l = 0; l < grains.size(); ++l)
+                for (int i = 0; i < n; ++i) noise[l][i] = standard_normal(grains[l]->key, x0 + i, y);
+        });
+        return;
+    }
+    // The fields the grains' noises sum (a grain's own alone where it mixes none), each hashed once.
     std::vector<NoiseKey> fields;
-    for (const GrainModel* g : grains)
-        for (const GrainModel::NoiseTerm& term : g->mixed_noise)
-            if (std::find(fields.begin(), fields.end(), term.key) == fields.end()) fields.push_back(term.key);
-    auto white = std::make_shared<std::vector<std::vector<float>>>(fields.size(), std::vector<float>(size_t(n)));
     std::vector<NoiseMix> mixes(grains.size());
-    for (size_t l = 0; l < grains.size(); ++l)
-        for (const GrainModel::NoiseTerm& term : grains[l]->mixed_noise) {
-            const size_t field = size_t(std::find(fields.begin(), fields.end(), term.key) - fields.begin());
-            mixes[l].rows.push_back((*white)[field].data());
-            mixes[l].weights.push_back(term.weight);
+    for (size_t l = 0; l < grains.size(); ++l) {
+        const std::vector<GrainModel::NoiseTerm> own{{grains[l]->key, 1.0f}};
+        for (const GrainModel::NoiseTerm& term : grains[l]->mixed_noise.empty() ? own : grains[l]->mixed_noise) {
+            const auto field = std::find(fields.begin(), fields.end(), term.key);
+            NoiseMix& mix = mixes[l];
+            if (mix.terms == kMaxNoiseFields || (field == fields.end() && fields.size() == kMaxNoiseFields))
+                throw std::logic_error("GrainNoiseStream: more noise fields than kMaxNoiseFields");
+            mix.field[mix.terms] = int(field - fields.begin());
+            mix.weight[mix.terms++] = term.weight;
+            if (field == fields.end()) fields.push_back(term.key);
         }
+    }
     stream_ = std::make_unique<SeparableStream>(w.width(), std::move(filters), w.y0 - r, w.y1 + r, w.y1,
-                                                [grains, fields, mixes, white, x0, n](int y, float* const* noise) {
-        const bool fast = grains.front()->fast;  // (one plan's grains are all fast or none)
-        for (size_t f = 0; f < fields.size(); ++f) white_noise_run(fast, fields[f], y, x0, n, (*white)[f].data());
-        for (size_t l = 0; l < grains.size(); ++l) {
-            const NoiseMix& mix = mixes[l];
-            if (mix.rows.empty()) {
-                white_noise_run(grains[l]->fast, grains[l]->key, y, x0, n, noise[l]);
-                continue;
-            }
-            simd::dispatch<WeightedSumRow>(mix.rows.data(), mix.weights.data(), int(mix.rows.size()), n, noise[l]);
-        }
+                                                [fields, mixes, x0, n](int y, float* const* noise) {
+        uint32_t row_hashes[kMaxNoiseFields];
+        for (size_t f = 0; f < fields.size(); ++f) row_hashes[f] = hashed_noise_row(fields[f], y);
+        mixed_hashed_noise_run(row_hashes, int(fields.size()), mixes.data(), int(mixes.size()), x0, n, noise);
     });
 }
 

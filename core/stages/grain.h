@@ -48,7 +48,8 @@ struct GrainModel {
     // Where a print's paper grain is folded into the film's (fold_paper_grain, develop.cpp):
     // the white noise this layer filters is a weighted sum of the film layers' white noises,
     // the weights' squares summing to 1 (unit variance still), which correlates the layers'
-    // grains as the print's channels need. Empty: its own key's noise alone.
+    // grains as the print's channels need. Empty: its own key's noise alone. (Hashed noise
+    // only: the fold's tiers are the fast ones.)
     struct NoiseTerm {
         NoiseKey key;
         float weight = 0;
