@@ -466,8 +466,8 @@ std::pair<double, double> solve_increasing(const F& f, double lo, double f_lo, d
 //     were 0.02 (at grey) to 0.13 (four stops under) more correlated than high's (0.049 from
 //     the reference's pooled over the benchmark's wedge, against the plate-matching tolerance
 //     of 0.05). So the layers' grains are correlated as the print needs: the film layers'
-//     covariance at the table's
-//     input that gives the print both grains' channel covariance, linearised,
+//     covariance at the table's input that gives the print both grains' channel covariance,
+//     linearised,
 //       T = diag(s_i^2) + M^-1 V diag(sigma_paper^2) V^T M^-T,
 //     is taken at grey, its correlation taken back to the white noises (over the correlation
 //     two layers' kernels give one white noise) and factored (Cholesky, W = L L^T): each layer
@@ -481,7 +481,8 @@ std::pair<double, double> solve_increasing(const F& f, double lo, double f_lo, d
 constexpr double kMaxFoldedGrainD = 0.5;
 void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
                       double exposure_scale, int curve_table_bits, int threads) {
-    if (film.curve_tables.empty() || film.grain.size() != 3) return;  // (the tiers that print through one table tabulate curves)
+    // (The tiers that print through one table tabulate curves; a colour film has three layers.)
+    if (film.curve_tables.empty() || film.grain.size() != 3) return;
     bool grained[3], any = false;
     ScatteredGrain spread[3];
     double gain[3] = {0, 0, 0};  // the spread at the table's input per unit amplitude: kappa_i sqrt(rho_i)
@@ -585,10 +586,9 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
             }
         }
     });
-    // 4: T at grey, its correlation over the kernels', factored. (Where that is not a
-    // correlation matrix, its correlations are shrunk until it is.)
-    // (The film's mid-grey exposure, which the printer lights print at the paper's aim: with the
-    // input in lux seconds, 0 stops above is 0.18 lux s, not grey.)
+    // 4: T at grey (the film's mid-grey exposure, which the printer lights print at the paper's
+    // aim; with the input in lux seconds the scale's 0 stops is 0.18 lux s, not grey), its
+    // correlation over the kernels' overlaps, factored.
     const double grey_stops = std::log2(mid_grey_exposure_lux_s(film.stock.iso_speed) / (0.18 * exposure_scale));
     const size_t grey = size_t(std::min_element(level_stops.begin(), level_stops.end(), [&](double a, double b) {
                                    return std::abs(a - grey_stops) < std::abs(b - grey_stops);
@@ -639,7 +639,8 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
         GrainModel& film_grain = *film.grain[i];
         if (factor[i * 3 + i] != 1.0)
             for (size_t j = 0; j <= i; ++j)
-                if (factor[i * 3 + j] != 0.0) film_grain.mixed_noise.push_back({film.grain[j]->key, float(factor[i * 3 + j])});
+                if (factor[i * 3 + j] != 0.0)
+                    film_grain.mixed_noise.push_back({film.grain[j]->key, float(factor[i * 3 + j])});
         const Curve extra_at = make_curve(std::move(density_i), std::move(extra_i), "paper grain on the film's densities");
         film.curve_tables[i] = LogAxisTable(film.stock.layers[i].density_curve, curve_table_bits,
                                             [film_grain, extra_at](double d) {
