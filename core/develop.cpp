@@ -520,13 +520,19 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
         print_densities(enlarger, paper.stock, negative, dp);
         log_view(dp, out);
     };
-    // Each level's equations (3) and T (4).
+    // Grey: the film's mid-grey exposure, which the printer lights print at the paper's aim (with
+    // the input in lux seconds the scale's 0 stops is 0.18 lux s, not grey).
+    const double grey_stops = std::log2(mid_grey_exposure_lux_s(film.stock.iso_speed) / (0.18 * exposure_scale));
+    const size_t grey = size_t(std::min_element(level_stops.begin(), level_stops.end(), [&](double a, double b) {
+                                   return std::abs(a - grey_stops) < std::abs(b - grey_stops);
+                               }) - level_stops.begin());
+    // Each level's equations (3), and T (4) at grey (glm: column-major, [j][i] is T_ij; the
+    // identity where M is singular there).
     struct Level {
         double a[3][3], b[3], m[3][3], film_variance[3];
-        glm::dmat3 covariance{0.0};  // T (glm: column-major, [j][i] is T_ij)
-        bool linear = false;         // T is finite (M invertible)
     };
     std::vector<Level> equations(levels.size());
+    glm::dmat3 at_grey(1.0);
     parallel_for(0, int(levels.size()), threads, [&](int begin, int end) {
         for (int level = begin; level < end; ++level) {
             const double* d = levels[size_t(level)].data();
@@ -548,18 +554,21 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
                 paper_variance[j] = paper.grain[j] ? std::pow(grain_sigma_at(*paper.grain[j], dp[j]), 2) : 0.0;
             for (int i = 0; i < 3; ++i)
                 e.film_variance[i] = grained[i] ? std::pow(film.grain[i]->amplitude_at(d[i]) * gain[i], 2) : 0.0;
-            glm::dmat3 m_inverse(0.0), paper_covariance(0.0);
-            for (int c = 0; c < 3; ++c)
-                for (int i = 0; i < 3; ++i) {
-                    m_inverse[i][c] = e.m[c][i];
-                    for (int j = 0; j < 3; ++j) paper_covariance[i][c] += v[c][j] * v[i][j] * paper_variance[j];
-                }
-            m_inverse = glm::inverse(m_inverse);
-            e.covariance = m_inverse * paper_covariance * glm::transpose(m_inverse);
-            for (int i = 0; i < 3; ++i) e.covariance[i][i] += e.film_variance[i];
-            e.linear = true;
-            for (int i = 0; i < 3; ++i)
-                for (int j = 0; j < 3; ++j) e.linear = e.linear && std::isfinite(e.covariance[j][i]);
+            if (size_t(level) == grey) {
+                glm::dmat3 m_inverse(0.0), paper_covariance(0.0);
+                for (int c = 0; c < 3; ++c)
+                    for (int i = 0; i < 3; ++i) {
+                        m_inverse[i][c] = e.m[c][i];
+                        for (int j = 0; j < 3; ++j) paper_covariance[i][c] += v[c][j] * v[i][j] * paper_variance[j];
+                    }
+                m_inverse = glm::inverse(m_inverse);
+                glm::dmat3 t = m_inverse * paper_covariance * glm::transpose(m_inverse);
+                for (int i = 0; i < 3; ++i) t[i][i] += e.film_variance[i];
+                bool finite = true;
+                for (int i = 0; i < 3; ++i)
+                    for (int j = 0; j < 3; ++j) finite = finite && std::isfinite(t[j][i]);
+                if (finite) at_grey = t;
+            }
             for (int c = 0; c < 3; ++c) {
                 e.b[c] = 0;
                 for (int j = 0; j < 3; ++j) e.b[c] += v[c][j] * v[c][j] * paper_variance[j];
@@ -586,14 +595,7 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
             }
         }
     });
-    // 4: T at grey (the film's mid-grey exposure, which the printer lights print at the paper's
-    // aim; with the input in lux seconds the scale's 0 stops is 0.18 lux s, not grey), its
-    // correlation over the kernels' overlaps, factored.
-    const double grey_stops = std::log2(mid_grey_exposure_lux_s(film.stock.iso_speed) / (0.18 * exposure_scale));
-    const size_t grey = size_t(std::min_element(level_stops.begin(), level_stops.end(), [&](double a, double b) {
-                                   return std::abs(a - grey_stops) < std::abs(b - grey_stops);
-                               }) - level_stops.begin());
-    const glm::dmat3 at_grey = equations[grey].linear ? equations[grey].covariance : glm::dmat3(1.0);
+    // 4: T at grey, its correlation over the kernels' overlaps, factored.
     std::vector<double> wanted(9, 0.0), kernels(9, 1.0);  // the layers' grains' correlations, their kernels' overlaps
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {
@@ -626,7 +628,9 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
                         for (int j = 0; j < 3; ++j)
                             if (i != j) b[c] -= e.m[c][i] * e.m[c][j] * s[i] * s[j] * correlation[i][j];
                 }
-                t = nonnegative_least_squares(e.a, b, grained);
+                const std::array<double, 3> next = nonnegative_least_squares(e.a, b, grained);
+                if (next == t) break;  // (settled: every later sweep would repeat it)
+                t = next;
             }
             for (int i = 0; i < 3; ++i) extra[size_t(level)][size_t(i)] = grained[i] ? std::sqrt(t[i]) / gain[i] : 0.0;
         }
