@@ -3,7 +3,7 @@
 //
 // A hot loop is written once, for any lane count, as a kernel: a struct whose static
 // member template run<lanes>(args...) is always inlined. dispatch<Kernel>(args...) runs it
-// compiled for AVX-512 (16 float lanes), AVX2 (8) or the baseline (8, in SSE2 halves),
+// compiled for AVX-512 (16 float lanes), AVX2 (8) or the baseline's SSE2 (4),
 // chosen once per process (dispatch_doubles: a kernel of doubles, a register's width of
 // them: 8, 4 or 2). No build uses FMA (a product and a sum round separately, and
 // the project builds with -ffp-contract=off), and every loop works lane by lane, so every
@@ -155,10 +155,11 @@ Isa isa();
 // Uses `isa`, or the widest this processor runs if that is narrower; returns the one used.
 Isa set_isa(Isa isa);
 
-// The lanes each instruction set's kernels use, and for kernels of doubles a register's
-// width of them (in vectors wider than the registers GCC makes comparisons and selects
-// scalar, storing and reloading the lanes).
-constexpr int kAvx512Lanes = 16, kAvx2Lanes = 8, kBaselineLanes = 8;
+// The lanes each instruction set's kernels use: a register's width of floats, and of doubles
+// for kernels of doubles. (In vectors wider than the registers GCC makes comparisons and
+// selects scalar, storing and reloading the lanes: the baseline's kernels at 8 lanes, in SSE2
+// halves, took 4-6x AVX2's time for the 4K fast frame; at 4, 2-2.5x.)
+constexpr int kAvx512Lanes = 16, kAvx2Lanes = 8, kBaselineLanes = 4;
 constexpr int kAvx512Doubles = 8, kAvx2Doubles = 4, kBaselineDoubles = 2;
 
 template <typename Kernel, int lanes = kAvx512Lanes, typename... Args>

@@ -122,8 +122,8 @@ __attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int
     const bool symmetric = std::equal(tap, tap + n / 2, std::reverse_iterator<const float*>(tap + n));
     const int pairs = symmetric ? n / 2 : 0;  // taps k and n-1-k for k < pairs; then k in [pairs, n - pairs)
     // (taps: std::integral_constant, kTaps. Inlined like the rest: a lambda called from
-    // three places was otherwise compiled apart, for the baseline's SSE2, and the AVX2
-    // kernels, whose 8 lanes share their instantiation with the baseline's, called that.)
+    // three places was otherwise compiled apart, for the default target, SSE2, and the AVX2
+    // kernels called that.)
     auto run = [&](auto taps) __attribute__((always_inline)) {
         constexpr int kTaps = decltype(taps)::value;
         int x = tap_blocks<lanes, kVecs / outputs, outputs, accumulate, kCentred, kTaps>(tap, n, pairs, 0, width, out,

@@ -102,26 +102,30 @@ __attribute__((always_inline)) inline auto concatenate(const V& a, const V& b, s
 }
 
 // The four values of the 16-byte node at each lane's offset (in floats) into v[0..components).
-// Vectors of eight or sixteen lanes load each node whole and transpose them in registers
-// (nodes k, k + 4, ... side by side, one per 128-bit block, then a 4x4 transpose within
-// each block), where lane-by-lane loads would insert the values one at a time; all load the
-// same floats.
+// Vectors of four, eight or sixteen lanes load each node whole and transpose them in
+// registers (nodes k, k + 4, ... side by side, one per 128-bit block, then a 4x4 transpose
+// within each block), where lane-by-lane loads would insert the values one at a time; all
+// load the same floats.
 template <int components, typename V, typename I>
 __attribute__((always_inline)) inline void node_values(const float* values, const I& offset, V* v) {
     constexpr int lanes = sizeof(V) / sizeof(float);
-    if constexpr (lanes == 8 || lanes == 16) {
+    if constexpr (lanes == 4 || lanes == 8 || lanes == 16) {
         int32_t at[lanes];
         simd::int32_lanes(at, offset);
         simd::Float4 n[lanes];
         for (int k = 0; k < lanes; ++k) load(n[k], values + at[k]);
         V p[4], t[4];
         for (int m = 0; m < 4; ++m) {
-            const simd::Float8 low = concatenate(n[m], n[m + 4], std::make_index_sequence<8>());
-            if constexpr (lanes == 8) {
-                p[m] = low;
+            if constexpr (lanes == 4) {
+                p[m] = n[m];
             } else {
-                const simd::Float8 high = concatenate(n[m + 8], n[m + 12], std::make_index_sequence<8>());
-                p[m] = concatenate(low, high, std::make_index_sequence<16>());
+                const simd::Float8 low = concatenate(n[m], n[m + 4], std::make_index_sequence<8>());
+                if constexpr (lanes == 8) {
+                    p[m] = low;
+                } else {
+                    const simd::Float8 high = concatenate(n[m + 8], n[m + 12], std::make_index_sequence<8>());
+                    p[m] = concatenate(low, high, std::make_index_sequence<16>());
+                }
             }
         }
         in_lane_transpose(p, t, std::make_index_sequence<lanes>());
@@ -156,7 +160,7 @@ __attribute__((always_inline)) inline bool any_lane_at_least(const U& v, uint32_
 // Where a vector's lanes' node indices lie within lanes/2 below and lanes/2 - 1 above its
 // middle lane's (a smooth row's usually do), the values of their nodes as four permutes of a
 // window of `lanes` consecutive samples of f and of g each, in place of a node load a lane and
-// their transpose: the same floats. Otherwise (one lane, the baseline's SSE2, which has no
+// their transpose: the same floats. Otherwise (one lane, the baseline's four, SSE2 having no
 // variable permute, or a compiler without GCC's variable shuffles) false.
 template <typename U, typename V>
 __attribute__((always_inline)) inline bool window_values(const LogAxisTable::Samples& table, const U& index, V* node) {
