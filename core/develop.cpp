@@ -840,7 +840,11 @@ std::vector<Plane> Plan::print(std::vector<Plane> negative, const Window& out, i
 std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, int threads, StageTimes* times) const {
     const MaterialStages& m = film_stages_;
     const Window film_in = out.grown(m.halo_px()).intersected(frame_);
-    const double mid_grey_log_h = std::log10(0.18 * film_exposure_scale_);
+    // Where the scene's mid grey falls (with the input in lux seconds, 0.18 is no grey: the film's
+    // own mid grey at its ISO speed).
+    const double mid_grey_log_h = std::log10(settings_.input_units == InputUnits::lux_seconds
+                                                 ? mid_grey_exposure_lux_s(m.stock.iso_speed)
+                                                 : 0.18 * film_exposure_scale_);
     std::vector<Plane> result;
     std::vector<std::optional<Plane>> fields(m.stock.layers.size());
     for (int c = 0; c < 3; ++c) {

@@ -47,6 +47,22 @@ TEST_CASE("lux-seconds input is the exposure itself", "[develop]") {
     }
 }
 
+TEST_CASE("the texture's grain is the same whether the input is scene-linear or in lux seconds", "[develop]") {
+    // The grain's exposure fluctuation takes the curve's slope at mid grey: the film's, at its
+    // ISO speed, in either units (in lux seconds 0.18 is no grey: 2.5 stops over 250D's).
+    Stock film = find_stock("kodak-vision3-250d");
+    const double lux_s_per_unit = mid_grey_exposure_lux_s(film.iso_speed) / 0.18;
+    Image scene = demo_scene(64, 48), lux_seconds = scene;
+    for (float& v : lux_seconds.pixels) v = float(v * lux_s_per_unit);
+    DevelopSettings s;
+    s.output = OutputMode::texture;
+    Image from_scene = render(film, nullptr, s, scene);
+    s.input_units = InputUnits::lux_seconds;
+    Image from_lux_seconds = render(film, nullptr, s, lux_seconds);
+    for (size_t i = 0; i < scene.pixels.size(); ++i)
+        REQUIRE(from_lux_seconds.pixels[i] / lux_s_per_unit == Approx(from_scene.pixels[i]).epsilon(1e-4));
+}
+
 TEST_CASE("negative output is the transmittance of the density output", "[develop]") {
     Stock film = test::test_film();
     Image scene = demo_scene(96, 64);
