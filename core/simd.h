@@ -158,7 +158,7 @@ Isa set_isa(Isa isa);
 // The lanes each instruction set's kernels use: a register's width of floats, and of doubles
 // for kernels of doubles. (In vectors wider than the registers GCC makes comparisons and
 // selects scalar, storing and reloading the lanes: the baseline's kernels at 8 lanes, in SSE2
-// halves, took 4-6x AVX2's time for the 4K fast frame; at 4, 2-2.5x.)
+// halves, took 4-6x AVX2's time for the 4K fast frame; at 4, 1.6-2.5x.)
 constexpr int kAvx512Lanes = 16, kAvx2Lanes = 8, kBaselineLanes = 4;
 constexpr int kAvx512Doubles = 8, kAvx2Doubles = 4, kBaselineDoubles = 2;
 
