@@ -125,11 +125,11 @@ __attribute__((always_inline)) inline void exposure_lanes(const float* px, int s
 
 // Stores a vector of 4, 8 or 16 floats to p, 16-byte aligned, past the caches (a non-temporal
 // store): the pass never reads the result back, and its cache line need not be read from
-// memory before it is written (a frame's result is far larger than the caches). Four or eight
-// floats as SSE stores, which every instruction set these kernels are compiled for has (a
-// 32-byte one would need AVX, which this template's target lacks); sixteen, not by the
-// intrinsic, which needs a target attribute this template lacks: clang's builtin, or for GCC
-// the instruction itself (clang rejects a 512-bit asm operand outside an AVX-512 function).
+// memory before it is written (a frame's result is far larger than the caches). The
+// intrinsics need their instruction set in the template's target, which it lacks: four or
+// eight floats as SSE stores, which every set these kernels are compiled for has (a 32-byte
+// one would need AVX); sixteen by clang's builtin, or for GCC the instruction itself (clang
+// rejects a 512-bit asm operand outside an AVX-512 function).
 template <typename V>
 __attribute__((always_inline)) inline void stream_store(float* p, const V& v) {
     if constexpr (sizeof(V) == 16) {

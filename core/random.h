@@ -70,7 +70,8 @@ inline uint32_t mix32(uint32_t h) {
     mix32_in_place(h);
     return h;
 }
-// The part of the hash that is the same along a row: pass it to hashed_noise_run.
+// The part of the hash that is the same along a row: pass it to hashed_noise_run (or, a
+// field's, to mixed_hashed_noise_run).
 inline uint32_t hashed_noise_row(const NoiseKey& key, int y) {
     uint32_t h = mix32(uint32_t(key.seed) ^ mix32(uint32_t(key.seed >> 32) ^ mix32(uint32_t(key.frame) ^
                                                                                   mix32(key.stream + 0x9E3779B9u))));
