@@ -13,7 +13,7 @@ cd "$(dirname "$0")"
 PACKAGES=(build-essential cmake ninja-build pkg-config
           libopenimageio-dev openimageio-tools libopencolorio-dev opencolorio-tools libopenexr-dev
           libglm-dev catch2 nlohmann-json3-dev libcli11-dev libfmt-dev fonts-dejavu-core
-          pybind11-dev python3-dev python3-numpy python3-openimageio python3-venv)
+          pybind11-dev python3-dev python3-numpy python3-openimageio python3-venv python3-jsonschema)
 # clang and its runtime libraries (libFuzzer, the sanitizers) for the fuzz step only.
 FUZZ_PACKAGES=(clang libclang-rt-14-dev)
 FUZZ_TARGETS=(fuzz_stock fuzz_look fuzz_grain_profile)

@@ -8,7 +8,8 @@
 
 #include "cli/atomic_file.h"
 #include "cli/commands.h"
-#include "cli/look_options.h"
+#include "cli/look_flags.h"
+#include "look/render.h"
 #include "cli/user_error.h"
 #include "ocio/lut_bake.h"
 
@@ -19,7 +20,7 @@ namespace {
 struct BakeLutOptions {
     std::string output;
     int cube_size = 65;
-    LookOptions look;
+    LookFlags flags;
 };
 
 // The lattice is developed as an image this many pixels wide (the width only sets a pixel
@@ -33,7 +34,7 @@ std::string signed_stops(double ev) {
 }
 
 // What the LUT holds, for its comments / CLF description.
-std::string describe_look(const LookOptions& look, const std::string& input, const ocio::Conversion& output) {
+std::string describe_look(const Look& look, const std::string& input, const ocio::Conversion& output) {
     const DevelopSettings& s = look.settings;
     std::ostringstream d;
     d << "film " << look.film;
@@ -49,7 +50,7 @@ std::string describe_look(const LookOptions& look, const std::string& input, con
 }
 
 void run_bake_lut(const BakeLutOptions& o) {
-    LookOptions look = o.look;
+    Look look = o.flags.look();
     DevelopSettings& s = look.settings;
     if (s.input_units != InputUnits::scene_linear)
         throw UserError("bake-lut samples scene-linear input: --input-units lux-seconds is not supported");
@@ -63,17 +64,18 @@ void run_bake_lut(const BakeLutOptions& o) {
         throw UserError(e.what());
     }
     require_folder(o.output);  // before the lattice is developed
-    const ColourIO colour(look.colour, s.output, look.verbose);
+    const Renderer renderer(look, flag_name, o.flags.verbose);
+    const ColourIO& colour = renderer.colour();
 
     const ocio::PixelFunction develop_lattice = [&](float* rgb, std::size_t n_pixels) {
         const int width = (int)std::min<std::size_t>(n_pixels, kLatticeImageWidth);
         const int height = (int)((n_pixels + width - 1) / width);
-        const Plan plan = compile_look(look, FrameGeometry{width, height});
+        const Plan plan = renderer.compile(FrameGeometry{width, height}, o.flags.threads);
         Image in(width, height, 3);
         std::copy(rgb, rgb + 3 * n_pixels, in.pixels.begin());
         Image out(in.window, 3);
-        plan.run(in.view(), out.view(), look.threads);
-        colour.result_to_output(out, look.threads);
+        plan.run(in.view(), out.view(), o.flags.threads);
+        colour.result_to_output(out.view(), o.flags.threads);
         std::copy(out.pixels.begin(), out.pixels.begin() + 3 * n_pixels, rgb);
     };
     ocio::LutBakeSettings settings;
@@ -100,7 +102,8 @@ void add_bake_lut_command(CLI::App& app) {
     cmd->add_option("--size", o->cube_size, "Lattice points per axis")
         ->check(CLI::Range(2, 129))
         ->capture_default_str();
-    add_look_flags(*cmd, o->look);
+    // Only the settings a LUT can hold; a look file's others (grain, optics) are ignored.
+    add_look_flags(*cmd, o->flags, LookScope::per_pixel, false);
     cmd->callback([o] { run_bake_lut(*o); });
 }
 

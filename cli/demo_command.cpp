@@ -3,8 +3,8 @@
 
 #include "cli/commands.h"
 #include "cli/image_io.h"
-#include "cli/look_file.h"
-#include "cli/look_options.h"
+#include "cli/look_flags.h"
+#include "look/render.h"
 #include "core/demo_scene.h"
 
 namespace darkroom::cli {
@@ -13,8 +13,7 @@ namespace {
 
 struct DemoOptions {
     std::string directory = "demo";
-    LookOptions look;
-    std::string look_path, save_look_path;
+    LookFlags flags;
 };
 
 // Display-referred linear -> sRGB-encoded, for the PNG previews.
@@ -27,16 +26,16 @@ Image encode_srgb(Image img) {
     return img;
 }
 
-void run_demo(const DemoOptions& o, CLI::App& cmd) {
+void run_demo(const DemoOptions& o) {
     namespace fs = std::filesystem;
-    if (!o.look.colour.input_space.empty())
+    const Look look = o.flags.look();
+    if (!look.colour.input_space.empty())
         throw UserError("demo renders its built-in scene in the working space: --iscolorspace does not apply");
-    if (!o.look_path.empty()) apply_look_file(cmd, o.look_path);
-    // (After the look file, which may name one.) The demo's result is the model's own, with its
-    // stock's grain; a plate's grain goes on an image of the plate's encoding, with develop.
-    if (!o.look.grain_profile.empty())
+    // The demo's result is the model's own, with its stock's grain; a plate's grain goes on an
+    // image of the plate's encoding, with develop.
+    if (!look.grain_profile.empty())
         throw UserError("demo renders its built-in scene with the stock's grain: --grain-profile applies to develop");
-    if (!o.save_look_path.empty()) save_look_file(cmd, o.save_look_path);
+    if (!o.flags.save_look_path.empty()) write_look_file(o.flags.save_look_path, look);
     std::error_code ec;
     fs::create_directories(o.directory, ec);
     if (ec) throw UserError("cannot create '" + o.directory + "': " + ec.message());
@@ -50,16 +49,17 @@ void run_demo(const DemoOptions& o, CLI::App& cmd) {
         OutputMode mode;
     };
     for (Output out : {Output{"print", OutputMode::print}, Output{"negative", OutputMode::negative}}) {
-        LookOptions look = o.look;
-        look.settings.output = out.mode;
-        const ColourIO colour(look.colour, out.mode, look.verbose);
-        Plan plan = compile_look(look, frame);
+        Look output_look = look;
+        output_look.settings.output = out.mode;
+        output_look.settings.frame = o.flags.frame;
+        const Renderer renderer(output_look, flag_name, o.flags.verbose);
+        const Plan plan = renderer.compile(frame, o.flags.threads);
         Image result(scene.window, 3);
-        plan.run(scene.view(), result.view(), look.threads);
+        plan.run(scene.view(), result.view(), o.flags.threads);
         std::string base = (fs::path(o.directory) / out.name).string();
         // The PNG previews the model's own values; the colour flags apply to the EXR.
         write_image(base + ".png", encode_srgb(result), like);
-        colour.result_to_output(result, look.threads);
+        renderer.colour().result_to_output(result.view(), o.flags.threads);
         write_image(base + ".exr", result, like);
         std::cout << "wrote " << base << ".exr and " << base << ".png\n";
     }
@@ -70,10 +70,9 @@ void run_demo(const DemoOptions& o, CLI::App& cmd) {
 void add_demo_command(CLI::App& app) {
     auto o = std::make_shared<DemoOptions>();
     CLI::App* cmd = app.add_subcommand("demo", "Render the built-in test scene through the default film and paper");
-    cmd->add_option("-o,--out", o->directory, "Output directory")->capture_default_str()->configurable(false);
-    add_look_file_flags(*cmd, o->look_path, o->save_look_path);
-    add_look_flags(*cmd, o->look);
-    cmd->callback([o, cmd] { run_demo(*o, *cmd); });
+    cmd->add_option("-o,--out", o->directory, "Output directory")->capture_default_str();
+    add_look_flags(*cmd, o->flags);
+    cmd->callback([o] { run_demo(*o); });
 }
 
 }  // namespace darkroom::cli

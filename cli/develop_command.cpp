@@ -6,8 +6,8 @@
 #include "cli/batch.h"
 #include "cli/commands.h"
 #include "cli/image_io.h"
-#include "cli/look_file.h"
-#include "cli/look_options.h"
+#include "cli/look_flags.h"
+#include "look/render.h"
 
 namespace darkroom::cli {
 
@@ -16,16 +16,16 @@ namespace {
 struct DevelopOptions {
     BatchOptions batch;
     std::vector<int> window;  // X, Y, W, H
-    LookOptions look;
-    std::string look_path, save_look_path;
+    LookFlags flags;
 };
 
 // How the frame's output is written, given its input's header; warns (once a run) where
 // linear values would go into integers.
-WriteOptions frame_write_options(const DevelopOptions& o, const ColourIO& colour, const OIIO::ImageSpec& input,
-                                 const FrameJob& job, FrameReport& report, Progress& progress) {
+WriteOptions frame_write_options(const DevelopOptions& o, const ColourIO& colour, OutputMode output,
+                                 const OIIO::ImageSpec& input, const FrameJob& job, FrameReport& report,
+                                 Progress& progress) {
     // Densities are measurements past 1 D, not a picture in the input's precision: float unless -d.
-    const WriteOptions write = o.look.settings.output == OutputMode::density
+    const WriteOptions write = output == OutputMode::density
                                    ? o.batch.write
                                    : with_input_data_type(o.batch.write, input, job.output);
     if (const std::string w = colour.integer_output_warning(job.output, writes_integers(job.output, write)); !w.empty())
@@ -35,8 +35,9 @@ WriteOptions frame_write_options(const DevelopOptions& o, const ColourIO& colour
 
 // Develops and writes one frame; its report goes to `progress` as its output takes its
 // name (so a run interrupted then logs every finished output).
-void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& plans, const FrameJob& job,
-                   int threads, bool print_plan, FrameReport& report, Progress& progress) {
+void develop_frame(const DevelopOptions& o, const Renderer& renderer, PlanCache& plans,
+                   const FrameJob& job, int threads, FrameReport& report, Progress& progress) {
+    const ColourIO& colour = renderer.colour();
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_image(job.input);
     report.read_seconds = seconds_since(start);
@@ -49,10 +50,6 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     const int premultiplied_alpha = premultiplied_alpha_channel(in.spec);
 
     start = std::chrono::steady_clock::now();
-    LookOptions look = o.look;
-    look.settings.frame = job.frame;
-    look.verbose = print_plan;
-    look.threads = threads;
     // The film frame is the file's display window: a data window that is a CG element's
     // bounding box, or overscan, is that part of the frame (its pixel pitch and its grain),
     // so the core sees the pixels at their display-window coordinates.
@@ -65,12 +62,14 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
     // Before the render starts, that a reference render will take long (core/develop.h).
     if (const std::string w = long_reference_render_warning(plan, out_window, "--quality "); !w.empty())
         progress.warn_once("long reference render", report, w);
-    for (const std::string& w : non_finite_warnings(plan, view, out_window, premultiplied_alpha)) progress.warn(report, w);
-    Image out = develop_image(look, colour, plan, view, out_window, premultiplied_alpha);
+    for (const std::string& w : non_finite_warnings(plan, view, out_window, premultiplied_alpha))
+        progress.warn(report, w);
+    Image out = renderer.develop(plan, view, out_window, job.frame, premultiplied_alpha, threads);
     out.window = out.window.moved(-dx, -dy);  // write_image takes the data window's coordinates
     report.develop_seconds = seconds_since(start);
 
-    const WriteOptions write = frame_write_options(o, colour, in.spec, job, report, progress);
+    const WriteOptions write =
+        frame_write_options(o, colour, renderer.look().settings.output, in.spec, job, report, progress);
     start = std::chrono::steady_clock::now();
     write_image(job.output, out, in.spec, o.batch.run.in_place ? "" : job.input, write, [&] {
         report.write_seconds = seconds_since(start);
@@ -79,40 +78,41 @@ void develop_frame(const DevelopOptions& o, const ColourIO& colour, PlanCache& p
 }
 
 // Densities run past 1 D: a file of integers (PNG whatever -d says, -d uint16) clips them.
-void check_output_format(const DevelopOptions& o) {
+void check_output_format(const DevelopOptions& o, OutputMode output) {
     const BatchOptions& b = o.batch;
-    if (o.look.settings.output == OutputMode::density && writes_integers(b.output, b.write))
+    if (output == OutputMode::density && writes_integers(b.output, b.write))
         throw UserError("--output density writes float densities: give a float format such as .exr or .tif (and -d "
                         "half or float), not '" + b.output + "'" +
                         (b.write.data_type.empty() ? "" : " -d " + b.write.data_type));
 }
 
-void run_develop(DevelopOptions& o, CLI::App& cmd) {
+void run_develop(DevelopOptions& o) {
     BatchOptions& b = o.batch;
-    if (!o.look_path.empty()) apply_look_file(cmd, o.look_path);
-    if (!o.save_look_path.empty() && b.run.dry_run) std::cout << "dry run: would write the look to " << o.save_look_path << "\n";
-    if (!o.save_look_path.empty() && !b.run.dry_run) save_look_file(cmd, o.save_look_path);
-    if (b.input.empty() && b.output.empty() && !o.save_look_path.empty()) return;
+    const LookFlags& flags = o.flags;
+    const Look look = flags.look();
+    if (!flags.save_look_path.empty() && b.run.dry_run)
+        std::cout << "dry run: would write the look to " << flags.save_look_path << "\n";
+    if (!flags.save_look_path.empty() && !b.run.dry_run) write_look_file(flags.save_look_path, look);
+    if (b.input.empty() && b.output.empty() && !flags.save_look_path.empty()) return;
     if (b.input.empty() || b.output.empty()) throw UserError("develop needs an input image and -o OUTPUT");
 
-    check_output_format(o);
-    load_plate_grain(o.look);
-    b.write.look_json = look_json(cmd).dump();
-    const ColourIO colour(o.look.colour, o.look.settings.output, o.look.verbose);
-    b.write.colour_space = colour.output_space();
-    b.write.printing_density = colour.writes_printing_density();
-    run_batch(b, o.look.settings.frame, cmd.get_option("--frame")->count() > 0, o.look.threads, o.look.verbose,
+    const OutputMode output = look.settings.output;
+    check_output_format(o, output);
+    const Renderer renderer(look, flag_name, flags.verbose);
+    b.write.look_json = look.to_json().dump();
+    b.write.colour_space = renderer.colour().output_space();
+    b.write.printing_density = renderer.colour().writes_printing_density();
+    run_batch(b, flags.frame, flags.frame_given(), flags.threads, flags.verbose,
               [&](int threads_per_frame) -> FrameWork {
-                  LookOptions plan_look = o.look;
-                  plan_look.threads = threads_per_frame;
-                  auto plans = std::make_shared<PlanCache>(plan_look);  // prints each plan it compiles with -v
-                  return [&o, &colour, plans](const FrameJob& job, int threads, bool first, FrameReport& report,
-                                              Progress& progress) {
-                      develop_frame(o, colour, *plans, job, threads, o.look.verbose && first, report, progress);
+                  // (prints each plan it compiles with -v)
+                  auto plans = std::make_shared<PlanCache>(renderer, threads_per_frame);
+                  return [&o, &renderer, plans](const FrameJob& job, int threads, bool, FrameReport& report,
+                                                Progress& progress) {
+                      develop_frame(o, renderer, *plans, job, threads, report, progress);
                   };
               },
               [&](const FrameJob& job, const OIIO::ImageSpec& input, FrameReport& report, Progress& progress) {
-                  frame_write_options(o, colour, input, job, report, progress);
+                  frame_write_options(o, renderer.colour(), output, input, job, report, progress);
               });
 }
 
@@ -120,9 +120,7 @@ void add_run_flags(CLI::App& cmd, DevelopOptions& o) {
     add_batch_flags(cmd, o.batch, "Input image or sequence", "Output image or sequence");
     cmd.add_option("--window", o.window, "Render only this window X,Y,W,H of the input (from its first pixel)")
         ->delimiter(',')
-        ->expected(4)
-        ->configurable(false);
-    add_look_file_flags(cmd, o.look_path, o.save_look_path);
+        ->expected(4);
 }
 
 }  // namespace
@@ -131,8 +129,8 @@ void add_develop_command(CLI::App& app) {
     auto o = std::make_shared<DevelopOptions>();
     CLI::App* cmd = app.add_subcommand("develop", "Develop an image or a sequence through film (and paper)");
     add_run_flags(*cmd, *o);
-    add_look_flags(*cmd, o->look);
-    cmd->callback([o, cmd] { run_develop(*o, *cmd); });
+    add_look_flags(*cmd, o->flags);
+    cmd->callback([o] { run_develop(*o); });
 }
 
 }  // namespace darkroom::cli

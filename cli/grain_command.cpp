@@ -13,7 +13,7 @@
 #include "cli/atomic_file.h"
 #include "cli/batch.h"
 #include "cli/image_io.h"
-#include "cli/look_options.h"
+#include "look/render.h"
 #include "core/plate/grain_analysis.h"
 #include "core/plate/grain_compare.h"
 #include "core/plate/grain_prediction.h"

@@ -1,14 +1,11 @@
-// The error type every caller of the look library (the darkroom program, the Python module)
-// reports to its user as it is.
+// The look layer's user error (look/user_error.h), as the program reports it.
 #pragma once
 
-#include <stdexcept>
+#include "look/user_error.h"
 
 namespace darkroom::cli {
 
 // A failure the user can act on: printed as "darkroom: error: <message>", exit 1.
-struct UserError : std::runtime_error {
-    using std::runtime_error::runtime_error;
-};
+using darkroom::UserError;
 
 }  // namespace darkroom::cli

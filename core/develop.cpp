@@ -248,20 +248,22 @@ void check_range(double value, double lo, double hi, const std::string& what, co
 }
 
 void validate(const DevelopSettings& s) {
-    check_range(s.exposure_ev, -64, 64, "camera exposure", "within +-64 EV");
-    check_range(s.print_exposure_ev, -64, 64, "print exposure", "within +-64 EV");
-    check_range(s.frame_width_mm, 0, 1e4, "frame width", "0-10000 mm");
-    check_range(s.print_width_mm, 0, 1e4, "print width", "0-10000 mm");
-    check_range(s.halation, 0, 100, "halation", "0-100");
+    check_range(s.exposure_ev, -kMaxExposureEv, kMaxExposureEv, "camera exposure", "within +-64 EV");
+    check_range(s.print_exposure_ev, -kMaxExposureEv, kMaxExposureEv, "print exposure", "within +-64 EV");
+    check_range(s.frame_width_mm, 0, kMaxFormatMm, "frame width", "0-10000 mm");
+    check_range(s.print_width_mm, 0, kMaxFormatMm, "print width", "0-10000 mm");
+    check_range(s.halation, 0, kMaxHalation, "halation", "0-100");
     for (int c = 0; c < 3; ++c) {
         const std::string channel = std::string(" (") + "RGB"[c] + ")";
-        check_range(s.grain_amount[c], 0, 100, "grain amount" + channel, "0-100");
-        check_range(s.grain_size[c], 0, 100, "grain size" + channel, "0-100");
+        check_range(s.grain_amount[c], 0, kMaxGrainScale, "grain amount" + channel, "0-100");
+        check_range(s.grain_size[c], 0, kMaxGrainScale, "grain size" + channel, "0-100");
         // NaN: the stock's own response.
         if (!std::isnan(s.grain_density_exponent[c]))
-            check_range(s.grain_density_exponent[c], 0, 4, "grain response (density exponent)" + channel, "0-4");
-        check_range(s.printer_lights[c], 25 - 200, 25 + 200, "printer lights" + channel, "within 25 +-200 points");
-        check_range(s.filtration_ymc[c], 0, 1000, std::string("filtration (") + "YMC"[c] + ")", "0-1000 CC");
+            check_range(s.grain_density_exponent[c], 0, kMaxGrainResponse, "grain response (density exponent)" + channel,
+                        "0-4");
+        check_range(s.printer_lights[c], kPrinterLightsAuto - kMaxPrinterPoints, kPrinterLightsAuto + kMaxPrinterPoints,
+                    "printer lights" + channel, "within 25 +-200 points");
+        check_range(s.filtration_ymc[c], 0, kMaxFiltrationCc, std::string("filtration (") + "YMC"[c] + ")", "0-1000 CC");
     }
 }
 

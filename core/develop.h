@@ -48,6 +48,17 @@ namespace darkroom {
 enum class OutputMode { print, negative, density, scan, texture };
 enum class InputUnits { scene_linear, lux_seconds };
 
+// The settings' accepted ranges: Plan::compile refuses values outside them, and the look
+// layer's parameter table (look/parameters.h) offers these ranges in every front end.
+inline constexpr double kMaxExposureEv = 64;      // camera and print exposure, +- stops
+inline constexpr double kPrinterLightsAuto = 25;  // points: the automatic light
+inline constexpr double kMaxPrinterPoints = 200;  // +- points from the automatic light
+inline constexpr double kMaxFiltrationCc = 1000;
+inline constexpr double kMaxGrainScale = 100;     // grain amount and size multipliers
+inline constexpr double kMaxGrainResponse = 4;    // the density exponent of granularity
+inline constexpr double kMaxHalation = 100;       // multiplier of the stock's strength
+inline constexpr double kMaxFormatMm = 1e4;       // frame and print widths
+
 struct DevelopSettings {
     double exposure_ev = 0.0;        // stops relative to the exposure the ISO speed implies
     double print_exposure_ev = 0.0;  // stops relative to the automatic print exposure

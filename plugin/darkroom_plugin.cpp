@@ -32,9 +32,8 @@
 
 #include "core/develop.h"
 #include "core/plane_memory.h"
-#include "core/plate/grain_synthesis.h"
-#include "core/stock.h"
-#include "ocio/transform.h"
+#include "look/render.h"
+#include "look/user_error.h"
 #include "plugin/ofx_abi.h"
 #include "plugin/ofx_host.h"
 #include "plugin/parameters.h"
@@ -88,14 +87,13 @@ struct RenderError : std::runtime_error {
 
 struct Instance {
     std::mutex mutex;
-    // Compiled plans by their inputs (frame included); a render and its region-of-interest
-    // query share one. The plans of other frames and Source regions are copies of one
-    // compiled plan (Plan::in_image, Plan::for_frame): scrubbing a sequence compiles once.
+    // The look's renderers (its colour management and plate grain resolved) by the look's id
+    // and its files' versions, and compiled plans by those and the frame; a render and its
+    // region-of-interest query share one. The plans of other frames and Source regions are
+    // copies of one compiled plan (Plan::in_image, Plan::for_frame): scrubbing a sequence
+    // compiles once.
+    std::map<std::string, std::shared_ptr<const Renderer>> renderers;
     std::map<std::string, std::shared_ptr<const Plan>> plans;
-    std::map<std::string, std::shared_ptr<const ocio::ColorConverter>> converters;
-    // Planned grain profiles by file and modification time: planning (each kernel's SVD) is
-    // done once, not on every tile a host asks for.
-    std::map<std::string, std::shared_ptr<const GrainSynthesisPlan>> grain_profiles;
 };
 
 Instance& instance_of(OfxImageEffectHandle effect) {
@@ -104,17 +102,22 @@ Instance& instance_of(OfxImageEffectHandle effect) {
     return *inst;
 }
 
-// The identity of a built-in stock id, or of a stock or grain profile file with its modification
-// time, so that an edited file is reloaded.
-std::string version_key(const std::string& path_or_id, bool from_file) {
-    if (!from_file) return path_or_id;
+// The identity of a file with its modification time, so that an edited file is reloaded;
+// empty for no file.
+std::string file_version(const std::string& path, bool is_file = true) {
+    if (!is_file || path.empty()) return "";
     std::error_code ec;
-    auto t = std::filesystem::last_write_time(path_or_id, ec);
-    return path_or_id + "@" + (ec ? std::string("?") : std::to_string(t.time_since_epoch().count()));
+    auto t = std::filesystem::last_write_time(path, ec);
+    return path + "@" + (ec ? std::string("?") : std::to_string(t.time_since_epoch().count()));
 }
 
-Stock load_stock(const std::string& path_or_id, bool from_file) {
-    return from_file ? load_stock_file(path_or_id) : find_stock(path_or_id);
+// What a renderer depends on: the look (its id names every setting, so a setting added to
+// the table is part of it), its files' versions and the host's $OCIO.
+std::string renderer_key(const NodeSettings& n) {
+    const char* env = std::getenv("OCIO");
+    return n.look.id() + "|" + file_version(n.look.film, n.film_from_file) + "|" +
+           file_version(n.look.paper, n.paper_from_file) + "|" + file_version(n.look.grain_profile) + "|" +
+           file_version(n.look.colour.config_path) + "|OCIO=" + (env ? env : "");
 }
 
 // The CPUs the host lets an effect use (its multithread suite's count; 1 without the suite).
@@ -124,24 +127,28 @@ unsigned host_cpus() {
     return cpus;
 }
 
-std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, const FrameGeometry& frame) {
-    const DevelopSettings& s = n.develop;
-    std::ostringstream key;
-    key.precision(17);
-    key << version_key(n.film, n.film_from_file) << '|' << version_key(n.paper, n.paper_from_file) << '|' << frame.film_width
-        << '|' << s.exposure_ev << ',' << s.print_exposure_ev << ',' << int(s.output) << ','
-        << int(s.input_units) << ',' << s.grain << ',' << s.mtf << ',' << s.halation << ',' << s.seed << ','
-        << s.frame_width_mm << ',' << s.print_width_mm << ',' << quality_name(s.quality) << ','
-        << s.skip_noop_stages << ',' << s.one_pass << ',' << frame.monochrome;
-    for (int c = 0; c < 3; ++c)
-        key << ',' << s.grain_amount[c] << ',' << s.grain_size[c] << ',' << s.grain_density_exponent[c] << ','
-            << s.printer_lights[c] << ',' << s.filtration_ymc[c];
-    // One compile per film frame and settings; each image window (the Source's region) and
+// A look's renderer; errors name the node's parameters (UserError, worded by ofx_label).
+std::shared_ptr<const Renderer> renderer_for(Instance& inst, const NodeSettings& n, const std::string& key) {
+    {
+        std::lock_guard<std::mutex> lock(inst.mutex);
+        auto it = inst.renderers.find(key);
+        if (it != inst.renderers.end()) return it->second;
+    }
+    auto renderer = std::make_shared<const Renderer>(n.look, ofx_label);
+    std::lock_guard<std::mutex> lock(inst.mutex);
+    if (inst.renderers.size() >= 8) inst.renderers.clear();  // (other looks, edited files' old versions)
+    inst.renderers[key] = renderer;
+    return renderer;
+}
+
+std::shared_ptr<const Plan> plan_for(Instance& inst, const Renderer& renderer, const std::string& look_key,
+                                     const NodeSettings& n, const FrameGeometry& frame) {
+    // One compile per film frame and look; each image window (the Source's region) and
     // frame is a copy of it.
-    const std::string any_frame = key.str(),
-                      this_frame = any_frame + "|image " + std::to_string(frame.x0) + ',' + std::to_string(frame.y0) + ',' +
-                                   std::to_string(frame.width) + 'x' + std::to_string(frame.height) + "|frame " +
-                                   std::to_string(s.frame);
+    const std::string any_frame = look_key + "|film " + std::to_string(frame.film_width) + (frame.monochrome ? " grey" : ""),
+                      this_frame = any_frame + "|image " + std::to_string(frame.x0) + ',' + std::to_string(frame.y0) +
+                                   ',' + std::to_string(frame.width) + 'x' + std::to_string(frame.height) + "|frame " +
+                                   std::to_string(n.frame);
     std::shared_ptr<const Plan> compiled;
     {
         std::lock_guard<std::mutex> lock(inst.mutex);
@@ -150,14 +157,9 @@ std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, cons
         it = inst.plans.find(any_frame);
         if (it != inst.plans.end()) compiled = it->second;
     }
-    if (!compiled) {
-        Stock film = load_stock(n.film, n.film_from_file);
-        Stock paper = n.paper.empty() ? Stock{} : load_stock(n.paper, n.paper_from_file);
-        // (its tables built on the host's CPUs, not every core: a host's budget holds)
-        compiled = std::make_shared<const Plan>(
-            Plan::compile(film, n.paper.empty() ? nullptr : &paper, s, frame, int(host_cpus())));
-    }
-    auto plan = std::make_shared<const Plan>(compiled->in_image(frame).for_frame(s.frame));
+    // (its tables built on the host's CPUs, not every core: a host's budget holds)
+    if (!compiled) compiled = std::make_shared<const Plan>(renderer.compile(frame, int(host_cpus())));
+    auto plan = std::make_shared<const Plan>(compiled->in_image(frame).for_frame(n.frame));
     std::lock_guard<std::mutex> lock(inst.mutex);
     // Plans of other frames and settings are dropped once a few accumulate (each holds
     // kernels and tables, not images, so a handful is cheap); the compiled one is kept.
@@ -167,55 +169,18 @@ std::shared_ptr<const Plan> plan_for(Instance& inst, const NodeSettings& n, cons
     return plan;
 }
 
-std::shared_ptr<const ocio::ColorConverter> converter_for(Instance& inst, const std::string& config_path) {
-    const char* env = std::getenv("OCIO");
-    std::string key = config_path + "|" + (env ? env : "");
-    std::lock_guard<std::mutex> lock(inst.mutex);
-    auto it = inst.converters.find(key);
-    if (it != inst.converters.end()) return it->second;
-    auto converter = std::make_shared<const ocio::ColorConverter>(
-        ocio::resolve_config(config_path, "the OCIO config parameter"));
-    inst.converters.emplace(key, converter);
-    return converter;
-}
-
-// The grain profile file's synthesis, planned once per version of the file; a profile that
-// does not load, or is not of RGB, fails the render naming it (and is tried again next time).
-std::shared_ptr<const GrainSynthesisPlan> plate_grain_for(Instance& inst, const std::string& path) {
-    const std::string key = version_key(path, true);
-    {
-        std::lock_guard<std::mutex> lock(inst.mutex);
-        auto it = inst.grain_profiles.find(key);
-        if (it != inst.grain_profiles.end()) return it->second;
-    }
-    std::shared_ptr<const GrainSynthesisPlan> plan;
-    try {
-        plan = std::make_shared<const GrainSynthesisPlan>(plan_grain_synthesis(load_grain_profile_file(path)));
-        require_profile_fits(int(plan->profile.channels.size()), 3);  // (the output's RGB)
-    } catch (const GrainProfileError& e) {
-        throw ParameterError(std::string("Grain profile: ") + e.what());
-    } catch (const std::invalid_argument& e) {
-        throw ParameterError(std::string("Grain profile '") + path + "': " + e.what());
-    }
-    std::lock_guard<std::mutex> lock(inst.mutex);
-    if (inst.grain_profiles.size() >= 8) inst.grain_profiles.clear();  // (edited files' old versions)
-    inst.grain_profiles[key] = plan;
-    return plan;
-}
-
-// The conversions a render applies: input space -> working space, working -> output space
-// (none for the density and scan outputs, which are data).
-struct Colour {
-    ocio::ConversionPtr in, out;
+// The look's renderer and plan for a frame.
+struct Development {
+    std::shared_ptr<const Renderer> renderer;
+    std::shared_ptr<const Plan> plan;
 };
 
-Colour colour_for(Instance& inst, const NodeSettings& n) {
-    auto converter = converter_for(inst, n.ocio_config);
-    Colour c;
-    c.in = converter->to_working(n.input_space);
-    OutputMode mode = n.develop.output;
-    if (mode != OutputMode::density && mode != OutputMode::scan) c.out = converter->from_working(n.output_space);
-    return c;
+Development development_for(Instance& inst, const NodeSettings& n, const FrameGeometry& frame) {
+    const std::string key = renderer_key(n);
+    Development d;
+    d.renderer = renderer_for(inst, n, key);
+    d.plan = plan_for(inst, *d.renderer, key, n, frame);
+    return d;
 }
 
 // --- Host images ----------------------------------------------------------------------
@@ -345,11 +310,10 @@ private:
 // What the bands of one render share.
 struct BandJob {
     OfxImageEffectHandle effect;
+    const Renderer* renderer;
     const Plan* plan;
-    ConstImageView input;
-    const ocio::Conversion* output_conversion;  // null: none
-    const GrainSynthesisPlan* plate_grain;       // null: none
-    uint64_t seed;
+    ConstImageView input;  // in the working space, straight (Renderer::working_input)
+    int premultiplied_alpha;
     int grain_frame;
     const HostImage* output;
     OfxRectI film;  // the film frame (Placement)
@@ -360,23 +324,12 @@ struct BandJob {
     std::exception_ptr error;
 };
 
+// The look's one render path over a band (look/render.h), written to the host's image.
 void render_band(BandJob& job, const Window& band) {
-    const int channels = job.output->channels();
-    Image out(band, channels, 1.0f);  // alpha 1 where the input has none
-    job.plan->run(job.input, out.view(), 1);
-    if (job.output_conversion)
-        job.output_conversion->apply({out.pixels.data(), band.width(), band.height(), channels, channels,
-                                      (std::ptrdiff_t)channels * band.width()});
-    // Keyed by absolute pixel like the film grain: a band gets that band of the full frame.
-    if (job.plate_grain) apply_grain_profile(*job.plate_grain, out.view(), job.seed, job.grain_frame, 1);
-    const bool premultiplied_output = job.output->premultiplied();
+    Image out(band, job.input.channels);
+    job.renderer->render(*job.plan, job.input, out.view(), job.grain_frame, job.premultiplied_alpha, 1);
     for (int y = band.y0; y < band.y1; ++y)
-        for (int x = band.x0; x < band.x1; ++x) {
-            float px[4];
-            std::copy_n(out.at(x, y), channels, px);
-            if (premultiplied_output) premultiply(px, 3, px[3]);
-            job.output->write(x + job.film.x1, job.film.y2 - 1 - y, px);
-        }
+        for (int x = band.x0; x < band.x1; ++x) job.output->write(x + job.film.x1, job.film.y2 - 1 - y, out.at(x, y));
 }
 
 // One of the host's threads: takes bands until none are left, the host aborts, or a band fails.
@@ -476,8 +429,8 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     if (window.x1 < ob.x1 || window.y1 < ob.y1 || window.x2 > ob.x2 || window.y2 > ob.y2)
         throw RenderError("the render window " + rect_text(window) + " is not inside the output image " + rect_text(ob));
 
-    std::shared_ptr<const Plan> plan = plan_for(inst, settings, geometry);
-    Colour colour = colour_for(inst, settings);
+    const Development development = development_for(inst, settings, geometry);
+    const Plan& plan = *development.plan;
 
     // Pixels of the window outside the frame are black and transparent.
     const Window frame_core = to_core(placement.image, film);
@@ -496,10 +449,10 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
         return kOfxStatOK;
     }
 
-    // The input: the window grown by the halo, unpremultiplied, in the working space. The host
-    // supplies at least the region of interest asked for; anything it leaves out is black.
+    // The input: the window grown by the halo, as the host has it. The host supplies at least
+    // the region of interest asked for; anything it leaves out is black.
     HostImage source(source_clip, time, "Source");
-    const Window in_core = plan->input_window(out_core);
+    const Window in_core = plan.input_window(out_core);
     const int in_channels = source.channels();
     WorkBuffer in_buffer(effect, (size_t)in_core.pixel_count() * in_channels);
     ImageView in{in_buffer.data(), in_core, in_channels, in_channels, (std::ptrdiff_t)in_channels * in_core.width()};
@@ -512,20 +465,18 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
                 continue;
             }
             source.read(ox, oy, px);
-            if (source.premultiplied()) unpremultiply(px, 3, px[3]);
         }
-    colour.in->apply({in.data, in_core.width(), in_core.height(), in_channels, in_channels, in.row_stride});
 
     BandJob job;
     job.effect = effect;
-    job.plan = plan.get();
-    job.input = in;
-    job.output_conversion = colour.out ? colour.out.get() : nullptr;
-    const std::shared_ptr<const GrainSynthesisPlan> plate_grain =
-        settings.grain_profile.empty() ? nullptr : plate_grain_for(inst, settings.grain_profile);
-    job.plate_grain = plate_grain.get();
-    job.seed = settings.develop.seed;
-    job.grain_frame = settings.develop.frame;
+    job.renderer = development.renderer.get();
+    job.plan = &plan;
+    // Straight colour in the working space, shared by the bands.
+    job.premultiplied_alpha = source.premultiplied() ? 3 : -1;
+    Image working;
+    job.input = development.renderer->working_input(plan, in, out_core, job.premultiplied_alpha, working,
+                                                    int(host_cpus()));
+    job.grain_frame = settings.frame;
     job.output = &output;
     job.film = film;
     // Each band also develops its halo (halation's reaches ~100 px at 4K): bands of at least
@@ -533,13 +484,13 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     // would leave threads without a band. Four bands per thread otherwise balance the load.
     const int threads = int(host_cpus()), height = out_core.height();
     const int per_thread = (height + threads - 1) / threads;
-    int band_rows = std::max(height / (4 * threads), std::min(2 * plan->halo_px(), per_thread));
+    int band_rows = std::max(height / (4 * threads), std::min(2 * plan.halo_px(), per_thread));
     band_rows = std::max(kMinBandRows, band_rows);
     for (int y = out_core.y0; y < out_core.y1; y += band_rows)
         job.bands.push_back({out_core.x0, y, out_core.x1, std::min(out_core.y1, y + band_rows)});
     // A reference render that will take hours says so on the node before it starts (the user
     // can abort it), and the message stays while the node renders at that cost.
-    const std::string long_render = long_reference_render_warning(*plan, out_core, "Quality ");
+    const std::string long_render = long_reference_render_warning(plan, out_core, "Quality ");
     if (!long_render.empty()) post_warning(effect, "Darkroom: " + long_render);
     run_bands(job);
     if (job.error) std::rethrow_exception(job.error);
@@ -577,8 +528,8 @@ OfxStatus regions_of_interest(OfxImageEffectHandle effect, const Props& in_args,
     const FrameGeometry geometry = frame_geometry(placement);
     const Window out_core = to_core(region_px, placement.film).intersected(to_core(placement.image, placement.film));
     if (out_core.empty()) return kOfxStatReplyDefault;
-    auto plan = plan_for(instance_of(effect), settings, geometry);
-    const OfxRectI roi = to_ofx(plan->input_window(out_core), placement.film);
+    const Development development = development_for(instance_of(effect), settings, geometry);
+    const OfxRectI roi = to_ofx(development.plan->input_window(out_core), placement.film);
     out_args.set_doubles((std::string(kOfxImageClipPropRoIPrefix) + kOfxImageEffectSimpleSourceClipName).c_str(),
                          {roi.x1 / sx, roi.y1 / sy, roi.x2 / sx, roi.y2 / sy});
     return kOfxStatOK;
@@ -588,14 +539,17 @@ OfxStatus regions_of_interest(OfxImageEffectHandle effect, const Props& in_args,
 // and so does the whole node when the input and output colour spaces are the same.
 OfxStatus is_identity(OfxImageEffectHandle effect, const Props& in_args, const Props& out_args) {
     const OfxTime time = in_args.get_double(kOfxPropTime);
-    NodeSettings n = read_parameters(effect, time);
-    const DevelopSettings& s = n.develop;
+    const NodeSettings n = read_parameters(effect, time);
+    const DevelopSettings& s = n.look.settings;
     bool no_grain = !s.grain || (s.grain_amount[0] == 0 && s.grain_amount[1] == 0 && s.grain_amount[2] == 0);
-    if (s.output != OutputMode::texture || !no_grain || s.mtf || s.halation != 0 || !n.grain_profile.empty())
+    if (s.output != OutputMode::texture || !no_grain || s.mtf || s.halation != 0 || !n.look.grain_profile.empty() ||
+        !n.look.colour.display_view.empty())
         return kOfxStatReplyDefault;
-    auto converter = converter_for(instance_of(effect), n.ocio_config);
-    if (converter->canonical_color_space(n.input_space) != converter->canonical_color_space(n.output_space))
-        return kOfxStatReplyDefault;
+    const ocio::ColorConverter& converter = renderer_for(instance_of(effect), n, renderer_key(n))->colour().converter();
+    auto canonical = [&](const std::string& space) {
+        return space.empty() ? converter.working_space().color_space : converter.canonical_color_space(space);
+    };
+    if (canonical(n.look.colour.input_space) != canonical(n.look.colour.output_space)) return kOfxStatReplyDefault;
     out_args.set(kOfxPropName, kOfxImageEffectSimpleSourceClipName);
     out_args.set(kOfxPropTime, time);
     return kOfxStatOK;
@@ -610,12 +564,12 @@ OfxStatus clip_preferences(OfxImageEffectHandle effect, const Props& out_args) {
                  source.get_string_or(kOfxImageEffectPropPreMultiplication,
                                       components == kOfxImageComponentRGB ? kOfxImageOpaque : kOfxImagePreMultiplied));
     // Grain changes with the frame unless it is off or static.
-    NodeSettings n = read_parameters(effect, 0.0);
-    const DevelopSettings& s = n.develop;
+    const NodeSettings n = read_parameters(effect, 0.0);
+    const DevelopSettings& s = n.look.settings;
     bool grain = (s.grain && (s.grain_amount[0] > 0 || s.grain_amount[1] > 0 || s.grain_amount[2] > 0)) ||
-                 !n.grain_profile.empty();
-    NodeSettings n1 = read_parameters(effect, 1.0);
-    out_args.set(kOfxImageEffectFrameVarying, grain && n1.develop.frame != s.frame ? 1 : 0);
+                 !n.look.grain_profile.empty();
+    const NodeSettings n1 = read_parameters(effect, 1.0);
+    out_args.set(kOfxImageEffectFrameVarying, grain && n1.frame != n.frame ? 1 : 0);
     return kOfxStatOK;
 }
 
@@ -726,14 +680,15 @@ OfxStatus dispatch(const char* action, OfxImageEffectHandle effect, OfxPropertyS
         clear_message(effect);  // the user changed something; the next render judges it afresh
         Props args(in_args);
         if (args.get_string_or(kOfxPropType, "") == kOfxTypeParameter)
-            follow_stock_choice(effect, args.get_string_or(kOfxPropName, ""), args.get_string_or(kOfxPropChangeReason, ""));
+            parameter_changed(effect, args.get_string_or(kOfxPropName, ""), args.get_string_or(kOfxPropChangeReason, ""),
+                              args.get_double_or(kOfxPropTime, 0.0));
         return kOfxStatOK;
     }
     if (!std::strcmp(action, kOfxActionPurgeCaches)) {
         Instance& inst = instance_of(effect);
         std::lock_guard<std::mutex> lock(inst.mutex);
         inst.plans.clear();
-        inst.converters.clear();
+        inst.renderers.clear();
         release_plane_memory();  // the planes' memory kept for the next render (core/plane_memory.h)
         return kOfxStatOK;
     }

@@ -288,6 +288,7 @@ inline constexpr int kOfxImageEffectPluginApiVersion = 1;
 #define kOfxParamTypeChoice "OfxParamTypeChoice"
 #define kOfxParamTypeString "OfxParamTypeString"
 #define kOfxParamTypeGroup "OfxParamTypeGroup"
+#define kOfxParamTypePushButton "OfxParamTypePushButton"
 #define kOfxParamPropDefault "OfxParamPropDefault"
 #define kOfxParamPropMin "OfxParamPropMin"
 #define kOfxParamPropMax "OfxParamPropMax"

@@ -1,54 +1,52 @@
 #include "plugin/parameters.h"
 
 #include <array>
+#include <climits>
 #include <cmath>
-#include <iterator>
 #include <vector>
 
+#include "look/parameters.h"
+#include "look/user_error.h"
 #include "plugin/ofx_host.h"
 
 namespace darkroom::ofx {
 
 namespace {
 
-// Script names of the parameters (what a host's scripting and saved projects use).
-constexpr const char* kFilm = "film";
-constexpr const char* kFilmFile = "filmFile";
-constexpr const char* kPaper = "paper";
-constexpr const char* kPaperFile = "paperFile";
-// Hidden: the id of the option each stock choice is set to (stock_options), so that a saved
-// node keeps its stocks when a later version's lists put them at other indices.
-constexpr const char* kFilmStock = "filmStock";
-constexpr const char* kPaperStock = "paperStock";
-constexpr const char* kOutput = "output";
-constexpr const char* kQuality = "quality";
-constexpr const char* kExposure = "exposure";
-constexpr const char* kPrintExposure = "printExposure";
-constexpr const char* kPrinterLights = "printerLights";
-constexpr const char* kFiltration = "filtration";
-constexpr const char* kGrain = "grain";
-constexpr const char* kGrainAmount = "grainAmount";
-constexpr const char* kGrainSize = "grainSize";
-constexpr const char* kGrainResponseOverride = "grainResponseOverride";
-constexpr const char* kGrainResponse = "grainResponse";
-constexpr const char* kGrainProfile = "grainProfile";
-constexpr const char* kSeed = "seed";
-constexpr const char* kStaticGrain = "staticGrain";
-constexpr const char* kHalation = "halation";
-constexpr const char* kMtf = "mtf";
-constexpr const char* kFrameWidth = "frameWidthMm";
-constexpr const char* kPrintWidth = "printWidthMm";
-constexpr const char* kFilmFrame = "filmFrame";
-constexpr const char* kOcioConfig = "ocioConfig";
-constexpr const char* kInputSpace = "inputColorspace";
-constexpr const char* kOutputSpace = "outputColorspace";
+using nlohmann::json;
 
-// Output modes in the order of the choice parameter.
-const std::array<std::pair<const char*, OutputMode>, 5> kOutputs{{{"Print", OutputMode::print},
-                                                                  {"Negative", OutputMode::negative},
-                                                                  {"Density", OutputMode::density},
-                                                                  {"Scan", OutputMode::scan},
-                                                                  {"Texture", OutputMode::texture}}};
+// The table's groups as the node's group parameters, in order; and the node's own.
+struct Group {
+    const char* label;
+    const char* name;
+    bool open;
+};
+constexpr const char* kLookGroup = "lookGroup";
+const std::array<Group, 5> kGroups{{{"Stocks", "stocksGroup", true},
+                                    {"Exposure and printing", "exposureGroup", true},
+                                    {"Grain", "grainGroup", true},
+                                    {"Optics and format", "opticsGroup", false},
+                                    {"Colour management (OCIO)", "colourGroup", false}}};
+
+const char* group_name(const Parameter& p) {
+    for (const Group& g : kGroups)
+        if (p.group == g.label) return g.name;
+    throw std::logic_error("the plugin has no group for '" + p.group + "'");
+}
+
+// The node's own parameters (script names).
+constexpr const char* kLookFile = "lookFile";
+constexpr const char* kLoadLook = "loadLook";
+constexpr const char* kSaveLook = "saveLook";
+constexpr const char* kStaticGrain = "staticGrain";
+constexpr const char* kFilmFrame = "filmFrame";
+
+// The names of the parameters a row makes besides its own (see define_row).
+std::string file_param(const Parameter& p) { return p.ofx_name + "File"; }      // stock: a stock file
+std::string id_param(const Parameter& p) { return p.ofx_name + "Stock"; }       // stock: the chosen id
+std::string override_param(const Parameter& p) { return p.ofx_name + "Override"; }  // per-channel
+std::string display_param(const Parameter& p) { return p.ofx_name + "Display"; }
+std::string view_param(const Parameter& p) { return p.ofx_name + "View"; }
 
 // An option of a stock choice: what it stands for (a built-in stock's id, or one of the
 // two below) and what the user sees.
@@ -58,12 +56,22 @@ struct StockOption {
 constexpr const char* kStockFileId = "file";
 constexpr const char* kNoPaperId = "none";
 
-// Film choice: the built-in films, then a stock file. Paper: built-in papers, none, a file.
-std::vector<StockOption> stock_options(StockKind kind) {
+const char* role_label(StockKind kind) {
+    switch (kind) {
+        case StockKind::negative: return "Negative";
+        case StockKind::print_film: return "Print film";
+        case StockKind::paper: return "Paper";
+    }
+    return "";
+}
+
+// The built-in stocks of the row's kinds by role, then none (a print stage's row) and a file.
+std::vector<StockOption> stock_options(const Parameter& p) {
     std::vector<StockOption> options;
-    for (const Stock& s : builtin_stocks())
-        if (s.kind == kind) options.push_back({s.id, s.name});
-    if (kind == StockKind::paper) options.push_back({kNoPaperId, "None (stop at the negative)"});
+    for (StockKind kind : p.stock_kinds)
+        for (const Stock& s : builtin_stocks())
+            if (s.kind == kind) options.push_back({s.id, std::string(role_label(kind)) + ": " + s.name});
+    if (p.stock_kinds.front() != StockKind::negative) options.push_back({kNoPaperId, "None (stop at the negative)"});
     options.push_back({kStockFileId, "Stock file..."});
     return options;
 }
@@ -74,144 +82,161 @@ int option_index(const std::vector<StockOption>& options, const std::string& id)
     return -1;
 }
 
-std::vector<std::string> labels(const std::vector<StockOption>& options) {
-    std::vector<std::string> out;
-    for (const StockOption& o : options) out.push_back(o.label);
-    return out;
-}
-
-// A stock choice, its hidden id parameter and the options it offers.
-struct StockChoice {
-    const char* choice;
-    const char* id;
-    StockKind kind;
-};
-const std::array<StockChoice, 2> kStockChoices{{{kFilm, kFilmStock, StockKind::negative},
-                                                {kPaper, kPaperStock, StockKind::paper}}};
-
-Props define(OfxParamSetHandle params, const char* type, const char* name, const char* label, const char* hint,
-             const char* parent) {
+Props define(OfxParamSetHandle params, const char* type, const std::string& name, const std::string& label,
+             const std::string& hint, const char* parent) {
     OfxPropertySetHandle h = nullptr;
-    check(suites.param->paramDefine(params, type, name, &h), (std::string("defining parameter ") + name).c_str());
+    check(suites.param->paramDefine(params, type, name.c_str(), &h), ("defining parameter " + name).c_str());
     Props p(h);
     p.set(kOfxPropLabel, label);
     p.set(kOfxParamPropScriptName, name);
-    if (hint) p.set(kOfxParamPropHint, hint);
+    if (!hint.empty()) p.set(kOfxParamPropHint, hint);
     if (parent) p.set(kOfxParamPropParent, parent);
     return p;
 }
 
-void define_group(OfxParamSetHandle params, const char* name, const char* label, bool open) {
-    Props g = define(params, kOfxParamTypeGroup, name, label, nullptr, nullptr);
-    g.set(kOfxParamPropGroupOpen, open ? 1 : 0);
-}
-
-Props define_double(OfxParamSetHandle params, const char* name, const char* label, const char* hint,
-                    const char* parent, double def, double min, double max, double display_min, double display_max) {
-    Props p = define(params, kOfxParamTypeDouble, name, label, hint, parent);
-    p.set(kOfxParamPropDoubleType, kOfxParamDoubleTypePlain);
-    p.set(kOfxParamPropDefault, def);
-    p.set(kOfxParamPropMin, min);
-    p.set(kOfxParamPropMax, max);
-    p.set(kOfxParamPropDisplayMin, display_min);
-    p.set(kOfxParamPropDisplayMax, display_max);
-    p.set(kOfxParamPropAnimates, 1);
-    return p;
-}
-
-// Three values, one per channel or filter; labels name the dimensions.
-Props define_double3(OfxParamSetHandle params, const char* name, const char* label, const char* hint,
-                     const char* parent, double def, double min, double max, double display_min, double display_max,
-                     const std::array<const char*, 3>& dimension_labels) {
-    Props p = define(params, kOfxParamTypeDouble3D, name, label, hint, parent);
-    p.set(kOfxParamPropDoubleType, kOfxParamDoubleTypePlain);
-    for (int i = 0; i < 3; ++i) {
-        p.set(kOfxParamPropDefault, def, i);
-        p.set(kOfxParamPropMin, min, i);
-        p.set(kOfxParamPropMax, max, i);
-        p.set(kOfxParamPropDisplayMin, display_min, i);
-        p.set(kOfxParamPropDisplayMax, display_max, i);
-        p.set(kOfxParamPropDimensionLabel, dimension_labels[i], i);
-    }
-    p.set(kOfxParamPropAnimates, 1);
-    return p;
-}
-
-void define_bool(OfxParamSetHandle params, const char* name, const char* label, const char* hint, const char* parent,
-                 bool def) {
+void define_bool(OfxParamSetHandle params, const std::string& name, const std::string& label, const std::string& hint,
+                 const char* parent, bool def) {
     Props p = define(params, kOfxParamTypeBoolean, name, label, hint, parent);
     p.set(kOfxParamPropDefault, def ? 1 : 0);
     p.set(kOfxParamPropAnimates, 0);
 }
 
-void define_choice(OfxParamSetHandle params, const char* name, const char* label, const char* hint, const char* parent,
-                   const std::vector<std::string>& options, int def) {
+void define_choice(OfxParamSetHandle params, const std::string& name, const std::string& label,
+                   const std::string& hint, const char* parent, const std::vector<std::string>& options, int def) {
     Props p = define(params, kOfxParamTypeChoice, name, label, hint, parent);
     p.set(kOfxParamPropChoiceOption, options);
     p.set(kOfxParamPropDefault, def);
     p.set(kOfxParamPropAnimates, 0);
 }
 
-Props define_string(OfxParamSetHandle params, const char* name, const char* label, const char* hint, const char* parent,
-                    const char* def, bool file_path) {
+void define_string(OfxParamSetHandle params, const std::string& name, const std::string& label,
+                   const std::string& hint, const char* parent, const std::string& def, bool file_path,
+                   bool file_exists = true) {
     Props p = define(params, kOfxParamTypeString, name, label, hint, parent);
     p.set(kOfxParamPropDefault, def);
     p.set(kOfxParamPropStringMode, file_path ? kOfxParamStringIsFilePath : kOfxParamStringIsSingleLine);
-    if (file_path) p.set(kOfxParamPropStringFilePathExists, 1);
+    if (file_path) p.set(kOfxParamPropStringFilePathExists, file_exists ? 1 : 0);
     p.set(kOfxParamPropAnimates, 0);
-    return p;
 }
 
-// Reading values from an instance.
+// A real or three (one per channel or filter): the row's default, range and slider.
+void define_doubles(OfxParamSetHandle params, const Parameter& row, const char* parent, const json& def) {
+    const bool three = row.type == ParameterType::per_channel;
+    Props p = define(params, three ? kOfxParamTypeDouble3D : kOfxParamTypeDouble, row.ofx_name, row.label, row.help,
+                     parent);
+    p.set(kOfxParamPropDoubleType, kOfxParamDoubleTypePlain);
+    for (int i = 0; i < (three ? 3 : 1); ++i) {
+        p.set(kOfxParamPropDefault, def.is_array() ? def[size_t(i)].get<double>() : def.get<double>(), i);
+        p.set(kOfxParamPropMin, row.min, i);
+        p.set(kOfxParamPropMax, row.max, i);
+        p.set(kOfxParamPropDisplayMin, row.display_min, i);
+        p.set(kOfxParamPropDisplayMax, row.display_max, i);
+        if (three) p.set(kOfxParamPropDimensionLabel, row.channel_names[size_t(i)], i);
+    }
+    p.set(kOfxParamPropAnimates, row.animatable ? 1 : 0);
+}
+
+// One row of the table as the node's parameters.
+void define_row(OfxParamSetHandle params, const Parameter& row) {
+    const char* parent = group_name(row);
+    const json def = row.default_value();
+    switch (row.type) {
+        case ParameterType::stock: {
+            const auto options = stock_options(row);
+            std::vector<std::string> labels;
+            for (const StockOption& o : options) labels.push_back(o.label);
+            define_choice(params, row.ofx_name, row.label, row.help, parent, labels,
+                          option_index(options, def.get<std::string>()));
+            define_string(params, file_param(row), row.label + " stock file",
+                          "A Darkroom stock file (.json), used when " + row.label + " is 'Stock file'", parent, "",
+                          true);
+            // Empty until the node is created (restore_stock_choices), as in nodes saved before them.
+            define_string(params, id_param(row), id_param(row), "The id of the stock chosen above, saved with the node",
+                          parent, "", false);
+            break;
+        }
+        case ParameterType::number: define_doubles(params, row, parent, def); break;
+        case ParameterType::per_channel:
+            if (row.stock_default) {
+                define_bool(params, override_param(row), "Override " + row.label,
+                            "Use " + row.label + " below instead of the stock's own", parent, false);
+                define_doubles(params, row, parent, json(row.override_start));
+            } else {
+                define_doubles(params, row, parent, def);
+            }
+            break;
+        case ParameterType::on_off: define_bool(params, row.ofx_name, row.label, row.help, parent, def.get<bool>()); break;
+        case ParameterType::choice: {
+            std::vector<std::string> labels;
+            int index = 0;
+            for (size_t i = 0; i < row.choices.size(); ++i) {
+                labels.push_back(row.choices[i].label);
+                if (row.choices[i].name == def) index = int(i);
+            }
+            define_choice(params, row.ofx_name, row.label, row.help, parent, labels, index);
+            break;
+        }
+        case ParameterType::seed: {
+            // A host's integer parameter holds 0 to 2^31 - 1 of the look's 64-bit seeds.
+            Props seed = define(params, kOfxParamTypeInteger, row.ofx_name, row.label, row.help, parent);
+            seed.set(kOfxParamPropDefault, int(def.get<uint64_t>()));
+            seed.set(kOfxParamPropMin, 0);
+            seed.set(kOfxParamPropMax, INT_MAX);
+            seed.set(kOfxParamPropDisplayMin, 0);
+            seed.set(kOfxParamPropDisplayMax, 1000);
+            seed.set(kOfxParamPropAnimates, 0);
+            break;
+        }
+        case ParameterType::text:
+        case ParameterType::file:
+            define_string(params, row.ofx_name, row.label, row.help, parent, "", row.type == ParameterType::file);
+            break;
+        case ParameterType::display_view:
+            define_bool(params, row.ofx_name, row.label, row.help, parent, false);
+            define_string(params, display_param(row), "Display", "The OCIO display (empty: the config's default)",
+                          parent, "", false);
+            define_string(params, view_param(row), "View", "The display's view (empty: its default)", parent, "",
+                          false);
+            break;
+    }
+}
+
+// Reading and setting values of an instance.
 class Reader {
 public:
     Reader(OfxImageEffectHandle instance, OfxTime time) : time_(time) {
         check(suites.effect->getParamSet(instance, &params_), "getting the parameter set");
     }
 
-    double get_double(const char* name) const {
+    double get_double(const std::string& name) const {
         double v = 0;
-        check(suites.param->paramGetValueAtTime(handle(name), time_, &v), name);
+        check(suites.param->paramGetValueAtTime(handle(name), time_, &v), name.c_str());
         return v;
     }
-    std::array<double, 3> get_double3(const char* name) const {
+    std::array<double, 3> get_double3(const std::string& name) const {
         std::array<double, 3> v{};
-        check(suites.param->paramGetValueAtTime(handle(name), time_, &v[0], &v[1], &v[2]), name);
+        check(suites.param->paramGetValueAtTime(handle(name), time_, &v[0], &v[1], &v[2]), name.c_str());
         return v;
     }
-    int get_int(const char* name) const {
+    int get_int(const std::string& name) const {
         int v = 0;
-        check(suites.param->paramGetValueAtTime(handle(name), time_, &v), name);
+        check(suites.param->paramGetValueAtTime(handle(name), time_, &v), name.c_str());
         return v;
     }
-    bool get_bool(const char* name) const { return get_int(name) != 0; }
-    std::string get_string(const char* name) const {
+    bool get_bool(const std::string& name) const { return get_int(name) != 0; }
+    std::string get_string(const std::string& name) const {
         char* v = nullptr;
-        check(suites.param->paramGetValueAtTime(handle(name), time_, &v), name);
+        check(suites.param->paramGetValueAtTime(handle(name), time_, &v), name.c_str());
         return v ? v : "";
     }
     // The label the user sees, for messages.
-    std::string label(const char* name) const {
+    std::string label(const std::string& name) const {
         OfxPropertySetHandle props = nullptr;
         OfxParamHandle h = nullptr;
-        if (suites.param->paramGetHandle(params_, name, &h, &props) != kOfxStatOK || !props) return name;
+        if (suites.param->paramGetHandle(params_, name.c_str(), &h, &props) != kOfxStatOK || !props) return name;
         return Props(props).get_string_or(kOfxPropLabel, name);
     }
-
-    // A value that must be finite and within [min, max].
-    double checked(const char* name, double v, double min, double max) const {
-        if (!std::isfinite(v) || v < min || v > max)
-            throw ParameterError(label(name) + " is " + std::to_string(v) + ": it must be a number from " +
-                                 trimmed(min) + " to " + trimmed(max));
-        return v;
-    }
-    double checked_double(const char* name, double min, double max) const { return checked(name, get_double(name), min, max); }
-    std::array<double, 3> checked_double3(const char* name, double min, double max) const {
-        std::array<double, 3> v = get_double3(name);
-        for (double& c : v) checked(name, c, min, max);
-        return v;
-    }
-    int checked_choice(const char* name, int option_count) const {
+    int checked_choice(const std::string& name, int option_count) const {
         int v = get_int(name);
         if (v < 0 || v >= option_count)
             throw ParameterError(label(name) + " is option " + std::to_string(v) + ", which does not exist (0 to " +
@@ -220,238 +245,256 @@ public:
     }
     // The id of the option a stock choice is set to. A node saved with a stock this version
     // does not have keeps that stock's id (restore_stock_choices) until the user chooses.
-    std::string stock_choice(const StockChoice& c) const {
-        const auto options = stock_options(c.kind);
-        const std::string saved = get_string(c.id);
+    std::string stock_choice(const Parameter& row) const {
+        const auto options = stock_options(row);
+        const std::string saved = get_string(id_param(row));
         if (!saved.empty() && option_index(options, saved) < 0)
-            throw ParameterError(label(c.choice) + ": this node was saved with the stock '" + saved +
+            throw ParameterError(row.label + ": this node was saved with the stock '" + saved +
                                  "', which this version of Darkroom does not have; choose another");
-        return options[size_t(checked_choice(c.choice, int(options.size())))].id;
+        return options[size_t(checked_choice(row.ofx_name, int(options.size())))].id;
     }
 
-    // A parameter's handle (also for setting its value).
-    OfxParamHandle handle(const char* name) const {
+    OfxParamHandle handle(const std::string& name) const {
         OfxParamHandle h = nullptr;
-        check(suites.param->paramGetHandle(params_, name, &h, nullptr), name);
+        check(suites.param->paramGetHandle(params_, name.c_str(), &h, nullptr), name.c_str());
         return h;
+    }
+    void set_int(const std::string& name, int v) const { check(suites.param->paramSetValue(handle(name), v), name.c_str()); }
+    void set_double(const std::string& name, double v) const {
+        check(suites.param->paramSetValue(handle(name), v), name.c_str());
+    }
+    void set_double3(const std::string& name, const json& v) const {
+        check(suites.param->paramSetValue(handle(name), v[0].get<double>(), v[1].get<double>(), v[2].get<double>()),
+              name.c_str());
+    }
+    void set_string(const std::string& name, const std::string& v) const {
+        check(suites.param->paramSetValue(handle(name), v.c_str()), name.c_str());
     }
 
 private:
-    static std::string trimmed(double v) {
-        std::string s = std::to_string(v);
-        s.erase(s.find_last_not_of('0') + 1);
-        if (!s.empty() && s.back() == '.') s.pop_back();
-        return s;
-    }
-
     OfxParamSetHandle params_ = nullptr;
     OfxTime time_;
 };
 
-// The path in a stock-file parameter, which must be given when its choice asks for a file.
-std::string stock_file(const Reader& r, const char* choice, const char* file) {
-    std::string path = r.get_string(file);
-    if (path.empty())
-        throw ParameterError(r.label(choice) + " is set to a stock file, but " + r.label(file) + " is empty");
+// A row's value at the reader's time, as the table's check takes it.
+json row_value(const Reader& r, const Parameter& row, NodeSettings& n) {
+    const std::string& name = row.ofx_name;
+    switch (row.type) {
+        case ParameterType::stock: {
+            const bool print_stage = row.stock_kinds.front() != StockKind::negative;
+            try {
+                const std::string id = r.stock_choice(row);
+                if (id != kStockFileId) return id;
+                const std::string path = r.get_string(file_param(row));
+                if (path.empty())
+                    throw ParameterError(row.label + " is set to a stock file, but " + r.label(file_param(row)) +
+                                         " is empty");
+                (print_stage ? n.paper_from_file : n.film_from_file) = true;
+                return path;
+            } catch (const ParameterError&) {
+                // Only the print output uses a paper: a paper it cannot use matters only then.
+                if (print_stage && n.look.settings.output != OutputMode::print) return kNoPaperId;
+                throw;
+            }
+        }
+        case ParameterType::number: return r.get_double(name);
+        case ParameterType::per_channel:
+            if (row.stock_default && !r.get_bool(override_param(row))) return nullptr;
+            return r.get_double3(name);
+        case ParameterType::on_off: return r.get_bool(name);
+        case ParameterType::choice: return row.choices[size_t(r.checked_choice(name, int(row.choices.size())))].name;
+        case ParameterType::seed: {
+            const int seed = r.get_int(name);
+            return seed < 0 ? json(seed) : json(uint64_t(seed));
+        }
+        case ParameterType::text:
+        case ParameterType::file: return r.get_string(name);
+        case ParameterType::display_view:
+            if (!r.get_bool(name)) return nullptr;
+            return json::array({r.get_string(display_param(row)), r.get_string(view_param(row))});
+    }
+    return nullptr;
+}
+
+// The stock option a look's stock is: its id, none, or a file.
+std::string stock_option_of(const Parameter& row, const std::string& stock) {
+    if (option_index(stock_options(row), stock) >= 0) return stock;
+    return kStockFileId;
+}
+
+// Sets a row's parameters to a look's value (the Load look button).
+void set_row(const Reader& r, const Parameter& row, const json& value) {
+    const std::string& name = row.ofx_name;
+    switch (row.type) {
+        case ParameterType::stock: {
+            const std::string stock = value.get<std::string>();
+            const std::string option = stock_option_of(row, stock);
+            r.set_int(name, option_index(stock_options(row), option));
+            r.set_string(id_param(row), option);
+            if (option == kStockFileId) r.set_string(file_param(row), stock);
+            break;
+        }
+        case ParameterType::number: r.set_double(name, value.get<double>()); break;
+        case ParameterType::per_channel:
+            if (row.stock_default) r.set_int(override_param(row), value.is_null() ? 0 : 1);
+            if (!value.is_null()) r.set_double3(name, value);
+            break;
+        case ParameterType::on_off: r.set_int(name, value.get<bool>() ? 1 : 0); break;
+        case ParameterType::choice:
+            for (size_t i = 0; i < row.choices.size(); ++i)
+                if (row.choices[i].name == value) r.set_int(name, int(i));
+            break;
+        case ParameterType::seed:
+            if (value.get<uint64_t>() > uint64_t(INT_MAX))
+                throw ParameterError(row.label + ": the look's seed " + value.dump() +
+                                     " is larger than a host's integer parameter holds (2147483647)");
+            r.set_int(name, int(value.get<uint64_t>()));
+            break;
+        case ParameterType::text:
+        case ParameterType::file: r.set_string(name, value.get<std::string>()); break;
+        case ParameterType::display_view:
+            r.set_int(name, value.is_null() ? 0 : 1);
+            if (!value.is_null()) {
+                r.set_string(display_param(row), value[0].get<std::string>());
+                r.set_string(view_param(row), value[1].get<std::string>());
+            }
+            break;
+    }
+}
+
+std::string look_file_path(const Reader& r) {
+    const std::string path = r.get_string(kLookFile);
+    if (path.empty()) throw ParameterError(r.label(kLookFile) + " is empty: give the look file's path");
     return path;
+}
+
+// The Load look button: every row's parameters set to the file's look.
+void load_look(OfxImageEffectHandle instance, OfxTime time) {
+    const Reader r(instance, time);
+    const std::string path = look_file_path(r);
+    Look look;
+    try {
+        look = read_look_file(path);
+    } catch (const UserError& e) {
+        throw ParameterError(e.what());
+    }
+    // The node's choice of the stock comes first, so that what follows it (a paper's choice
+    // read only for the print output) is set in a consistent state.
+    for (const Parameter& row : parameters())
+        if (!row.ofx_name.empty()) set_row(r, row, row.get(look));
+}
+
+// The Save look button: the node's look at `time` to the file.
+void save_look(OfxImageEffectHandle instance, OfxTime time) {
+    const Reader r(instance, time);
+    const std::string path = look_file_path(r);
+    const NodeSettings n = read_parameters(instance, time);
+    try {
+        write_look_file(path, n.look);
+    } catch (const UserError& e) {
+        throw ParameterError(e.what());
+    }
+}
+
+// The choice set to the option with this id, when one has it.
+void set_choice_to(OfxImageEffectHandle instance, const Parameter& row, const std::string& id) {
+    const int index = option_index(stock_options(row), id);
+    const Reader r(instance, 0);
+    if (index >= 0 && r.get_int(row.ofx_name) != index) r.set_int(row.ofx_name, index);
+}
+
+// The id parameter set to the option the choice shows.
+void record_choice(OfxImageEffectHandle instance, const Parameter& row) {
+    const auto options = stock_options(row);
+    const Reader r(instance, 0);
+    const int index = r.get_int(row.ofx_name);
+    if (index < 0 || index >= int(options.size())) return;  // read_parameters reports it
+    r.set_string(id_param(row), options[size_t(index)].id);
+}
+
+template <typename F>
+void each_stock_row(F&& f) {
+    for (const Parameter& row : parameters())
+        if (row.type == ParameterType::stock && !row.ofx_name.empty()) f(row);
 }
 
 }  // namespace
 
 void define_parameters(OfxParamSetHandle params) {
-    const char* stocks = "stocksGroup";
-    define_group(params, stocks, "Stocks", true);
-    const auto films = stock_options(StockKind::negative), papers = stock_options(StockKind::paper);
-    define_choice(params, kFilm, "Film", "The camera negative: a built-in stock, or a stock file (below)", stocks,
-                  labels(films), option_index(films, "kodak-tri-x-400"));
-    define_string(params, kFilmFile, "Film stock file", "A Darkroom stock file (.json) used when Film is 'Stock file'",
-                  stocks, "", true);
-    define_choice(params, kPaper, "Paper",
-                  "The print paper: a built-in stock, none (only for the negative, density and scan outputs), or a "
-                  "stock file",
-                  stocks, labels(papers), option_index(papers, "vdr-paper-grade-2"));
-    define_string(params, kPaperFile, "Paper stock file", "A Darkroom stock file (.json) used when Paper is 'Stock file'",
-                  stocks, "", true);
-    // Empty until the node is created (restore_stock_choices), as in nodes saved before them.
-    for (const StockChoice& c : kStockChoices)
-        define_string(params, c.id, c.id, "The id of the stock chosen above, saved with the node", stocks, "", false)
-            .set(kOfxParamPropSecret, 1);
-    std::vector<std::string> outputs;
-    for (const auto& o : kOutputs) outputs.push_back(o.first);
-    define_choice(params, kOutput, "Output",
-                  "Print: the print's colour (linear Rec.709). Negative: the negative's transmittance. Density: the "
-                  "developed density per layer. Scan: Cineon-style log code values / 1023. Texture: the input with "
-                  "the film's grain, MTF and halation only",
-                  stocks, outputs, 0);
-    std::vector<std::string> qualities;
-    for (Quality q : kQualities) qualities.push_back(quality_name(q));
-    define_choice(params, kQuality, "Quality",
-                  "How each stage is computed: reference (from its definition; slow), high, fast or preview; "
-                  "darkroom bench measures each against the reference",
-                  stocks, qualities, int(DevelopSettings{}.quality));
-
-    const char* exposure = "exposureGroup";
-    define_group(params, exposure, "Exposure and printing", true);
-    define_double(params, kExposure, "Exposure (EV)",
-                  "Camera exposure in stops; at 0 a scene-linear 0.18 gets the mid-grey exposure the film's ISO speed "
-                  "implies",
-                  exposure, 0, -64, 64, -6, 6);
-    define_double(params, kPrintExposure, "Print exposure (EV)", "Print exposure in stops relative to the automatic one",
-                  exposure, 0, -64, 64, -4, 4);
-    define_double3(params, kPrinterLights, "Printer lights",
-                   "Printer points for the red, green and blue light: 25 is the automatic light; one point is 0.025 "
-                   "log exposure, so more red light gives more cyan dye",
-                   exposure, 25, 0, 100, 0, 50, {"R", "G", "B"});
-    define_double3(params, kFiltration, "Filtration (CC)",
-                   "Enlarger filters in colour-compensating units (density x 100) of yellow, magenta and cyan", exposure,
-                   0, 0, 300, 0, 100, {"Y", "M", "C"});
-
-    const char* grain = "grainGroup";
-    define_group(params, grain, "Grain", true);
-    define_bool(params, kGrain, "Grain", "Simulate granularity", grain, true);
-    define_double3(params, kGrainAmount, "Amount",
-                   "Multiplies each layer's RMS granularity (red, green and blue layers; a black-and-white film uses R)",
-                   grain, 1, 0, 10, 0, 3, {"R", "G", "B"});
-    define_double3(params, kGrainSize, "Size", "Multiplies each layer's grain size", grain, 1, 0.05, 20, 0.25, 4,
-                   {"R", "G", "B"});
-    define_bool(params, kGrainResponseOverride, "Override response",
-                "Replace the stock's density exponent of granularity by Response", grain, false);
-    define_double3(params, kGrainResponse, "Response",
-                   "Granularity grows with net density as D^response (the seed paper cites 1/3)", grain, 1.0 / 3.0, 0,
-                   3, 0, 1, {"R", "G", "B"});
-    define_string(params, kGrainProfile, "Grain profile",
-                  "A plate's grain profile (.json from darkroom grain analyze or predict): replaces the stock's grain "
-                  "and is added in the output colour space, which should be the plate's",
-                  grain, "", true);
-    Props seed = define(params, kOfxParamTypeInteger, kSeed, "Seed",
-                        "Grain seed: the grain is a function of (seed, frame, layer, pixel)", grain);
-    seed.set(kOfxParamPropDefault, 0);
-    seed.set(kOfxParamPropMin, 0);
-    seed.set(kOfxParamPropMax, INT_MAX);
-    seed.set(kOfxParamPropDisplayMin, 0);
-    seed.set(kOfxParamPropDisplayMax, 1000);
-    seed.set(kOfxParamPropAnimates, 0);
-    define_bool(params, kStaticGrain, "Static grain", "The same grain on every frame (frame 0's)", grain, false);
-
-    const char* optics = "opticsGroup";
-    define_group(params, optics, "Optics and format", false);
-    define_double(params, kHalation, "Halation", "Multiplies each film layer's halation strength (0 = off)", optics, 1,
-                  0, 10, 0, 4);
-    define_bool(params, kMtf, "MTF", "Internal scattering in the emulsion (the stock's MTF)", optics, true);
-    // The format does not change during a shot.
-    define_double(params, kFrameWidth, "Frame width (mm)",
-                  "Width of the film frame; with the image width it sets the pixel pitch (0 = the stock's format)",
-                  optics, 0, 0, 10000, 0, 70)
-        .set(kOfxParamPropAnimates, 0);
-    define_double(params, kPrintWidth, "Print width (mm)", "Width of the print (0 = the paper's format)", optics, 0, 0,
-                  10000, 0, 500)
-        .set(kOfxParamPropAnimates, 0);
-    define_choice(params, kFilmFrame, "Film frame",
-                  "What the frame width spans: the project's format (a CG element's bounding box or overscan is that "
-                  "part of the frame), or the Source image itself (a plate whose format differs from the project's)",
-                  optics, {"Project format", "Source image"}, 0);
-
-    const char* colour = "colourGroup";
-    define_group(params, colour, "Colour management (OCIO)", false);
-    define_string(params, kOcioConfig, "OCIO config",
-                  "An OCIO config file; empty uses $OCIO, else Darkroom's embedded config", colour, "", true);
-    define_string(params, kInputSpace, "Input colour space", "The colour space of the input pixels", colour,
-                  "scene_linear", false);
-    define_string(params, kOutputSpace, "Output colour space",
-                  "The colour space of the print, negative and texture outputs (density and scan are data, never "
-                  "converted)",
-                  colour, "scene_linear", false);
+    Props look_group = define(params, kOfxParamTypeGroup, kLookGroup, "Look file", "", nullptr);
+    look_group.set(kOfxParamPropGroupOpen, 0);
+    define_string(params, kLookFile, "Look file",
+                  "A Darkroom look (.json): Load look sets the node's parameters from it; Save look writes them to it "
+                  "(the program's --look and Python's look= read it)",
+                  kLookGroup, "", true, false);
+    define(params, kOfxParamTypePushButton, kLoadLook, "Load look", "Set the parameters from the Look file", kLookGroup);
+    define(params, kOfxParamTypePushButton, kSaveLook, "Save look", "Write the parameters to the Look file",
+           kLookGroup);
+    const char* last_group = nullptr;
+    for (const Parameter& row : parameters()) {
+        if (row.ofx_name.empty()) continue;
+        const char* group = group_name(row);
+        if (!last_group || std::string(group) != last_group) {
+            for (const Group& g : kGroups)
+                if (group == std::string(g.name))
+                    define(params, kOfxParamTypeGroup, g.name, g.label, "", nullptr).set(kOfxParamPropGroupOpen, g.open ? 1 : 0);
+            last_group = group;
+        }
+        define_row(params, row);
+        // The node's own, beside the settings they go with.
+        if (row.key == "seed")
+            define_bool(params, kStaticGrain, "Static grain", "The same grain on every frame (frame 0's)", group, false);
+        if (row.key == "print-width-mm")
+            define_choice(params, kFilmFrame, "Film frame",
+                          "What the frame width spans: the project's format (a CG element's bounding box or overscan "
+                          "is that part of the frame), or the Source image itself (a plate whose format differs from "
+                          "the project's)",
+                          group, {"Project format", "Source image"}, 0);
+    }
 }
 
 NodeSettings read_parameters(OfxImageEffectHandle instance, OfxTime time) {
-    Reader r(instance, time);
+    const Reader r(instance, time);
     NodeSettings n;
-    DevelopSettings& s = n.develop;
-
-    const std::string film = r.stock_choice(kStockChoices[0]);
-    n.film_from_file = film == kStockFileId;
-    n.film = n.film_from_file ? stock_file(r, kFilm, kFilmFile) : film;
-    s.output = kOutputs[r.checked_choice(kOutput, (int)kOutputs.size())].second;
-    s.quality = kQualities[r.checked_choice(kQuality, int(std::size(kQualities)))];
-    // Only the print output uses a paper (and only then is its choice checked).
-    if (s.output == OutputMode::print) {
-        const std::string paper = r.stock_choice(kStockChoices[1]);
-        if (paper == kNoPaperId)
-            throw ParameterError("the Print output needs a paper: choose one, or the Negative, Density or Scan output");
-        n.paper_from_file = paper == kStockFileId;
-        n.paper = n.paper_from_file ? stock_file(r, kPaper, kPaperFile) : paper;
+    // The output first: whether the paper is read depends on it.
+    std::vector<const Parameter*> rows{&parameter("output")};
+    for (const Parameter& row : parameters())
+        if (!row.ofx_name.empty() && row.key != "output") rows.push_back(&row);
+    for (const Parameter* row : rows) {
+        try {
+            set_value(n.look, *row, row_value(r, *row, n));
+        } catch (const UserError& e) {
+            throw ParameterError(row->label + ": " + e.what());
+        }
     }
-
-    s.exposure_ev = r.checked_double(kExposure, -64, 64);
-    s.print_exposure_ev = r.checked_double(kPrintExposure, -64, 64);
-    s.printer_lights = r.checked_double3(kPrinterLights, 0, 100);
-    s.filtration_ymc = r.checked_double3(kFiltration, 0, 300);
-
-    s.grain = r.get_bool(kGrain);
-    s.grain_amount = r.checked_double3(kGrainAmount, 0, 10);
-    s.grain_size = r.checked_double3(kGrainSize, 0.05, 20);
-    if (r.get_bool(kGrainResponseOverride)) s.grain_density_exponent = r.checked_double3(kGrainResponse, 0, 3);
-    int seed = r.get_int(kSeed);
-    if (seed < 0) throw ParameterError(r.label(kSeed) + " is " + std::to_string(seed) + ": it must be 0 or more");
-    s.seed = (uint64_t)seed;
     // Grain belongs to whole frames: a fractional (motion-blur) time uses its nearest frame.
     if (!std::isfinite(time) || std::abs(time) > 1e9) throw ParameterError("the host asked for time " + std::to_string(time));
-    s.frame = r.get_bool(kStaticGrain) ? 0 : (int)std::lround(time);
-
-    s.halation = r.checked_double(kHalation, 0, 10);
-    s.mtf = r.get_bool(kMtf);
-    s.frame_width_mm = r.checked_double(kFrameWidth, 0, 10000);
-    s.print_width_mm = r.checked_double(kPrintWidth, 0, 10000);
+    n.frame = r.get_bool(kStaticGrain) ? 0 : (int)std::lround(time);
+    n.look.settings.frame = n.frame;
     n.film_frame_is_source = r.checked_choice(kFilmFrame, 2) == 1;
-
-    n.grain_profile = r.get_string(kGrainProfile);
-    if (!n.grain_profile.empty()) s.grain = false;  // the plate's grain replaces the stock's
-
-    n.ocio_config = r.get_string(kOcioConfig);
-    n.input_space = r.get_string(kInputSpace);
-    n.output_space = r.get_string(kOutputSpace);
-    if (n.input_space.empty()) throw ParameterError(r.label(kInputSpace) + " is empty: name a colour space of the config");
-    if (n.output_space.empty()) throw ParameterError(r.label(kOutputSpace) + " is empty: name a colour space of the config");
     return n;
 }
 
-namespace {
-
-// The choice set to the option with this id, when one has it.
-void set_choice_to(OfxImageEffectHandle instance, const StockChoice& c, const std::string& id) {
-    const int index = option_index(stock_options(c.kind), id);
-    const Reader r(instance, 0);
-    if (index >= 0 && r.get_int(c.choice) != index)
-        check(suites.param->paramSetValue(r.handle(c.choice), index), c.choice);
-}
-
-// The id parameter set to the option the choice shows.
-void record_choice(OfxImageEffectHandle instance, const StockChoice& c) {
-    const auto options = stock_options(c.kind);
-    const Reader r(instance, 0);
-    const int index = r.get_int(c.choice);
-    if (index < 0 || index >= int(options.size())) return;  // read_parameters reports it
-    check(suites.param->paramSetValue(r.handle(c.id), options[size_t(index)].id.c_str()), c.id);
-}
-
-}  // namespace
-
 void restore_stock_choices(OfxImageEffectHandle instance) {
-    for (const StockChoice& c : kStockChoices) {
-        const std::string saved = Reader(instance, 0).get_string(c.id);
+    each_stock_row([&](const Parameter& row) {
+        const std::string saved = Reader(instance, 0).get_string(id_param(row));
         if (saved.empty())
-            record_choice(instance, c);  // a new node, or one saved before the ids were
+            record_choice(instance, row);  // a new node, or one saved before the ids were
         else
-            set_choice_to(instance, c, saved);  // (an unknown stock stays, for read_parameters to report)
-    }
+            set_choice_to(instance, row, saved);  // (an unknown stock stays, for read_parameters to report)
+    });
 }
 
-void follow_stock_choice(OfxImageEffectHandle instance, const std::string& param, const std::string& reason) {
-    for (const StockChoice& c : kStockChoices) {
-        if (param == c.choice && reason == kOfxChangeUserEdited) record_choice(instance, c);
+void parameter_changed(OfxImageEffectHandle instance, const std::string& param, const std::string& reason,
+                       OfxTime time) {
+    if (param == kLoadLook) return load_look(instance, time);
+    if (param == kSaveLook) return save_look(instance, time);
+    each_stock_row([&](const Parameter& row) {
+        if (param == row.ofx_name && reason == kOfxChangeUserEdited) record_choice(instance, row);
         // A host that sets the saved id after creating the node (or a script that sets it).
-        if (param == c.id && reason != kOfxChangePluginEdited) set_choice_to(instance, c, Reader(instance, 0).get_string(c.id));
-    }
+        if (param == id_param(row) && reason != kOfxChangePluginEdited)
+            set_choice_to(instance, row, Reader(instance, 0).get_string(id_param(row)));
+    });
 }
 
 }  // namespace darkroom::ofx

@@ -46,8 +46,8 @@ TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[c
              {"develop " + in + " -o " + out + " --window 60,40,10,10", "not inside"},
              {"develop " + in + " -o " + out + " --window 1,2,3", "--window"},
              {"develop " + in + " -o " + out + " --window 0,0,0,5", "has no pixels"},
-             {"develop " + in + " -o " + out + " --print-exposure inf", "print exposure must be within +-64 EV, not inf"},
-             {"develop " + in + " -o " + out + " --paper none", "--paper none"},
+             {"develop " + in + " -o " + out + " --print-exposure inf", "--print-exposure: must be a number from -64 to 64, not inf"},
+             {"develop " + in + " -o " + out + " --paper none", "--output print needs a paper, and --paper is none"},
              {"develop " + in + " -o /nonexistent-dir/x.exr", "cannot write"},
              {"develop " + in + " -o " + out + " --film " + (kTmp / "missing.json").string(), "cannot open"},
              {"frobnicate", "subcommand is required"},
@@ -669,4 +669,23 @@ TEST_CASE("plot draws a stock's curves, sensitivities, dyes and MTF", "[cli][plo
     r = darkroom("plot no-such-stock -o " + svg);
     CHECK(r.exit_code == 1);
     CHECK_THAT(r.output, Catch::Contains("unknown stock 'no-such-stock'"));
+}
+
+TEST_CASE("bake-lut reads a whole look file and offers only the settings a LUT holds", "[cli][look]") {
+    const std::string look = (kTmp / "whole-look.json").string(), lut = (kTmp / "whole-look.cube").string();
+    REQUIRE(darkroom("develop --film kodak-portra-400 --paper kodak-portra-endura --seed 9 --grain-amount 2 "
+                     "--halation 0.5 --save-look " + look).exit_code == 0);
+    fs::remove(lut);
+    Result baked = darkroom("bake-lut --look " + look + " --size 9 -o " + lut);
+    INFO(baked.output);
+    CHECK(baked.exit_code == 0);
+    CHECK(fs::exists(lut));
+    // Grain, seed and optics cannot change a LUT, so bake-lut has no flags for them.
+    const std::string help = darkroom("bake-lut --help").output;
+    for (const char* flag : {"--seed", "--grain-amount", "--halation", "--no-mtf", "--frame-width-mm"}) {
+        INFO(flag);
+        CHECK(help.find(std::string(flag) + " ") == std::string::npos);
+    }
+    CHECK(help.find("--print-exposure") != std::string::npos);
+    CHECK(darkroom("bake-lut --seed 3 -o " + lut).exit_code != 0);
 }

@@ -223,7 +223,7 @@ TEST_CASE("bad colour input: a message naming the config and the problem, and no
              {develop + "--colorconfig " + no_displays, "colour-no-displays.ocio"},
              {develop + "--colorconfig " + no_displays, "no default display"},
              {develop + "--output density --tocolorspace ACEScg", "densities, which are data"},
-             {develop + "--tocolorspace ACEScg --ociodisplay sRGB Standard", "excludes"},
+             {develop + "--tocolorspace ACEScg --ociodisplay sRGB Standard", "both say where the result goes"},
              {"bake-lut -o " + tmp("colour-never.3dl"), ".cube or .clf"},
              {"bake-lut -o " + tmp("colour-never.cube") + " --input-units lux-seconds", "scene-linear"},
              {"bake-lut -o " + tmp("no-such-dir/look.cube"), "the folder '" + tmp("no-such-dir") + "' does not exist"},

@@ -1,46 +1,32 @@
-// Look files (cli/look_file.h): the text of a file applied to the develop command's look
-// flags, as `--look FILE` does. Rejection is a UserError; an accepted look must save
-// (look_json) and read back into a fresh command as the same look.
+// Look files (look/look.h): the text of a file applied to a default look, as `--look FILE`,
+// the plugin's Look file and Python's look= do. Rejection is a UserError and changes nothing;
+// an accepted look must pass the cross-setting checks or be refused by them with a
+// UserError, and save and read back as the same look.
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <vector>
 
-#include "cli/look_file.h"
-#include "cli/look_options.h"
-#include "cli/user_error.h"
+#include "look/look.h"
+#include "look/parameters.h"
+#include "look/user_error.h"
 #include "tests/fuzz/fuzz_check.h"
 
-namespace {
-
-using namespace darkroom::cli;
-
-// The look flags of `darkroom develop`, parsed from an empty command line.
-struct Command {
-    CLI::App app{"develop"};
-    LookOptions look;
-    std::string look_path, save_look_path;
-
-    Command() {
-        add_look_file_flags(app, look_path, save_look_path);
-        add_look_flags(app, look);
-        app.parse(std::vector<std::string>{});
-    }
-};
-
-}  // namespace
-
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-    Command command;
+    darkroom::Look look;
     try {
-        apply_look_text(command.app, std::string(reinterpret_cast<const char*>(data), size), "fuzz input");
-    } catch (const UserError&) {
+        darkroom::apply_look_text(look, std::string(reinterpret_cast<const char*>(data), size), "fuzz input");
+    } catch (const darkroom::UserError&) {
+        fuzz_require(look == darkroom::Look{});
         return 0;
     }
-    const nlohmann::json saved = look_json(command.app);
-    Command reloaded;
-    apply_look(reloaded.app, saved, "the fuzz input's look, saved");
-    fuzz_require(look_json(reloaded.app) == saved);
+    try {
+        darkroom::validate(look, darkroom::look_file_key);
+    } catch (const darkroom::UserError&) {
+    }
+    const nlohmann::json saved = look.to_json();
+    darkroom::Look reloaded;
+    darkroom::apply_look_json(reloaded, saved, "the fuzz input's look, saved");
+    fuzz_require(reloaded.to_json() == saved);
     return 0;
 }

@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 
+#include "look/parameters.h"
 #include "tests/plugin/test_host.h"
 
 namespace fs = std::filesystem;
@@ -431,8 +432,8 @@ TEST_CASE("a saved node keeps its stocks when the plugin's list of stocks change
     REQUIRE(trix >= 0);
     REQUIRE(portra != trix);
     // A new node records the id of its default stock; a user's choice moves the id with it.
-    CHECK(chosen->get_string("filmStock") == "kodak-tri-x-400");
-    CHECK(chosen->get_string("paperStock") == "vdr-paper-grade-2");
+    CHECK(chosen->get_string("filmStock") == "kodak-vision3-250d");
+    CHECK(chosen->get_string("paperStock") == "kodak-2383");
     chosen->set_int("film", portra);
     REQUIRE(chosen->user_edited("film") == kOfxStatOK);
     CHECK(chosen->get_string("filmStock") == "kodak-portra-400");
@@ -723,4 +724,110 @@ TEST_CASE("a grain profile replaces the stock's grain as darkroom develop --grai
     bad = inst->render(9, {0, 0, w, h});
     CHECK(bad.status == kOfxStatFailed);
     CHECK_THAT(inst->effect().persistent_message, Catch::Contains(two_path) && Catch::Contains("2 channels"));
+}
+
+// --- The look layer: the node's parameters are the table's, and look files travel -------
+
+TEST_CASE("every setting of the look's table is a node parameter with its default, range and help", "[plugin][look]") {
+    Effect& ctx = Plugin::get().context_descriptor();
+    using darkroom::ParameterType;
+    for (const darkroom::Parameter& row : darkroom::parameters()) {
+        if (row.ofx_name.empty()) continue;
+        INFO(row.key);
+        const Param* param = ctx.params.find(row.ofx_name);
+        REQUIRE(param);
+        const PropertySet& props = param->props;
+        CHECK(props.get_string(kOfxParamPropHint) == row.help);
+        CHECK(props.get_string(kOfxPropLabel) == row.label);
+        const nlohmann::json def = row.default_value();
+        switch (row.type) {
+            case ParameterType::number:
+            case ParameterType::per_channel: {
+                const int dims = row.type == ParameterType::per_channel ? 3 : 1;
+                for (int i = 0; i < dims; ++i) {
+                    CHECK(props.get_double(kOfxParamPropMin, i) == row.min);
+                    CHECK(props.get_double(kOfxParamPropMax, i) == row.max);
+                    if (!def.is_null())
+                        CHECK(props.get_double(kOfxParamPropDefault, i) == (dims == 3 ? def[size_t(i)] : def).get<double>());
+                }
+                CHECK(props.get_int(kOfxParamPropAnimates) == int(row.animatable));
+                break;
+            }
+            case ParameterType::on_off: CHECK(props.get_int(kOfxParamPropDefault) == int(def.get<bool>())); break;
+            case ParameterType::choice:
+                CHECK(row.choices.at(size_t(props.get_int(kOfxParamPropDefault))).name == def);
+                break;
+            case ParameterType::stock: {
+                // The default option is the default stock, labelled with its role.
+                const auto& options = props.props.at(kOfxParamPropChoiceOption).s;
+                const std::string label = options.at(size_t(props.get_int(kOfxParamPropDefault)));
+                CHECK(darkroom::find_stock(def.get<std::string>()).name == label.substr(label.find(": ") + 2));
+                break;
+            }
+            case ParameterType::seed: CHECK(uint64_t(props.get_int(kOfxParamPropDefault)) == def.get<uint64_t>()); break;
+            default: CHECK(props.get_string(kOfxParamPropDefault) == def.get<std::string>()); break;
+        }
+    }
+    // The print stage lists print films and papers by role: the program's default print is there.
+    const auto& papers = ctx.params.find("paper")->props.props.at(kOfxParamPropChoiceOption).s;
+    CHECK(std::count_if(papers.begin(), papers.end(), [](const std::string& o) { return o.rfind("Print film: ", 0) == 0; }) >= 1);
+    CHECK(std::count_if(papers.begin(), papers.end(), [](const std::string& o) { return o.rfind("Paper: ", 0) == 0; }) >= 1);
+}
+
+TEST_CASE("a look file renders the program's pixels in the node, every output mode", "[plugin][look][cli]") {
+    const int w = 48, h = 32;
+    std::vector<float> px = scene(w, h, 3);
+    const std::string input = write_exr("plugin-look-scene.exr", px, w, h, 3);
+    const std::string output = GENERATE(as<std::string>{}, "print", "negative", "density", "scan", "texture");
+    INFO("output " << output);
+    const std::string look = (kTmp / ("look-" + output + ".json")).string();
+    run(std::string(DARKROOM_EXE) + " develop --output " + output +
+        " --film kodak-portra-400 --paper kodak-portra-endura --grain-amount 1.5 --seed 5 --frame-width-mm 4 "
+        "--print-width-mm 30 --exposure 0.5 --print-exposure -0.3 --save-look " + look);
+    auto inst = make_instance();
+    inst->set_string("lookFile", look);
+    REQUIRE(inst->user_edited("loadLook") == kOfxStatOK);
+    CHECK(inst->get_string("filmStock") == "kodak-portra-400");
+    inst->set_source(Frame::from_top_down(px, w, h, 3), kOfxImageOpaque);
+    RenderResult r = inst->render(7, {0, 0, w, h});
+    INFO(inst->effect().persistent_message);
+    REQUIRE(r.status == kOfxStatOK);
+    const std::vector<float> cli = develop(input, "--look " + look + " --frame 7");
+    CHECK(r.output.to_top_down() == cli);
+}
+
+TEST_CASE("a look the node saves is read by the program, and the node reads the program's", "[plugin][look][cli]") {
+    const int w = 40, h = 30;
+    std::vector<float> px = scene(w, h, 3);
+    const std::string input = write_exr("plugin-save-scene.exr", px, w, h, 3);
+    auto inst = make_instance();
+    set_common_look(*inst);
+    inst->set_double3("printerLights", 24, 26, 25);
+    inst->set_int("grainResponseOverride", 1);
+    inst->set_double3("grainResponse", 0.4, 0.5, 0.6);
+    inst->set_int("output", inst->choice_index("output", "Scan"));
+    const std::string look = (kTmp / "node-look.json").string();
+    fs::remove(look);
+    inst->set_string("lookFile", look);
+    REQUIRE(inst->user_edited("saveLook") == kOfxStatOK);
+    REQUIRE(fs::exists(look));
+    inst->set_source(Frame::from_top_down(px, w, h, 3), kOfxImageOpaque);
+    RenderResult r = inst->render(3, {0, 0, w, h});
+    REQUIRE(r.status == kOfxStatOK);
+    CHECK(r.output.to_top_down() == develop(input, "--look " + look + " --frame 3"));
+
+    // Read back into a fresh node: the same parameters, so the same pixels.
+    auto reloaded = make_instance();
+    reloaded->set_string("lookFile", look);
+    REQUIRE(reloaded->user_edited("loadLook") == kOfxStatOK);
+    CHECK(reloaded->get_int("output") == inst->get_int("output"));
+    CHECK(reloaded->get_int("grainResponseOverride") == 1);
+    reloaded->set_source(Frame::from_top_down(px, w, h, 3), kOfxImageOpaque);
+    CHECK(same_bits(reloaded->render(3, {0, 0, w, h}).output, r.output));
+
+    SECTION("a look file that cannot be read is named on the node") {
+        reloaded->set_string("lookFile", (kTmp / "no-such-look.json").string());
+        CHECK(reloaded->user_edited("loadLook") == kOfxStatFailed);
+        CHECK_THAT(reloaded->effect().persistent_message, Catch::Contains("no-such-look.json"));
+    }
 }

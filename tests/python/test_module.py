@@ -151,16 +151,87 @@ class ModuleEqualsProgram(unittest.TestCase):
             darkroom.develop(self.plate, look=self.look, frame=1)
         self.assertEqual([w for w in caught if "non-finite" in str(w.message)], [])
 
+    def test_every_output_mode_of_a_look_file_gives_the_programs_pixels(self):
+        for output in ("print", "negative", "density", "scan", "texture"):
+            with self.subTest(output=output):
+                look = os.path.join(self.dir, output + ".json")
+                darkroom.save_look(look, look=self.look, output=output, quality="high" if output == "density" else "fast")
+                expected = self.program("--look", look, "--frame", "3")
+                got = darkroom.develop(self.plate, look=look, frame=3)
+                self.assertTrue(np.array_equal(got, expected))
+
     def test_bad_settings_are_named(self):
-        with self.assertRaisesRegex(TypeError, "exposur"):
+        with self.assertRaisesRegex(TypeError, "exposur.*did you mean 'exposure'"):
             darkroom.develop(self.plate, exposur=1)
-        with self.assertRaisesRegex(ValueError, "--output"):
+        with self.assertRaisesRegex(ValueError, "output= must be one of print"):
             darkroom.develop(self.plate, output="slide")
+        with self.assertRaisesRegex(ValueError, "seed= must be a whole number"):
+            darkroom.develop(self.plate, seed=2**64)
+        self.assertEqual(darkroom.look(seed=2**64 - 1)["settings"]["seed"], 2**64 - 1)
         bad = os.path.join(self.dir, "bad.json")
         with open(bad, "w") as f:
             json.dump({"format": "darkroom-look", "version": 1, "settings": {"threads": 2}}, f)
         with self.assertRaisesRegex(ValueError, "bad.json.*run option"):
             darkroom.develop(self.plate, look=bad)
+
+
+class TheParameterTable(unittest.TestCase):
+    """The keywords, the program's flags and look files are one table, with one schema."""
+
+    def test_the_keywords_defaults_and_ranges_are_the_programs(self):
+        folder = tempfile.mkdtemp(prefix="darkroom-table-")
+        path = os.path.join(folder, "defaults.json")
+        run_program("develop", "--save-look", path)
+        with open(path) as f:
+            program = json.load(f)["settings"]
+        table = {row["key"]: row for row in darkroom.parameters()}
+        self.assertEqual(set(table), set(program))
+        for key, row in table.items():
+            with self.subTest(key=key):
+                self.assertEqual(row["default"], program[key])
+                self.assertEqual(row["keyword"], key.replace("-", "_"))
+                if "min" not in row:
+                    continue
+                # Past the range, the keyword and the flag are refused alike.
+                value = row["max"] + 1
+                with self.assertRaisesRegex(ValueError, row["keyword"] + "= must be a number from"):
+                    darkroom.look(**{row["keyword"]: value})
+                result = subprocess.run([DARKROOM_EXE, "develop", "--" + key, str(value), "--save-look",
+                                         os.path.join(folder, "refused.json")], capture_output=True, text=True)
+                self.assertEqual(result.returncode, 1)
+                self.assertIn("--" + key + ": must be a number from", result.stderr)
+
+    def test_the_schema_in_the_repository_is_the_tables(self):
+        with open(SCHEMA) as f:
+            self.assertEqual(json.load(f), darkroom.look_schema(),
+                             "look/look.schema.json is out of date: run tools/write_look_schema.py")
+
+    def test_the_schema_takes_looks_and_refuses_broken_ones(self):
+        import jsonschema
+        schema = darkroom.look_schema()
+        jsonschema.Draft202012Validator.check_schema(schema)
+        validator = jsonschema.Draft202012Validator(schema)
+        for name in ("default-v1.json", "tri-x-v1.json"):
+            with open(os.path.join(LOOK_DATA, name)) as f:
+                validator.validate(json.load(f))
+        validator.validate(darkroom.look(film="kodak-tri-x-400", grain_amount=[0.5, 1, 2], seed=2**64 - 1,
+                                         ociodisplay=["sRGB", "Film"]))
+        good = darkroom.look()
+        for key, bad in (("exposure", 65), ("grain-amount", [1, 2]), ("output", "slide"), ("seed", -1),
+                         ("grain", 1), ("ociodisplay", ["sRGB"]), ("exposur", 0)):
+            with self.subTest(key=key):
+                broken = json.loads(json.dumps(good))
+                broken["settings"][key] = bad
+                self.assertFalse(validator.is_valid(broken))
+                with self.assertRaises((ValueError, TypeError)):
+                    path = os.path.join(tempfile.mkdtemp(prefix="darkroom-look-"), "broken.json")
+                    with open(path, "w") as f:
+                        json.dump(broken, f)
+                    darkroom.look(look=path)
+
+
+SCHEMA = os.path.join(os.path.dirname(__file__), "..", "..", "look", "look.schema.json")
+LOOK_DATA = os.path.join(os.path.dirname(__file__), "..", "look", "data")
 
 
 if __name__ == "__main__":

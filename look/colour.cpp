@@ -1,30 +1,19 @@
-#include "cli/colour_io.h"
+#include "look/colour.h"
 
 #include <iostream>
 
-#include "cli/image_io.h"
+#include "look/user_error.h"
 
-namespace darkroom::cli {
+namespace darkroom {
 
 namespace {
 
-ocio::ActiveConfig resolve_config(const ColourOptions& o) {
+ocio::ActiveConfig resolve_config(const ColourSettings& o, const Naming& name) {
     try {
-        return ocio::resolve_config(o.config_path, "--colorconfig");
+        return ocio::resolve_config(o.config_path, name(parameter("colorconfig")));
     } catch (const ocio::OcioError& e) {
         throw UserError(e.what());
     }
-}
-
-const char* output_mode_name(OutputMode mode) {
-    switch (mode) {
-        case OutputMode::print: return "print";
-        case OutputMode::negative: return "negative";
-        case OutputMode::density: return "density";
-        case OutputMode::scan: return "scan";
-        case OutputMode::texture: return "texture";
-    }
-    return "?";
 }
 
 // The names a config's Cineon log space goes by (the embedded config's, then its alias).
@@ -44,41 +33,36 @@ std::string config_space_named(const ocio::ColorConverter& converter, const char
 
 }  // namespace
 
-void add_colour_flags(CLI::App& cmd, ColourOptions& colour) {
-    cmd.add_option("--colorconfig", colour.config_path,
-                   "OCIO config file (default: $OCIO, else the embedded config)");
-    cmd.add_option("--iscolorspace", colour.input_space,
-                   "Colour space of the input (default: the working space, linear Rec.709)");
-    CLI::Option* to_space =
-        cmd.add_option("--tocolorspace", colour.output_space, "Convert the result to this colour space");
-    cmd.add_option("--ociodisplay", colour.display_view,
-                   "Convert the result to this display and view (\"\" for the config's defaults)")
-        ->expected(2)
-        ->type_name("DISPLAY VIEW")
-        ->excludes(to_space);
-}
-
-ColourIO::ColourIO(const ColourOptions& o, OutputMode output, bool verbose)
-    : converter_(resolve_config(o)), input_space_(o.input_space), output_mode_(output) {
+ColourIO::ColourIO(const ColourSettings& o, OutputMode output, bool verbose, const Naming& name)
+    : converter_(resolve_config(o, name)), input_space_(o.input_space), output_mode_(output), name_(name) {
     const bool to_display = !o.display_view.empty();
-    const bool converts_result = to_display || !o.output_space.empty();
-    if (output == OutputMode::density && converts_result)
-        throw UserError(std::string("--output density writes densities, which are data, not colours: ") +
-                        (to_display ? "--ociodisplay" : "--tocolorspace") + " cannot convert them");
     const ocio::ResultEncoding result =
         output == OutputMode::scan ? ocio::ResultEncoding::cineon_log : ocio::ResultEncoding::working_linear;
+    // Empty colour spaces are the config's scene_linear role, as hosts and pipelines hand
+    // effects scene-linear pixels in their config's terms (the embedded config's is the
+    // working space itself); a config without the role leaves them in the working space.
+    // The scan's code values and the densities are data: left as they are.
+    const bool has_scene_linear = converter_.config().config->hasRole(ocio::OCIO::ROLE_SCENE_LINEAR);
+    const bool colour_result = output != OutputMode::density && output != OutputMode::scan;
+    const std::string input_space =
+        !o.input_space.empty() ? o.input_space : has_scene_linear ? ocio::OCIO::ROLE_SCENE_LINEAR : "";
+    const std::string output_space =
+        !o.output_space.empty() ? o.output_space : has_scene_linear && colour_result ? ocio::OCIO::ROLE_SCENE_LINEAR : "";
     try {
-        input_ = input_space_.empty()
-                     ? std::make_shared<const ocio::Conversion>(nullptr, "already in the working space (no --iscolorspace)")
-                     : converter_.to_working(input_space_);
+        input_ = input_space.empty()
+                     ? std::make_shared<const ocio::Conversion>(
+                           nullptr, "already in the working space (no " + name(parameter("iscolorspace")) + ")")
+                     : converter_.to_working(input_space);
         if (to_display) {
             output_ = converter_.to_display(o.display_view[0], o.display_view[1], result);
             output_space_ = converter_.display_view_color_space(o.display_view[0], o.display_view[1]);
-        } else if (!o.output_space.empty()) {
-            output_ = converter_.from_working(o.output_space, result);
-            output_space_ = converter_.canonical_color_space(o.output_space);
+        } else if (!output_space.empty()) {
+            output_ = converter_.from_working(output_space, result);
+            output_space_ = converter_.canonical_color_space(output_space);
         } else {
-            output_ = std::make_shared<const ocio::Conversion>(nullptr, "left as the model writes it (no --tocolorspace or --ociodisplay)");
+            output_ = std::make_shared<const ocio::Conversion>(
+                nullptr, "left as the model writes it (no " + name(parameter("tocolorspace")) + " or " +
+                             name(parameter("ociodisplay")) + ")");
             if (output == OutputMode::scan)
                 output_space_ = config_space_named(converter_, kCineonLogSpaces);
             else if (output != OutputMode::density)
@@ -93,7 +77,7 @@ ColourIO::ColourIO(const ColourOptions& o, OutputMode output, bool verbose)
         std::cerr << "colour: " << what << ": " << c.description() << (c.is_noop() ? " (no-op: skipped)" : "") << "\n";
     };
     say("input", *input_);
-    say((std::string(output_mode_name(output)) + " result").c_str(), *output_);
+    say((output_name(output) + " result").c_str(), *output_);
 }
 
 std::string ColourIO::input_tag_warning(const std::string& path, const std::string& file_space) const {
@@ -107,16 +91,18 @@ std::string ColourIO::input_tag_warning(const std::string& path, const std::stri
     }
     return "'" + path + "' says its pixels are in '" + space + "' (oiio:ColorSpace \"" + file_space +
            "\"), but they are read as the working space '" + converter_.working_space().color_space +
-           "' (no --iscolorspace): give --iscolorspace \"" + space + "\" to convert them";
+           "' (no " + name_(parameter("iscolorspace")) + "): give " + name_(parameter("iscolorspace")) + " \"" + space +
+           "\" to convert them";
 }
 
 std::string ColourIO::integer_output_warning(const std::string& path, bool integer_file) const {
     const bool linear = output_mode_ == OutputMode::print || output_mode_ == OutputMode::negative ||
                         output_mode_ == OutputMode::texture;
     if (!integer_file || !linear || !output_->is_noop()) return "";
-    return "'" + path + "' gets the " + output_mode_name(output_mode_) + "'s linear values ('" + output_space_ +
-           "') as integers: a display shows them dark and values above 1 clip; give --ociodisplay DISPLAY VIEW "
-           "(\"\" \"\" for the config's defaults; sRGB Standard in the embedded one) or --tocolorspace for a "
+    return "'" + path + "' gets the " + output_name(output_mode_) + "'s linear values ('" + output_space_ +
+           "') as integers: a display shows them dark and values above 1 clip; give " + name_(parameter("ociodisplay")) +
+           " DISPLAY VIEW (\"\" \"\" for the config's defaults; sRGB Standard in the embedded one) or " +
+           name_(parameter("tocolorspace")) + " for a "
            "picture to view, or write a float format such as .exr";
 }
 
@@ -127,4 +113,4 @@ void ColourIO::apply(const ocio::Conversion& conversion, const ImageView& image,
                      threads);
 }
 
-}  // namespace darkroom::cli
+}  // namespace darkroom

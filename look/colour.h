@@ -1,7 +1,7 @@
-// Colour management for the commands that develop (develop, demo, bake-lut): which OCIO
-// config is active, the input picture's colour space to the model's working space, and
-// the model's result to an output colour space or to a display and view. The flags are
-// oiiotool's spelling; the library is ocio/.
+// Colour management of a look (its colour settings, look/look.h): which OCIO config is
+// active, the input picture's colour space to the model's working space, and the model's
+// result to an output colour space or to a display and view, for every front end. The
+// library is ocio/.
 //
 // What the model's result is, per output mode (core/develop.h):
 //   print, negative, texture  working-space values (linear Rec.709, D65)
@@ -9,37 +9,29 @@
 //   density                   data: asking to colour-convert it is an error
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <string>
 #include <vector>
 
 #include "core/develop.h"
 #include "core/image.h"
+#include "look/parameters.h"
 #include "ocio/transform.h"
 
-namespace darkroom::cli {
-
-struct ColourOptions {
-    std::string config_path;                // --colorconfig; empty: $OCIO, then the embedded config
-    std::string input_space;                // --iscolorspace; empty: the working space
-    std::string output_space;               // --tocolorspace
-    std::vector<std::string> display_view;  // --ociodisplay DISPLAY VIEW ("" for the defaults)
-};
-
-void add_colour_flags(CLI::App& command, ColourOptions& colour);
+namespace darkroom {
 
 // The active config and the two conversions one develop run needs, resolved up front so
-// that a bad config or name fails before any pixel is computed (UserError naming it).
+// that a bad config or name fails before any pixel is computed (UserError naming it, and
+// the setting by `name`: a flag, a plugin parameter, a keyword).
 class ColourIO {
 public:
     // With `verbose`, prints the active config and why, the working space, and each
     // conversion (or that it is skipped as a no-op) to stderr.
-    ColourIO(const ColourOptions& options, OutputMode output, bool verbose);
+    ColourIO(const ColourSettings& settings, OutputMode output, bool verbose, const Naming& name = flag_name);
 
     // In place, on the colour channels (the first three, or a grey image's one: further
     // channels, e.g. alpha, unchanged), on `threads` threads (0: all cores).
     void input_to_working(const ImageView& image, int threads) const { apply(*input_, image, threads); }
-    void result_to_output(Image& image, int threads) const { apply(*output_, image.view(), threads); }
+    void result_to_output(const ImageView& image, int threads) const { apply(*output_, image, threads); }
 
     const ocio::ColorConverter& converter() const { return converter_; }
     // The input colour space as given; empty for the working space.
@@ -70,7 +62,8 @@ private:
     ocio::ColorConverter converter_;
     std::string input_space_, output_space_;
     OutputMode output_mode_;
+    Naming name_;
     ocio::ConversionPtr input_, output_;
 };
 
-}  // namespace darkroom::cli
+}  // namespace darkroom
