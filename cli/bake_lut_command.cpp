@@ -4,6 +4,7 @@
 // colour flags as develop; the Plan runs over the LUT's lattice as an image.
 #include <cmath>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "cli/atomic_file.h"
@@ -48,6 +49,51 @@ std::string describe_look(const LookOptions& look, const std::string& input, con
     return d.str();
 }
 
+// The look as the plan composes it, for a .clf of its stages (ocio::LayeredLook): each film
+// layer's spectral sensitivity and H&D curve, then for a colour print the print from the
+// negative's three densities, the one stage a 3D LUT must sample: on the lattice of the
+// plan's own print table, so the file is the plan. Other outputs are one curve per layer,
+// and so is a black-and-white print (one layer on one). None (the whole look sampled) for
+// the texture output, which develops no negative, and for a colour print computed per pixel
+// (the high and reference tiers): sampled on a density lattice that print missed by more
+// than the whole look sampled in stops does (docs/development/luts.md).
+std::optional<ocio::LayeredLook> layered_look(const Plan& plan, OutputMode output, const ColourIO& colour) {
+    const Stock& film = plan.film();
+    const size_t layers = film.layers.size();
+    const bool colour_print = output == OutputMode::print && layers == 3;
+    if (output == OutputMode::texture || (colour_print && !plan.print_table())) return std::nullopt;
+    ocio::LayeredLook look;
+    look.log10_exposure_lo = INFINITY;
+    look.log10_exposure_hi = -INFINITY;
+    for (size_t c = 0; c < 3; ++c) {
+        const size_t l = std::min(c, layers - 1);  // (a single layer serves all three)
+        look.exposure_matrix[c] = plan.film_exposure_weights(l);
+        const Curve& curve = film.layers[l].density_curve;
+        look.log10_exposure_lo = std::min(look.log10_exposure_lo, curve.x_min());
+        look.log10_exposure_hi = std::max(look.log10_exposure_hi, curve.x_max());
+    }
+    look.curves = [&plan, layers, colour_print](double log10_exposure, double* values) {
+        double density[3];
+        for (size_t l = 0; l < layers; ++l) density[l] = plan.film_density(l, std::pow(10.0, log10_exposure));
+        if (colour_print)
+            std::copy_n(density, 3, values);
+        else
+            plan.result_of_negative(density, values);
+    };
+    look.exposure_name = "film exposure (lux-seconds)";
+    look.curves_name = colour_print ? "film density (H&D curves)" : "film density (H&D curves), as written";
+    if (colour_print) {
+        look.table = [&plan](const double* density, double* rgb) { plan.result_of_negative(density, rgb); };
+        // The table's nodes at the same size (it too interpolates cube roots tetrahedrally).
+        look.table_lo = plan.print_table()->lo();
+        look.table_hi = plan.print_table()->hi();
+        look.table_cube_root = true;
+        look.table_name = "print (linear Rec.709)";
+    }
+    look.output = colour.output_conversion().processor();
+    return look;
+}
+
 void run_bake_lut(const BakeLutOptions& o) {
     LookOptions look = o.look;
     DevelopSettings& s = look.settings;
@@ -65,10 +111,11 @@ void run_bake_lut(const BakeLutOptions& o) {
     require_folder(o.output);  // before the lattice is developed
     const ColourIO colour(look.colour, s.output, look.verbose);
 
+    // (Any lattice fits a frame this size.)
+    const Plan plan = compile_look(look, FrameGeometry{kLatticeImageWidth, kLatticeImageWidth});
     const ocio::PixelFunction develop_lattice = [&](float* rgb, std::size_t n_pixels) {
         const int width = (int)std::min<std::size_t>(n_pixels, kLatticeImageWidth);
         const int height = (int)((n_pixels + width - 1) / width);
-        const Plan plan = compile_look(look, FrameGeometry{width, height});
         Image in(width, height, 3);
         std::copy(rgb, rgb + 3 * n_pixels, in.pixels.begin());
         Image out(in.window, 3);
@@ -82,7 +129,9 @@ void run_bake_lut(const BakeLutOptions& o) {
     settings.description = describe_look(look, colour.input_space(), colour.output_conversion());
     ocio::BakedLut baked;
     try {
-        baked = ocio::bake_look(colour.converter(), colour.input_space(), develop_lattice, settings, format);
+        const std::optional<ocio::LayeredLook> layered = layered_look(plan, s.output, colour);
+        baked = ocio::bake_look(colour.converter(), colour.input_space(), develop_lattice, settings, format,
+                                layered ? &*layered : nullptr);
     } catch (const ocio::OcioError& e) {
         throw UserError(e.what());
     }

@@ -57,6 +57,7 @@
 // out (embedded_config_yaml(), `darkroom colorconfig -o FILE`).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <functional>
 #include <string>
@@ -93,6 +94,7 @@ struct LogShaper {
 struct LutBakeSettings {
     int cube_size = 65;              // lattice points per axis (2..129)
     int cube_shaper_size = 16384;    // .cube only: entries of the sampled 1D shaper
+    int curve_size = 16384;          // .clf of a LayeredLook: entries of its Lut1D curves
     LutInput input = LutInput::scene_linear;
     LogShaper shaper;
     std::string title;               // a one-line name for the LUT (CLF name, .cube comment)
@@ -100,6 +102,33 @@ struct LutBakeSettings {
     // .clf only: exact OCIO operations written before the shaper, from the file's input to
     // the look's input (bake_look fills it in). Null: none.
     OCIO::ConstGroupTransformRcPtr clf_prefix;
+};
+
+// A look as a film composes it, for a .clf that holds its stages as they are (bake_look):
+//   exposure_c = row c of exposure_matrix . rgb    Matrix (the layers' spectral sensitivities)
+//   e_c        = log10 exposure_c                  Log, onto the curves' domain
+//   v_c        = channel c of curves(e_c)          Lut1D of curve_size entries (each layer's
+//                                                  own curve; beyond the domain, its ends)
+//   out        = table(v), where there is one      Lut3D of cube_size^3 on the box the curves'
+//                                                  values span (tetrahedral), holding the
+//                                                  cube roots of table() when table_cube_root,
+//                                                  then an Exponent of 3
+//   then the output conversion's exact operations.
+// Only what the model itself interpolates or what is genuinely 3D is sampled coarsely.
+struct LayeredLook {
+    std::array<std::array<double, 3>, 3> exposure_matrix{};  // row c: channel c's exposure per unit input
+    double log10_exposure_lo = 0, log10_exposure_hi = 0;     // the curves' domain
+    // The three channels' curves at one log10 exposure.
+    std::function<void(double log10_exposure, double* values)> curves;
+    // The 3D stage on the curves' values (null: none), the box it spans per axis (values
+    // beyond clamp to it), and whether it is interpolated in cube roots (values spanning
+    // decades, such as a print's light).
+    std::function<void(const double* values, double* out)> table;
+    std::array<double, 3> table_lo{}, table_hi{};
+    bool table_cube_root = false;
+    OCIO::ConstProcessorRcPtr output;  // the output conversion after; null: none
+    // Names of the file's nodes, saying what each stage is.
+    std::string exposure_name = "exposure", curves_name = "curves", table_name = "table";
 };
 
 // A baked LUT: the file's text, to be written by the caller (the program writes every output
@@ -119,9 +148,12 @@ BakedLut bake_lut(const PixelFunction& look, const LutBakeSettings& settings, Lu
 
 // Bakes a look defined on the working space for pictures in `input_space` of the
 // converter's config (empty: the working space itself): the LUT's input is
-// `input_space`, its output whatever `look_from_working` gives. Chooses the layout described above; `settings.input` and
-// `clf_prefix` are set here.
+// `input_space`, its output whatever `look_from_working` gives. Chooses the layout described
+// above; `settings.input` and `clf_prefix` are set here. With `layered` (the same look as its
+// stages compose it) a .clf holds those stages, where the input and output conversions are
+// exact OCIO operations; otherwise, and in a .cube, `look_from_working` is sampled.
 BakedLut bake_look(const ColorConverter& converter, const std::string& input_space,
-                   const PixelFunction& look_from_working, LutBakeSettings settings, LutFormat format);
+                   const PixelFunction& look_from_working, LutBakeSettings settings, LutFormat format,
+                   const LayeredLook* layered = nullptr);
 
 }  // namespace darkroom::ocio
