@@ -300,14 +300,16 @@ T named(T transform, const std::string& name) {
 // The .clf of a layered look (LayeredLook) after settings.clf_prefix, and `output` after it.
 BakedLut bake_layered(const LayeredLook& look, const LutBakeSettings& settings,
                       const OCIO::ConstGroupTransformRcPtr& output) {
-    validate(settings, LutFormat::clf);
+    LutBakeSettings sized = settings;
+    if (look.table && look.table_size != 0) sized.cube_size = look.table_size;
+    validate(sized, LutFormat::clf);
     const double lo = look.log10_exposure_lo, span = look.log10_exposure_hi - look.log10_exposure_lo;
     if (settings.curve_size < 2 || settings.curve_size > 65536)
         throw OcioError("LUT curve size " + std::to_string(settings.curve_size) + " is outside 2..65536");
     if (!(std::isfinite(lo) && std::isfinite(span) && span > 0))
         throw OcioError("the look's curves span no exposures (log10 " + format_number(lo) + " .. " +
                         format_number(look.log10_exposure_hi) + ")");
-    const int n_curve = settings.curve_size, n = settings.cube_size;
+    const int n_curve = settings.curve_size, n = sized.cube_size;
     std::string summary = "Darkroom: the look's stages: an exposure matrix, log10 exposure " + format_number(lo) +
                           " .. " + format_number(look.log10_exposure_hi) + ", 1D curves of " +
                           std::to_string(n_curve) + " entries";

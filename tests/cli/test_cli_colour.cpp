@@ -267,6 +267,7 @@ TEST_CASE("a LUT from bake-lut, applied by oiiotool, matches develop without gra
         const char* lut;
         const char* input_space;  // "" for the working space
         std::string look;         // with the output and its colour flags
+        std::string bake_flags = "";
     };
     for (const Case& c : {Case{"colour-look.cube", "", bw_look + display}, Case{"colour-look.clf", "", bw_look + display},
                           Case{"colour-look-acescct.clf", "ACEScct", bw_look + display},
@@ -274,6 +275,8 @@ TEST_CASE("a LUT from bake-lut, applied by oiiotool, matches develop without gra
                           Case{"colour-look-2383.clf", "", colour_look + display},
                           Case{"colour-look-2383.cube", "", colour_look + display},
                           Case{"colour-look-2383-acescct.clf", "ACEScct", colour_look + display},
+                          // (The print's 3D LUT is the plan's table's lattice, whatever --size.)
+                          Case{"colour-look-2383-33.clf", "", colour_look + display, " --size 33"},
                           Case{"colour-look-2383-high.clf", "", colour_look + display + " --quality high"},
                           Case{"colour-look-negative.clf", "", colour_look + " --output negative"},
                           Case{"colour-look-scan.clf", "", colour_look + " --output scan"},
@@ -287,7 +290,7 @@ TEST_CASE("a LUT from bake-lut, applied by oiiotool, matches develop without gra
         }
         const std::string lut = tmp(c.lut), developed = tmp(std::string(c.lut) + ".developed.exr"),
                           applied = tmp(std::string(c.lut) + ".applied.exr");
-        Result r = darkroom("bake-lut -o " + lut + look);
+        Result r = darkroom("bake-lut -o " + lut + look + c.bake_flags);
         INFO(r.output);
         REQUIRE(r.exit_code == 0);
         const bool clf = lut.substr(lut.size() - 4) == ".clf";
