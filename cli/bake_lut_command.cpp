@@ -4,6 +4,7 @@
 // colour flags as develop; the Plan runs over the LUT's lattice as an image.
 #include <cmath>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "cli/atomic_file.h"
@@ -49,6 +50,53 @@ std::string describe_look(const Look& look, const std::string& input, const ocio
     return d.str();
 }
 
+// The look as the plan composes it, for a .clf of its stages (ocio::LayeredLook): each film
+// layer's spectral sensitivity and H&D curve, then for a colour print the print from the
+// negative's three densities, the one stage a 3D LUT must sample: on the lattice of the
+// plan's own print table, so the file is the plan. Other outputs are one curve per layer,
+// and so is a black-and-white print (one layer on one). None (the whole look sampled) for
+// the texture output, which develops no negative, and for a colour print computed per pixel
+// (the high and reference tiers): sampled on a density lattice that print missed by more
+// than the whole look sampled in stops does (docs/development/luts.md).
+std::optional<ocio::LayeredLook> layered_look(const Plan& plan, OutputMode output, const ColourIO& colour) {
+    const Stock& film = plan.film();
+    const size_t layers = film.layers.size();
+    const bool colour_print = output == OutputMode::print && layers == 3;
+    if (output == OutputMode::texture || (colour_print && !plan.print_table())) return std::nullopt;
+    ocio::LayeredLook look;
+    look.log10_exposure_lo = INFINITY;
+    look.log10_exposure_hi = -INFINITY;
+    for (size_t c = 0; c < 3; ++c) {
+        const size_t l = std::min(c, layers - 1);  // (a single layer serves all three)
+        look.exposure_matrix[c] = plan.film_exposure_weights(l);
+        const Curve& curve = film.layers[l].density_curve;
+        look.log10_exposure_lo = std::min(look.log10_exposure_lo, curve.x_min());
+        look.log10_exposure_hi = std::max(look.log10_exposure_hi, curve.x_max());
+    }
+    look.curves = [&plan, layers, colour_print](double log10_exposure, double* values) {
+        double density[3];
+        for (size_t l = 0; l < layers; ++l) density[l] = plan.film_density(l, std::pow(10.0, log10_exposure));
+        if (colour_print)
+            std::copy_n(density, 3, values);
+        else
+            plan.result_of_negative(density, values);
+    };
+    look.exposure_name = "film exposure (lux-seconds)";
+    look.curves_name = colour_print ? "film density (H&D curves)" : "film density (H&D curves), as written";
+    if (colour_print) {
+        look.table = [&plan](const double* density, double* rgb) { plan.result_of_negative(density, rgb); };
+        // The table's own nodes, whatever --size (it too interpolates cube roots
+        // tetrahedrally): another lattice would resample it, by 0.18 at worst at 33^3.
+        look.table_lo = plan.print_table()->lo();
+        look.table_hi = plan.print_table()->hi();
+        look.table_size = plan.print_table()->nodes();
+        look.table_cube_root = true;
+        look.table_name = "print (linear Rec.709)";
+    }
+    look.output = colour.output_conversion().processor();
+    return look;
+}
+
 void run_bake_lut(const BakeLutOptions& o) {
     Look look = o.flags.look();
     DevelopSettings& s = look.settings;
@@ -67,10 +115,11 @@ void run_bake_lut(const BakeLutOptions& o) {
     const Renderer renderer(look, flag_name, o.flags.verbose);
     const ColourIO& colour = renderer.colour();
 
+    // (Any lattice fits a frame this size.)
+    const Plan plan = renderer.compile(FrameGeometry{kLatticeImageWidth, kLatticeImageWidth}, o.flags.threads);
     const ocio::PixelFunction develop_lattice = [&](float* rgb, std::size_t n_pixels) {
         const int width = (int)std::min<std::size_t>(n_pixels, kLatticeImageWidth);
         const int height = (int)((n_pixels + width - 1) / width);
-        const Plan plan = renderer.compile(FrameGeometry{width, height}, o.flags.threads);
         Image in(width, height, 3);
         std::copy(rgb, rgb + 3 * n_pixels, in.pixels.begin());
         Image out(in.window, 3);
@@ -84,7 +133,9 @@ void run_bake_lut(const BakeLutOptions& o) {
     settings.description = describe_look(look, colour.input_space(), colour.output_conversion());
     ocio::BakedLut baked;
     try {
-        baked = ocio::bake_look(colour.converter(), colour.input_space(), develop_lattice, settings, format);
+        const std::optional<ocio::LayeredLook> layered = layered_look(plan, s.output, colour);
+        baked = ocio::bake_look(colour.converter(), colour.input_space(), develop_lattice, settings, format,
+                                layered ? &*layered : nullptr);
     } catch (const ocio::OcioError& e) {
         throw UserError(e.what());
     }
@@ -99,7 +150,7 @@ void add_bake_lut_command(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand(
         "bake-lut", "Write the look's tone and colour (no grain, MTF or halation) as a .cube or .clf 3D LUT");
     cmd->add_option("-o,--out", o->output, "LUT file: .clf (exact input conversion) or .cube")->required();
-    cmd->add_option("--size", o->cube_size, "Lattice points per axis")
+    cmd->add_option("--size", o->cube_size, "Lattice points per axis of a sampled LUT")
         ->check(CLI::Range(2, 129))
         ->capture_default_str();
     // Only the settings a LUT can hold; a look file's others (grain, optics) are ignored.

@@ -832,6 +832,53 @@ std::vector<Plane> Plan::print(std::vector<Plane> negative, const Window& out, i
     return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view.rgb(d, rgb); });
 }
 
+namespace {
+
+// A layer's developed density at one exposure, as develop_material computes it per pixel.
+double developed_density(const MaterialStages& m, size_t layer, double exposure_lux_s) {
+    if (!m.curve_tables.empty()) return m.curve_tables[layer](float(exposure_lux_s));
+    return m.stock.layers[layer].density_curve(std::log10(std::max(exposure_lux_s, 1e-30)));
+}
+
+}  // namespace
+
+std::array<double, 3> Plan::film_exposure_weights(size_t layer) const {
+    std::array<double, 3> w = film_stages_.rgb_weights[layer];
+    for (double& v : w) v *= film_exposure_scale_;
+    return w;
+}
+
+double Plan::film_density(size_t layer, double exposure_lux_s) const {
+    return developed_density(film_stages_, layer, exposure_lux_s);
+}
+
+void Plan::result_of_negative(const double* density, double* result) const {
+    if (settings_.output == OutputMode::texture)
+        throw std::invalid_argument("Plan::result_of_negative: the texture output develops no negative");
+    if (print_table_) {
+        const float d[3] = {float(density[0]), float(density[1]), float(density[2])};
+        float rgb[3];
+        (*print_table_)(d, rgb);
+        std::copy_n(rgb, 3, result);
+        return;
+    }
+    if (print_) {
+        double h[3], paper_density[3];
+        print_->expose(density, h);
+        for (int j = 0; j < print_->paper_layers(); ++j)
+            paper_density[j] = developed_density(paper_stages_, size_t(j), std::clamp(h[j], 0.0, kMaxInput));
+        PrintView(paper_stages_.stock).rgb(paper_density, result);
+        return;
+    }
+    const size_t layers = film_stages_.stock.layers.size();
+    for (size_t c = 0; c < 3; ++c) {
+        const size_t l = std::min(c, layers - 1);  // (a single layer serves all three)
+        float v = float(density[l]);
+        convert_row(settings_.output, film_stages_.stock.layers[l].density_curve.y_min(), &v, 1);
+        result[c] = v;
+    }
+}
+
 // Texture: each channel c is treated as the exposure of film layer c (a single-layer film
 // serves all three), spread by halation (normalised, so it moves light without adding
 // any) and the MTF, and multiplied by the grain's exposure fluctuation

@@ -176,6 +176,17 @@ public:
     // The fast tiers' print table (null where the plan prints otherwise or not at all).
     const Table3D* print_table() const { return print_table_.get(); }
 
+    // The per-pixel stages one at a time, as run() composes them without grain, MTF and
+    // halation, for tools that rebuild the look from them (bake-lut's .clf); not for the
+    // texture output:
+    //   exposure_l = film_exposure_weights(l) . rgb   (lux-seconds; below 0 no light)
+    //   density_l  = film_density(l, exposure_l)
+    //   result     = result_of_negative(density)      (channels 0-2 of what run() writes)
+    const Stock& film() const { return film_stages_.stock; }
+    std::array<double, 3> film_exposure_weights(size_t layer) const;
+    double film_density(size_t layer, double exposure_lux_s) const;
+    void result_of_negative(const double* density, double* result) const;
+
 private:
     std::vector<Plane> develop_film(const ConstImageView& in, const Window& film_out, int threads,
                                     StageTimes* times) const;

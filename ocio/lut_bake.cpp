@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -65,16 +66,16 @@ SampledShaper sample_shaper(const LogShaper& shaper, int size) {
     return sampled;
 }
 
-// Lattice inputs, red fastest (the order of .cube files).
-std::vector<float> lattice_inputs(int n, const std::vector<double>& axis) {
+// Lattice inputs, red fastest (the order of .cube files), axes[c] the coordinates along c.
+std::vector<float> lattice_inputs(int n, const std::array<std::vector<double>, 3>& axes) {
     std::vector<float> rgb((std::size_t)n * n * n * 3);
     std::size_t p = 0;
     for (int b = 0; b < n; ++b)
         for (int g = 0; g < n; ++g)
             for (int r = 0; r < n; ++r, p += 3) {
-                rgb[p] = (float)axis[(std::size_t)r];
-                rgb[p + 1] = (float)axis[(std::size_t)g];
-                rgb[p + 2] = (float)axis[(std::size_t)b];
+                rgb[p] = (float)axes[0][(std::size_t)r];
+                rgb[p + 1] = (float)axes[1][(std::size_t)g];
+                rgb[p + 2] = (float)axes[2][(std::size_t)b];
             }
     return rgb;
 }
@@ -129,7 +130,14 @@ std::string cube_text(const LutBakeSettings& s, const std::string& summary, cons
     return out;
 }
 
-std::string clf_text(const LutBakeSettings& s, const std::string& summary, const std::vector<float>& lattice) {
+void append_operations(OCIO::GroupTransform& group, const OCIO::ConstGroupTransformRcPtr& operations) {
+    if (operations)
+        for (int i = 0; i < operations->getNumTransforms(); ++i)
+            group.appendTransform(operations->getTransform(i)->createEditableCopy());
+}
+
+// A CLF's process list: its name, description and summary, and the input operations.
+OCIO::GroupTransformRcPtr clf_group(const LutBakeSettings& s, const std::string& summary) {
     OCIO::GroupTransformRcPtr group = OCIO::GroupTransform::Create();
     OCIO::FormatMetadata& meta = group->getFormatMetadata();
     meta.setID("darkroom-look");
@@ -139,10 +147,32 @@ std::string clf_text(const LutBakeSettings& s, const std::string& summary, const
     for (const std::string& line : lines_of(s.description))
         meta.addChildElement(OCIO::METADATA_DESCRIPTION, line.c_str());
     meta.addChildElement(OCIO::METADATA_DESCRIPTION, summary.c_str());
+    append_operations(*group, s.clf_prefix);
+    return group;
+}
 
-    if (s.clf_prefix)
-        for (int i = 0; i < s.clf_prefix->getNumTransforms(); ++i)
-            group->appendTransform(s.clf_prefix->getTransform(i)->createEditableCopy());
+std::string clf_written(const OCIO::GroupTransform& group) {
+    std::ostringstream out;
+    group.write(OCIO::Config::CreateRaw(), "Academy/ASC Common LUT Format", out);
+    return out.str();
+}
+
+// A tetrahedral LUT3D of a lattice in the order lattice_inputs gives.
+OCIO::Lut3DTransformRcPtr lut3d_of(int size, const std::vector<float>& lattice) {
+    const unsigned long n = (unsigned long)size;
+    OCIO::Lut3DTransformRcPtr lut = OCIO::Lut3DTransform::Create(n);
+    lut->setInterpolation(OCIO::INTERP_TETRAHEDRAL);
+    lut->setFileOutputBitDepth(OCIO::BIT_DEPTH_F32);
+    std::size_t p = 0;
+    for (unsigned long b = 0; b < n; ++b)
+        for (unsigned long g = 0; g < n; ++g)
+            for (unsigned long r = 0; r < n; ++r, p += 3)
+                lut->setValue(r, g, b, lattice[p], lattice[p + 1], lattice[p + 2]);
+    return lut;
+}
+
+std::string clf_text(const LutBakeSettings& s, const std::string& summary, const std::vector<float>& lattice) {
+    OCIO::GroupTransformRcPtr group = clf_group(s, summary);
     if (s.input == LutInput::scene_linear) {
         // s = k log2(x / x_lo) + k / ln 2 above x_lo; OCIO's linear segment below the
         // break is the tangent there, which is the shaper's toe.
@@ -155,20 +185,15 @@ std::string clf_text(const LutBakeSettings& s, const std::string& summary, const
         log->setLinSideOffsetValue({0.0, 0.0, 0.0});
         group->appendTransform(log);
     }
-    const unsigned long n = (unsigned long)s.cube_size;
-    OCIO::Lut3DTransformRcPtr lut = OCIO::Lut3DTransform::Create(n);
-    lut->setInterpolation(OCIO::INTERP_TETRAHEDRAL);
-    lut->setFileOutputBitDepth(OCIO::BIT_DEPTH_F32);
-    std::size_t p = 0;
-    for (unsigned long b = 0; b < n; ++b)
-        for (unsigned long g = 0; g < n; ++g)
-            for (unsigned long r = 0; r < n; ++r, p += 3)
-                lut->setValue(r, g, b, lattice[p], lattice[p + 1], lattice[p + 2]);
-    group->appendTransform(lut);
+    group->appendTransform(lut3d_of(s.cube_size, lattice));
+    return clf_written(*group);
+}
 
-    std::ostringstream out;
-    group->write(OCIO::Config::CreateRaw(), "Academy/ASC Common LUT Format", out);
-    return out.str();
+// What the .clf's input operations are, for its summary.
+std::string prefix_summary(const LutBakeSettings& s) {
+    if (!s.clf_prefix) return {};
+    return "; before it, the exact conversion from the file's input colour space (" +
+           std::to_string(s.clf_prefix->getNumTransforms()) + " OCIO operations)";
 }
 
 }  // namespace
@@ -224,7 +249,7 @@ BakedLut bake_lut(const PixelFunction& look, const LutBakeSettings& settings, Lu
             axis[(std::size_t)i] = settings.shaper.from_shaper(s);
     }
 
-    const std::vector<float> inputs = lattice_inputs(n, axis);
+    const std::vector<float> inputs = lattice_inputs(n, {axis, axis, axis});
     std::vector<float> lattice = inputs;
     look(lattice.data(), lattice.size() / 3);
     check_finite(lattice, inputs);
@@ -243,9 +268,7 @@ BakedLut bake_lut(const PixelFunction& look, const LutBakeSettings& settings, Lu
     } else {
         summary += ": encoded input 0 .. 1, inputs outside clamp";
     }
-    if (settings.clf_prefix)
-        summary += "; before it, the exact conversion from the file's input colour space (" +
-                   std::to_string(settings.clf_prefix->getNumTransforms()) + " OCIO operations)";
+    summary += prefix_summary(settings);
     baked.summary = summary;
 
     baked.text = baked.format == LutFormat::cube ? cube_text(settings, summary, shaped ? &sampled : nullptr, lattice)
@@ -268,12 +291,142 @@ OCIO::ConstGroupTransformRcPtr clf_writable_operations(const OCIO::Processor& pr
     }
 }
 
+template <typename T>
+T named(T transform, const std::string& name) {
+    transform->getFormatMetadata().setName(name.c_str());
+    return transform;
+}
+
+// The .clf of a layered look (LayeredLook) after settings.clf_prefix, and `output` after it.
+BakedLut bake_layered(const LayeredLook& look, const LutBakeSettings& settings,
+                      const OCIO::ConstGroupTransformRcPtr& output) {
+    LutBakeSettings sized = settings;
+    if (look.table && look.table_size != 0) sized.cube_size = look.table_size;
+    validate(sized, LutFormat::clf);
+    const double lo = look.log10_exposure_lo, span = look.log10_exposure_hi - look.log10_exposure_lo;
+    if (settings.curve_size < 2 || settings.curve_size > 65536)
+        throw OcioError("LUT curve size " + std::to_string(settings.curve_size) + " is outside 2..65536");
+    if (!(std::isfinite(lo) && std::isfinite(span) && span > 0))
+        throw OcioError("the look's curves span no exposures (log10 " + format_number(lo) + " .. " +
+                        format_number(look.log10_exposure_hi) + ")");
+    const int n_curve = settings.curve_size, n = sized.cube_size;
+    std::string summary = "Darkroom: the look's stages: an exposure matrix, log10 exposure " + format_number(lo) +
+                          " .. " + format_number(look.log10_exposure_hi) + ", 1D curves of " +
+                          std::to_string(n_curve) + " entries";
+    if (look.table) {
+        const std::string size = std::to_string(n);
+        summary += ", then a 3D LUT " + size + "x" + size + "x" + size + " (tetrahedral) on the curves' values";
+        if (look.table_cube_root) summary += ", holding cube roots, cubed after";
+    }
+    summary += prefix_summary(settings);
+    if (output) summary += "; after it, the exact output conversion (" + std::to_string(output->getNumTransforms()) +
+                           " OCIO operations)";
+    OCIO::GroupTransformRcPtr group = clf_group(settings, summary);
+
+    OCIO::MatrixTransformRcPtr exposure = named(OCIO::MatrixTransform::Create(), look.exposure_name);
+    double m44[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1};
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) m44[4 * r + c] = look.exposure_matrix[(std::size_t)r][(std::size_t)c];
+    exposure->setMatrix(m44);
+    group->appendTransform(exposure);
+
+    // (log10 x - lo) / span: the curves' domain onto the Lut1D's 0 .. 1.
+    OCIO::LogAffineTransformRcPtr log = named(OCIO::LogAffineTransform::Create(), "log10 " + look.exposure_name);
+    log->setBase(10.0);
+    log->setLogSideSlopeValue({1.0 / span, 1.0 / span, 1.0 / span});
+    log->setLogSideOffsetValue({-lo / span, -lo / span, -lo / span});
+    group->appendTransform(log);
+
+    std::vector<float> curve_inputs, curve_values;
+    for (int i = 0; i < n_curve; ++i) {
+        const double e = lo + span * i / double(n_curve - 1);
+        double v[3];
+        look.curves(e, v);
+        curve_inputs.insert(curve_inputs.end(), 3, (float)e);
+        curve_values.insert(curve_values.end(), {(float)v[0], (float)v[1], (float)v[2]});
+    }
+    check_finite(curve_values, curve_inputs);
+    OCIO::Lut1DTransformRcPtr curves =
+        named(OCIO::Lut1DTransform::Create((unsigned long)n_curve, false), look.curves_name);
+    curves->setInterpolation(OCIO::INTERP_LINEAR);
+    curves->setFileOutputBitDepth(OCIO::BIT_DEPTH_F32);
+    for (int i = 0; i < n_curve; ++i)
+        curves->setValue((unsigned long)i, curve_values[3 * (std::size_t)i], curve_values[3 * (std::size_t)i + 1],
+                         curve_values[3 * (std::size_t)i + 2]);
+    group->appendTransform(curves);
+
+    if (look.table) {
+        // The box onto the Lut3D's 0 .. 1 per axis.
+        OCIO::MatrixTransformRcPtr to_box = named(OCIO::MatrixTransform::Create(), look.table_name + " domain");
+        double scale[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1}, offset[4] = {0, 0, 0, 0};
+        std::array<std::vector<double>, 3> axes;
+        for (int a = 0; a < 3; ++a) {
+            const double a_lo = look.table_lo[(std::size_t)a], a_span = look.table_hi[(std::size_t)a] - a_lo;
+            if (!(std::isfinite(a_lo) && std::isfinite(a_span) && a_span > 0))
+                throw OcioError("the look's 3D stage spans nothing along axis " + std::to_string(a));
+            scale[5 * a] = 1.0 / a_span;
+            offset[a] = -a_lo / a_span;
+            for (int i = 0; i < n; ++i) axes[(std::size_t)a].push_back(a_lo + a_span * i / double(n - 1));
+        }
+        to_box->setMatrix(scale);
+        to_box->setOffset(offset);
+        group->appendTransform(to_box);
+
+        const std::vector<float> inputs = lattice_inputs(n, axes);
+        std::vector<float> lattice(inputs.size());
+        for (std::size_t p = 0; p < inputs.size(); p += 3) {
+            const double in[3] = {inputs[p], inputs[p + 1], inputs[p + 2]};
+            double out[3];
+            look.table(in, out);
+            for (std::size_t c = 0; c < 3; ++c)
+                lattice[p + c] = (float)(look.table_cube_root ? std::cbrt(out[c]) : out[c]);
+        }
+        check_finite(lattice, inputs);
+        group->appendTransform(named(lut3d_of(n, lattice), look.table_name));
+        if (look.table_cube_root) {
+            // Mirrored, so that a value below 0 (a colour outside the gamut) keeps its sign.
+            OCIO::ExponentTransformRcPtr cube = named(OCIO::ExponentTransform::Create(), look.table_name + " cubed");
+            cube->setValue({3.0, 3.0, 3.0, 1.0});
+            cube->setNegativeStyle(OCIO::NEGATIVE_MIRROR);
+            group->appendTransform(cube);
+        }
+    }
+    append_operations(*group, output);
+
+    BakedLut baked;
+    baked.format = LutFormat::clf;
+    baked.summary = summary;
+    baked.text = clf_written(*group);
+    return baked;
+}
+
+// The layered look's .clf, or none where the input or output conversion has no exact CLF form.
+std::optional<BakedLut> layered_clf(const ColorConverter& converter, const std::string& input_space,
+                                    const LayeredLook& look, LutBakeSettings settings) {
+    if (!input_space.empty()) {
+        const ConversionPtr to_working = converter.to_working(input_space);
+        if (!to_working->is_noop()) {
+            settings.clf_prefix = clf_writable_operations(*to_working->processor());
+            if (!settings.clf_prefix) return std::nullopt;
+        }
+    }
+    OCIO::ConstGroupTransformRcPtr output;
+    if (look.output) {
+        output = clf_writable_operations(*look.output);
+        if (!output) return std::nullopt;
+    }
+    return bake_layered(look, settings, output);
+}
+
 }  // namespace
 
 BakedLut bake_look(const ColorConverter& converter, const std::string& input_space,
-                   const PixelFunction& look_from_working, LutBakeSettings settings, LutFormat format) {
+                   const PixelFunction& look_from_working, LutBakeSettings settings, LutFormat format,
+                   const LayeredLook* layered) {
     settings.clf_prefix = nullptr;
     settings.input = LutInput::scene_linear;
+    if (layered && format == LutFormat::clf)
+        if (std::optional<BakedLut> baked = layered_clf(converter, input_space, *layered, settings)) return *baked;
     if (input_space.empty()) return bake_lut(look_from_working, settings, format);
     const ConversionPtr to_working = converter.to_working(input_space);
     if (to_working->is_noop()) return bake_lut(look_from_working, settings, format);

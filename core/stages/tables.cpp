@@ -322,7 +322,7 @@ void LogAxisTable::apply_row_with_noise(const float* in, const float* noise, flo
 
 Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, int threads,
                  const Function& f, Encoding encoding)
-    : nodes_(nodes), cubed_(encoding == Encoding::cube_root) {
+    : nodes_(nodes), lo_given_(lo), hi_given_(hi), cubed_(encoding == Encoding::cube_root) {
     for (int a = 0; a < 3; ++a) {
         lo_[a] = float(lo[a]);
         scale_[a] = float(1.0 / ((hi[a] - lo[a]) / (nodes - 1)));  // 1 / the node spacing

@@ -84,9 +84,13 @@ public:
     // rows: operator() at each point, a vector of points at a time, bit for bit the same values.
     void apply_row(const float* const* in, float* const* out, int n) const;
     int nodes() const { return nodes_; }
+    // The grid's span per axis, as given.
+    const std::array<double, 3>& lo() const { return lo_given_; }
+    const std::array<double, 3>& hi() const { return hi_given_; }
 
 private:
     int nodes_ = 0;
+    std::array<double, 3> lo_given_{}, hi_given_{};
     std::array<float, 3> lo_{}, scale_{};
     std::vector<std::array<float, 4>> values_;  // x fastest; 3 values and a pad, one 16-byte load per node
     bool cubed_ = false;                        // Encoding::cube_root

@@ -749,6 +749,97 @@ TEST_CASE("LUTs for pictures in a log space (ACEScct)", "[ocio][lut]") {
     }
 }
 
+// A film-like look in stages: a sensitivity matrix to lux-seconds, S-shaped H&D curves
+// against log10 exposure, and a print-like 3D function of the three densities (light
+// falling by decades, with crosstalk), shown on the sRGB display.
+LayeredLook film_like_look(const ColorConverter& converter) {
+    LayeredLook look;
+    look.exposure_matrix = {{{0.045, 0.004, 0.001}, {0.0025, 0.0425, 0.005}, {0.0005, 0.006, 0.0435}}};
+    look.log10_exposure_lo = -5.0;
+    look.log10_exposure_hi = 1.0;
+    look.curves = [](double e, double* density) {
+        for (int c = 0; c < 3; ++c) density[c] = 0.2 + 2.2 / (1.0 + std::exp(-2.0 * (e + 2.05 + 0.05 * (c - 1))));
+    };
+    look.table = [](const double* d, double* rgb) {
+        for (int c = 0; c < 3; ++c)
+            rgb[c] = std::pow(10.0, 0.9 * (d[c] - 0.2) + 0.15 * (d[(c + 1) % 3] - d[c]) - 2.0);
+    };
+    look.table_lo = {0.1, 0.1, 0.1};
+    look.table_hi = {2.5, 2.5, 2.5};
+    look.table_cube_root = true;
+    look.output = converter.to_display("sRGB", "Standard")->processor();
+    return look;
+}
+
+// The same look evaluated directly (the stages clamp as the file's do).
+std::vector<float> film_like_expected(const ColorConverter& converter, const LayeredLook& look,
+                                      std::vector<float> rgb) {
+    for (std::size_t p = 0; p < rgb.size(); p += 3) {
+        double v[3];
+        for (std::size_t c = 0; c < 3; ++c) {
+            double exposure = 0;
+            for (std::size_t k = 0; k < 3; ++k) exposure += look.exposure_matrix[c][k] * rgb[p + k];
+            const double e = exposure > 0 ? std::clamp(std::log10(exposure), look.log10_exposure_lo,
+                                                       look.log10_exposure_hi)
+                                          : look.log10_exposure_lo;
+            double curves[3];
+            look.curves(e, curves);
+            v[c] = std::clamp(curves[c], look.table_lo[c], look.table_hi[c]);
+        }
+        double out[3];
+        look.table(v, out);
+        for (std::size_t c = 0; c < 3; ++c) rgb[p + c] = (float)out[c];
+    }
+    converter.to_display("sRGB", "Standard")->apply_rgb(rgb.data(), rgb.size() / 3);
+    return rgb;
+}
+
+TEST_CASE("a layered look's .clf holds its stages and matches the look", "[ocio][lut]") {
+    TempDir dir;
+    ColorConverter converter(embedded_active_config());
+    const LayeredLook look = film_like_look(converter);
+    const int width = 64, height = 64;
+    const std::vector<float> inputs = lut_test_inputs(LogShaper(), width, height);
+    const std::vector<float> expected = film_like_expected(converter, look, inputs);
+    const PixelFunction sampled = [&](float* rgb, std::size_t n) {
+        const std::vector<float> out = film_like_expected(converter, look, std::vector<float>(rgb, rgb + 3 * n));
+        std::copy(out.begin(), out.end(), rgb);
+    };
+
+    const std::string lut = dir.file("layered.clf");
+    const BakedLut baked = written_to(lut, bake_look(converter, "", sampled, LutBakeSettings(), LutFormat::clf, &look));
+    CHECK(baked.summary.find("1D curves of 16384 entries") != std::string::npos);
+    CHECK(baked.summary.find("3D LUT 65x65x65") != std::string::npos);
+    // In the model's order: matrix, log, curves, the box, the 3D LUT, its cube, the display.
+    std::size_t at = 0;
+    for (const char* node : {"<Matrix", "<Log", "<LUT1D", "<Matrix", "<LUT3D", "<Exponent", "<Exponent"}) {
+        INFO(node);
+        at = baked.text.find(node, at);
+        REQUIRE(at != std::string::npos);
+        ++at;
+    }
+    const ErrorStats ocio = compare(apply_lut_in_process(lut, inputs), expected);
+    std::printf("[lut accuracy] layered .clf 65^3, OCIO in-process: max %.6f, mean %.7f\n", ocio.max, ocio.mean);
+    CHECK(ocio.max < 0.001);
+    if (oiiotool_available()) {
+        const ErrorStats tool = compare(apply_lut_with_oiiotool(dir, lut, inputs, width, height), expected);
+        std::printf("[lut accuracy] layered .clf 65^3, oiiotool:         max %.6f, mean %.7f\n", tool.max, tool.mean);
+        CHECK(tool.max < 0.001);
+    }
+
+    // From ACEScct: the exact decode first, then the same stages.
+    std::vector<float> acescct = inputs;
+    converter.from_working("ACEScct")->apply_rgb(acescct.data(), acescct.size() / 3);
+    const std::string from_log = dir.file("layered-acescct.clf");
+    written_to(from_log, bake_look(converter, "ACEScct", sampled, LutBakeSettings(), LutFormat::clf, &look));
+    CHECK(compare(apply_lut_in_process(from_log, acescct), expected).max < 0.001);
+
+    // A .cube cannot hold the stages: the whole look is sampled.
+    const BakedLut cube = bake_look(converter, "", sampled, LutBakeSettings(), LutFormat::cube, &look);
+    CHECK(cube.summary.find("1D curves") == std::string::npos);
+    CHECK(cube.summary.find("log2 shaper") != std::string::npos);
+}
+
 // (A file that cannot be written: `cli: bake-lut ...`, since the program writes it.)
 TEST_CASE("LUT baking refuses bad input", "[ocio][lut]") {
     LutBakeSettings settings;
