@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 
+#include "tests/ocio/ocio_variable.h"
 #include "tests/plugin/test_host.h"
 
 namespace fs = std::filesystem;
@@ -508,6 +509,28 @@ TEST_CASE("settings that change nothing are reported as identity", "[plugin]") {
         inst->set_double3("grainAmount", 0, 0, 0);
         CHECK(inst->is_identity(1) == kOfxStatOK);
     }
+}
+
+TEST_CASE("OCIO=ocio://default, as hosts set it for OCIO 2.2, renders with the embedded config", "[plugin]") {
+    const int w = 32, h = 24;
+    auto render = [&](const std::string& config_parameter) {
+        auto inst = make_instance();
+        set_common_look(*inst);
+        inst->set_string("inputColorspace", "sRGB - Texture");
+        inst->set_string("outputColorspace", "ACEScg");
+        inst->set_string("ocioConfig", config_parameter);
+        inst->set_source(Frame::from_top_down(scene(w, h, 3), w, h, 3), kOfxImageOpaque);
+        RenderResult r = inst->render(1, {0, 0, w, h});
+        INFO(inst->effect().persistent_message);
+        REQUIRE(r.status == kOfxStatOK);
+        return r.output;
+    };
+    const Frame embedded = render("");
+    {
+        ScopedOcioVariable set(std::string("ocio://default"));
+        CHECK(same_bits(render(""), embedded));
+    }
+    CHECK(same_bits(render("ocio://default"), embedded));
 }
 
 TEST_CASE("a reference render that will take hours says so on the node before it starts", "[plugin]") {
