@@ -141,12 +141,26 @@ void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_he
     run_option(cmd.add_option("--log", o.run.log_path, "Write per-frame timings, warnings and errors to this JSON file"));
 }
 
+std::string output_flag_hint(const CLI::App& cmd) {
+    const CLI::Option* input = cmd.get_option_no_throw("input");
+    const CLI::Option* output = cmd.get_option_no_throw("-o");
+    const std::vector<std::string> extra = cmd.remaining();
+    if (!input || !output || input->count() != 1 || output->count() != 0 || extra.size() != 1 || extra[0][0] == '-')
+        return "";
+    std::string command = cmd.get_name();
+    for (const CLI::App* parent = cmd.get_parent(); parent && parent->get_parent(); parent = parent->get_parent())
+        command = parent->get_name() + " " + command;
+    return "'" + extra[0] + "' is a second input: name the output with -o, as in 'darkroom " + command + " " +
+           input->as<std::string>() + " -o " + extra[0] + "'";
+}
+
 void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int threads, bool verbose,
                const PrepareFrames& prepare, const DryRunCheck& dry_run_check) {
     const bool sequence = is_sequence_pattern(o.input) || is_sequence_pattern(o.output);
     if (sequence && frame_flag_given)
         throw UserError("--frame is for a single image: each frame of a sequence uses its own frame number");
-    const std::vector<FrameJob> jobs = expand_frames(o.input, o.output, o.sequence, single_frame);
+    const ExpandedFrames expanded = expand_frames(o.input, o.output, o.sequence, single_frame);
+    const std::vector<FrameJob>& jobs = expanded.jobs;
     require_known_compression(o.output, o.write.compression);
     const std::map<fs::path, std::string> folders = output_folders(jobs);
     for (const auto& [folder, output] : folders) require_writable(output);  // a sequence's frames share theirs
@@ -156,14 +170,22 @@ void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int thr
     o.write.command_line = command_line();
     if (!o.run.dry_run) remove_stale_outputs_temps(folders, o.run.quiet);
 
+    // A frame missing on disk is more often a render that failed than a range meant so.
+    if (!expanded.missing_frames.empty())
+        std::cerr << "darkroom: warning: the input sequence '" << o.input << "' has frames " << jobs.front().frame
+                  << "-" << jobs.back().frame << " on disk but not " << expanded.missing_frames
+                  << ", which are left out\n";
+
     // A single image is made silently, as oiiotool does, unless asked (-v, -n).
     const bool quiet = o.run.quiet || (!sequence && !o.run.dry_run && !verbose);
     Progress progress(jobs.size(), sequence, quiet, isatty(STDERR_FILENO) && sequence && !o.run.dry_run);
     threads = resolve_threads(threads);
     OIIO::attribute("threads", threads);  // OpenImageIO's own pool (EXR decoding) keeps to --threads too
     {
-        // Interrupted (Ctrl-C, a farm's kill), the log still tells which frames were finished.
+        // Interrupted (Ctrl-C, a farm's kill), the bar's line ends before the interrupt's message
+        // and the log still tells which frames were finished.
         InterruptHookScope log_on_interrupt([&](int signal_number) {
+            progress.finish();
             if (!o.run.log_path.empty())
                 write_run_log(o.run.log_path, progress.reports(), progress.elapsed_seconds(), command_line(),
                               signal_number);

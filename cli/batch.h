@@ -34,6 +34,11 @@ struct BatchOptions {
 // The flags above on `cmd` (not read from look files: they are the run's, not the look's).
 void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_help, const std::string& output_help);
 
+// For a command line CLI11 refused, when `cmd` (with the flags above) was given a second
+// name and no -o, as oiiotool's habit `develop in.exr out.exr` does: how to name the output.
+// Empty otherwise.
+std::string output_flag_hint(const CLI::App& cmd);
+
 double seconds_since(std::chrono::steady_clock::time_point start);
 
 // One frame's work: read job.input, write job.output (through write_image, whose `committed`

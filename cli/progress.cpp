@@ -74,6 +74,7 @@ void Progress::add(FrameReport r) {
 }
 
 void Progress::draw_bar() const {
+    if (finished_) return;
     const size_t done = reports_.size();
     const double elapsed = elapsed_seconds();
     const double fps = elapsed > 0 ? done / elapsed : 0;
@@ -86,7 +87,8 @@ void Progress::draw_bar() const {
 
 void Progress::finish() {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (terminal_ && !quiet_) std::fprintf(stderr, "\n");
+    if (terminal_ && !quiet_ && !finished_) std::fprintf(stderr, "\n");
+    finished_ = true;
 }
 
 std::vector<FrameReport> Progress::reports() const {

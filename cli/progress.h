@@ -29,6 +29,10 @@ public:
     // `sequence`: messages name the frame ("frame 12:"); a single image's name no frame, and
     // its failure is left to the caller (it is the run's error).
     Progress(size_t total_frames, bool sequence, bool quiet, bool terminal);
+    // Ends the bar's line if finish() has not: a run that throws leaves no prompt after the bar.
+    ~Progress() { finish(); }
+    Progress(const Progress&) = delete;
+    Progress& operator=(const Progress&) = delete;
 
     // Thread-safe, and printed even when quiet. A warning is printed when it arises (a render
     // that will take hours says so before it starts) and kept in the frame's report for the log.
@@ -38,7 +42,8 @@ public:
     void warn_once(const std::string& kind, FrameReport& report, const std::string& warning);
     // A frame's report, when it is finished (or failed, or skipped).
     void add(FrameReport report);
-    // Ends the bar's line.
+    // Ends the bar's line, once: when the run ends, or when it is interrupted, before what
+    // the interrupt prints. No bar is drawn after it.
     void finish();
 
     std::vector<FrameReport> reports() const;
@@ -50,6 +55,7 @@ private:
     mutable std::mutex mutex_;
     size_t total_;
     bool sequence_, quiet_, terminal_;
+    bool finished_ = false;
     std::chrono::steady_clock::time_point start_;
     std::vector<FrameReport> reports_;
     std::set<std::string> warned_kinds_;

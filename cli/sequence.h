@@ -24,6 +24,13 @@ struct SequenceOptions {
     int framepadding = 0;  // --framepadding; 0: as the pattern says
 };
 
+struct ExpandedFrames {
+    std::vector<FrameJob> jobs;
+    // For an input sequence found on disk, the frames absent between its first and last,
+    // as ranges ("6, 9-11"); empty when none are or the frames were named.
+    std::string missing_frames;
+};
+
 // Whether `path` names a sequence (holds a frame number wildcard).
 bool is_sequence_pattern(const std::string& path);
 
@@ -32,7 +39,10 @@ bool is_sequence_pattern(const std::string& path);
 // single input with an output sequence develops the same image at each frame (moving grain
 // on a still). Throws UserError for a bad range, a wildcard missing where one is needed, or
 // a sequence with no frames.
-std::vector<FrameJob> expand_frames(const std::string& input, const std::string& output,
-                                    const SequenceOptions& sequence, int single_frame);
+ExpandedFrames expand_frames(const std::string& input, const std::string& output, const SequenceOptions& sequence,
+                             int single_frame);
+
+// Frame numbers as ranges, in their order: {1, 2, 3, 7, 9, 10} -> "1-3, 7, 9-10".
+std::string frame_ranges(const std::vector<int>& frames);
 
 }  // namespace darkroom::cli

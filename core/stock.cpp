@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/builtin_stock_data.h"
+#include "core/did_you_mean.h"
 #include "core/stock_json.h"
 
 namespace darkroom {
@@ -392,12 +393,16 @@ Stock find_stock(const std::string& id_or_path) {
     bool is_path = id_or_path.find('/') != std::string::npos ||
                    (id_or_path.size() > 5 && id_or_path.compare(id_or_path.size() - 5, 5, ".json") == 0);
     if (is_path) return load_stock_file(id_or_path);
+    std::vector<std::string> ids;
     std::string known;
     for (const Stock& s : builtin_stocks()) {
         if (s.id == id_or_path) return s;
+        ids.push_back(s.id);
         known += (known.empty() ? "" : ", ") + s.id;
     }
-    throw StockError("unknown stock '" + id_or_path + "' (built-in: " + known + "; or give a path to a .json file)");
+    const std::string suggestion = did_you_mean(id_or_path, ids);
+    throw StockError("unknown stock '" + id_or_path + "'" + (suggestion.empty() ? "" : ": " + suggestion) +
+                     " (built-in: " + known + "; or give a path to a .json file)");
 }
 
 }  // namespace darkroom

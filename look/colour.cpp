@@ -8,9 +8,12 @@ namespace darkroom {
 
 namespace {
 
+// The active config; where another stands in for the one named, the user is told so.
 ocio::ActiveConfig resolve_config(const ColourSettings& o, const Naming& name) {
     try {
-        return ocio::resolve_config(o.config_path, name(parameter("colorconfig")));
+        ocio::ActiveConfig active = ocio::resolve_config(o.config_path, name(parameter("colorconfig")));
+        if (!active.warning.empty()) std::cerr << "darkroom: warning: " << active.warning << "\n";
+        return active;
     } catch (const ocio::OcioError& e) {
         throw UserError(e.what());
     }

@@ -252,6 +252,9 @@ std::string config_cache_id(const OCIO::ConstConfigRcPtr& config) {
 
 std::string quoted(const std::string& s) { return "'" + s + "'"; }
 
+// OCIO 2.2 and later name the configs built into them so ("ocio://default"); they are no files.
+bool is_builtin_config_name(const std::string& path) { return path.rfind("ocio://", 0) == 0; }
+
 // OCIO's own validation, with the commonest problem said in plain words first.
 void validate_config(const ActiveConfig& active, const std::string& hint) {
     if (active.config->getNumDisplays() == 0)
@@ -293,11 +296,13 @@ ActiveConfig load_config_file(const std::string& path, ConfigSource source, cons
     active.path = path;
     active.origin = origin;
     const std::string hint =
-        source == ConfigSource::environment ? " (unset OCIO, or give --colorconfig, to use another config)" : "";
+        source == ConfigSource::environment ? " (unset OCIO, or name a config file, to use another one)" : "";
 
     std::error_code ec;
-    if (!fs::exists(path, ec)) throw ConfigError(active.name() + " does not exist" + hint);
-    if (fs::is_directory(path, ec)) throw ConfigError(active.name() + " is a directory, not a config file" + hint);
+    if (!is_builtin_config_name(path)) {
+        if (!fs::exists(path, ec)) throw ConfigError(active.name() + " does not exist" + hint);
+        if (fs::is_directory(path, ec)) throw ConfigError(active.name() + " is a directory, not a config file" + hint);
+    }
 
     try {
         active.config = OCIO::Config::CreateFromFile(path.c_str());
@@ -321,18 +326,38 @@ ActiveConfig from_host_config(OCIO::ConstConfigRcPtr config, const std::string& 
     return active;
 }
 
+namespace {
+
+// The config `path` names, active for `reason`. A built-in config name this OCIO cannot load
+// (hosts set $OCIO=ocio://default for OCIO 2.2 and later) gives the embedded config instead,
+// which serves as well as any for the film model; a file that fails stays an error.
+ActiveConfig load_named_config(const std::string& path, ConfigSource source, const std::string& origin,
+                               const std::string& reason) {
+    try {
+        ActiveConfig active = load_config_file(path, source, origin);
+        active.reason = reason;
+        return active;
+    } catch (const ConfigError&) {
+        if (!is_builtin_config_name(path)) throw;
+    }
+    const std::string why = origin + " names " + quoted(path) +
+                            ", a config built into OCIO 2.2 and later, which OCIO " + OCIO::GetVersion() +
+                            " cannot load";
+    ActiveConfig active = embedded_active_config(why);
+    active.warning = why + ": using the embedded Darkroom config instead";
+    return active;
+}
+
+}  // namespace
+
 ActiveConfig resolve_config(const std::string& explicit_path, const std::string& explicit_origin) {
-    if (!explicit_path.empty()) {
-        ActiveConfig active = load_config_file(explicit_path, ConfigSource::explicit_file, explicit_origin);
-        active.reason = "given by " + explicit_origin;
-        return active;
-    }
+    if (!explicit_path.empty())
+        return load_named_config(explicit_path, ConfigSource::explicit_file, explicit_origin,
+                                 "given by " + explicit_origin);
     const char* env = std::getenv("OCIO");
-    if (env && *env) {
-        ActiveConfig active = load_config_file(env, ConfigSource::environment, "$OCIO");
-        active.reason = "$OCIO names it and no " + explicit_origin + " was given";
-        return active;
-    }
+    if (env && *env)
+        return load_named_config(env, ConfigSource::environment, "$OCIO",
+                                 "$OCIO names it and no " + explicit_origin + " was given");
     return embedded_active_config("no " + explicit_origin + " was given and $OCIO is not set");
 }
 

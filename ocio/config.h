@@ -12,7 +12,9 @@
 //   2. the file named by `$OCIO`;
 //   3. the embedded config below, built in code from OCIO 2.1 built-in transforms.
 // A config that is named (1 or 2) but missing or invalid is an error naming the file and
-// the problem: the embedded config is never silently substituted for it.
+// the problem: the embedded config is never silently substituted for it. The one exception
+// is a config built into OCIO 2.2 and later ("ocio://default"), which hosts set $OCIO to
+// and OCIO 2.1 cannot load: the embedded config stands in for it, with a warning.
 //
 // In a config of the user's, the working space is the first of these colour space names
 // (or aliases) that it defines: "lin_rec709", "Linear Rec.709 (sRGB)", "lin_rec709_srgb",
@@ -113,6 +115,9 @@ struct ActiveConfig {
     std::string origin;    // who named it: "--colorconfig", "$OCIO", "the OFX host", ...
     std::string reason;    // why this one is active, one sentence
     std::string cache_id;  // OCIO's id of the config's contents; keys the processor cache
+    // For the user, when the config named could not be loaded and another stands in for it
+    // (a built-in config this OCIO lacks); empty otherwise.
+    std::string warning;
 
     // "OCIO config '/show/config.ocio' (from $OCIO)" or "the embedded Darkroom config".
     std::string name() const;
@@ -124,11 +129,13 @@ struct ActiveConfig {
 
 // Chooses the active config: `explicit_path` if not empty (named by `explicit_origin`),
 // else $OCIO if set and not empty, else the embedded config. Throws ConfigError when the
-// named file is missing or invalid.
+// named file is missing or invalid; a built-in config name ("ocio://...") this OCIO cannot
+// load gives the embedded config, with its `warning` set.
 ActiveConfig resolve_config(const std::string& explicit_path = "",
                             const std::string& explicit_origin = "--colorconfig");
 
-// Loads and validates one config file; throws ConfigError naming the file and `origin`.
+// Loads and validates one config file (or OCIO built-in config name, "ocio://..."); throws
+// ConfigError naming it and `origin`.
 ActiveConfig load_config_file(const std::string& path, ConfigSource source, const std::string& origin);
 
 // Wraps a config object a host already holds (validated here; ConfigError if invalid).

@@ -489,14 +489,16 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     for (int y = out_core.y0; y < out_core.y1; y += band_rows)
         job.bands.push_back({out_core.x0, y, out_core.x1, std::min(out_core.y1, y + band_rows)});
     // A reference render that will take hours says so on the node before it starts (the user
-    // can abort it), and the message stays while the node renders at that cost.
-    const std::string long_render = long_reference_render_warning(plan, out_core, "Quality ");
-    if (!long_render.empty()) post_warning(effect, "Darkroom: " + long_render);
+    // can abort it), and so does a config that another stands in for (a host's ocio:// name
+    // this OCIO cannot load): the message stays while the node renders that way.
+    std::string warning = long_reference_render_warning(plan, out_core, "Quality ");
+    if (warning.empty()) warning = development.renderer->colour().converter().config().warning;
+    if (!warning.empty()) post_warning(effect, "Darkroom: " + warning);
     run_bands(job);
     if (job.error) std::rethrow_exception(job.error);
     // An aborted render is incomplete; the host discards it, so there is nothing to tell the user.
     if (job.aborted) return kOfxStatFailed;
-    if (long_render.empty()) clear_message(effect);
+    if (warning.empty()) clear_message(effect);
     return kOfxStatOK;
 }
 

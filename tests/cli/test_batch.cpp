@@ -118,6 +118,28 @@ TEST_CASE("frame wildcards and ranges follow oiiotool", "[cli][batch]") {
     CHECK(fs::exists(dir / "e.03.exr"));
 }
 
+TEST_CASE("frames missing from a sequence on disk are named, as ranges, by the run and the dry run",
+          "[cli][batch][bad-input]") {
+    fs::path dir = fresh_dir("gaps");
+    make_plates(dir, 1, 12, 8, 6);
+    for (int f : {6, 8, 9}) fs::remove(frame_name(dir, "plate", f));
+    const std::string in = (dir / "plate.####.exr").string(),
+                      args = "develop " + in + " -o " + (dir / "out.####.exr").string() + " --no-grain --no-mtf";
+    const std::string warning = "darkroom: warning: the input sequence '" + in +
+                                "' has frames 1-12 on disk but not 6, 8-9, which are left out";
+    for (const std::string& flags : {" -n", " -q"}) {
+        Result r = darkroom(args + flags);
+        INFO(flags << "\n" << r.output);
+        CHECK(r.exit_code == 0);
+        CHECK(count(r.output, warning) == 1);
+    }
+    for (int f = 1; f <= 12; ++f) CHECK(fs::exists(frame_name(dir, "out", f)) == (f != 6 && f != 8 && f != 9));
+    // Frames named by --frames, or a sequence without gaps, say nothing of it.
+    CHECK_THAT(darkroom(args + " -n --frames 1-12").output, !Catch::Contains("on disk but not"));
+    make_plates(dir, 6, 9, 8, 6);
+    CHECK_THAT(darkroom(args + " -n").output, !Catch::Contains("on disk but not"));
+}
+
 TEST_CASE("a missing frame fails with its name and --skip-bad-frames goes on and still reports it", "[cli][batch][bad-input]") {
     fs::path dir = fresh_dir("missing");
     make_plates(dir, 1, 3);
@@ -631,6 +653,22 @@ TEST_CASE("progress: a bar on a terminal, a line per frame otherwise", "[cli][ba
     REQUIRE(bar.exit_code == 0);
     CHECK_THAT(bar.output, Catch::Contains("2/2 frames") && Catch::Contains("fps") && Catch::Contains("left"));
     CHECK_THAT(bar.output, !Catch::Contains("frame 2: "));
+    CHECK(bar.output.substr(bar.output.rfind("left")) == "left\r\n");  // (a terminal's newline)
+}
+
+TEST_CASE("an interrupted run ends the bar's line before it says so", "[cli][batch][progress][safe-writes]") {
+    fs::path dir = fresh_dir("progress-interrupted");
+    make_plates(dir, 1, 6, 160, 120);
+    const std::string first_output = frame_name(dir, "out", 1);
+    // Killed once its first frame is written, while the bar is on the terminal script(1) gives it.
+    const std::string run = std::string(DARKROOM_EXE) + " develop " + (dir / "plate.#.exr").string() + " -o " +
+                            (dir / "out.#.exr").string() + kLook + " --threads 1 --frames-at-once 1 & " +
+                            "while [ ! -e " + first_output + " ]; do sleep 0.02; done; kill -TERM $!; wait $!";
+    Result r = shell("script -qec '" + run + "' /dev/null");
+    INFO(r.output);
+    const size_t interrupted = r.output.find("darkroom: interrupted by signal 15");
+    REQUIRE(interrupted != std::string::npos);
+    CHECK_THAT(r.output.substr(0, interrupted), Catch::Contains("frames") && Catch::EndsWith("left\r\n"));
 }
 
 TEST_CASE("a sequence that cannot be made is refused before any work", "[cli][batch][bad-input]") {

@@ -1,6 +1,8 @@
 // The darkroom program run as a user runs it: exit codes, messages, outputs.
 #include <catch2/catch.hpp>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "cli_support.h"
 
@@ -50,7 +52,7 @@ TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[c
              {"develop " + in + " -o " + out + " --paper none", "--output print needs a paper, and --paper is none"},
              {"develop " + in + " -o /nonexistent-dir/x.exr", "cannot write"},
              {"develop " + in + " -o " + out + " --film " + (kTmp / "missing.json").string(), "cannot open"},
-             {"frobnicate", "subcommand is required"},
+             {"frobnicate", "'frobnicate' is not a command"},
              {"develop " + in + " -o " + (kTmp / "d.png").string() + " --output density", "float"},
              {"develop " + in + " -o " + (kTmp / "d.png").string() + " --output density -d float", "not '"},
              {"develop " + in + " -o " + out + " --output density -d uint16", "-d uint16"},
@@ -61,6 +63,82 @@ TEST_CASE("bad input gets a message naming the problem and a non-zero exit", "[c
         CHECK_THAT(r.output, Catch::Contains(c.message));
     }
     CHECK_FALSE(fs::exists(out));
+}
+
+TEST_CASE("an unknown command or stock suggests the known names a typo away, and only those", "[cli][bad-input]") {
+    const std::string in = make_input("suggest-in.exr", 16, 12), out = (kTmp / "suggest-never.exr").string();
+    struct Case {
+        std::string args, message;
+        int exit_code;
+    };
+    for (const Case& c : std::vector<Case>{
+             {"devlop " + in + " -o " + out, "'devlop' is not a command of darkroom: did you mean 'develop'?", 109},
+             {"stock", "did you mean 'stocks'?", 109},
+             {"grain analyse " + in, "'analyse' is not a command of darkroom grain: did you mean 'analyze'?", 109},
+             {"develop " + in + " -o " + out + " --film kodak-vison3-250d", "did you mean 'kodak-vision3-250d'?", 1},
+             {"develop " + in + " -o " + out + " --paper Kodak-2383", "did you mean 'kodak-2383'?", 1},
+         }) {
+        Result r = darkroom(c.args);
+        INFO(c.args << "\n" << r.output);
+        CHECK(r.exit_code == c.exit_code);
+        CHECK_THAT(r.output, Catch::Contains("darkroom: error: ") && Catch::Contains(c.message));
+    }
+    for (const std::string& args : {std::string("frobnicate"), "develop " + in + " -o " + out + " --film agfa"}) {
+        Result r = darkroom(args);
+        INFO(args << "\n" << r.output);
+        CHECK(r.exit_code != 0);
+        CHECK_THAT(r.output, !Catch::Contains("did you mean"));
+    }
+    CHECK_FALSE(fs::exists(out));
+}
+
+TEST_CASE("develop in.exr out.exr, oiiotool's habit, is told to name the output with -o", "[cli][bad-input]") {
+    const std::string in = make_input("habit-in.exr", 16, 12), out = (kTmp / "habit-out.exr").string();
+    fs::remove(out);
+    Result r = darkroom("develop " + in + " " + out + " --no-grain");
+    INFO(r.output);
+    CHECK(r.exit_code == 109);
+    CHECK_THAT(r.output, Catch::Contains("'" + out + "' is a second input: name the output with -o, as in 'darkroom "
+                                         "develop " + in + " -o " + out + "'"));
+    CHECK_FALSE(fs::exists(out));
+    // With -o given, a second name is only an argument too many.
+    r = darkroom("develop " + in + " " + out + " -o " + out);
+    CHECK(r.exit_code == 109);
+    CHECK_THAT(r.output, !Catch::Contains("name the output with -o"));
+    CHECK_FALSE(fs::exists(out));
+}
+
+TEST_CASE("every exit status is listed in --help and in the README, and the listed ones are given", "[cli]") {
+    Result help = darkroom("--help");
+    REQUIRE(help.exit_code == 0);
+    const size_t footer = help.output.find("Exit status:\n");
+    REQUIRE(footer != std::string::npos);
+    // "  104    a flag's value that does not convert (...)", one a line.
+    std::map<std::string, std::string> listed;
+    std::istringstream lines(help.output.substr(footer + 13));
+    for (std::string line; std::getline(lines, line) && line.rfind("  ", 0) == 0;) {
+        const size_t status_end = line.find(' ', 2), meaning = line.find_first_not_of(' ', status_end);
+        listed[line.substr(2, status_end - 2)] = line.substr(meaning);
+    }
+    REQUIRE(listed.count("0") == 1);
+    REQUIRE(listed.count("128+N") == 1);  // (the kill tests check the status itself)
+    const std::string readme = file_bytes(fs::path(DARKROOM_SOURCE_DIR) / "README.md");
+    for (const auto& [status, meaning] : listed) {
+        INFO(status << " " << meaning);
+        CHECK_THAT(readme, Catch::Contains("| " + status + " | " + meaning + " |"));
+    }
+
+    // Each status a command line gives is listed.
+    const std::string in = make_input("status-in.exr", 16, 12), develop = "develop " + in + " -o " +
+                                                                          (kTmp / "status-out.exr").string();
+    for (const std::string& args :
+         {develop, develop + " --film no-such-film", develop + " --exposure lots", develop + " --quality bogus",
+          std::string(""), develop + " --tocolorspace ACEScg --ociodisplay sRGB Standard", develop + " --bogus",
+          develop + " --window 1,2,3"}) {
+        const int status = darkroom(args).exit_code;
+        INFO(args << " -> " << status);
+        CHECK(listed.count(std::to_string(status)) == 1);
+    }
 }
 
 // OpenImageIO writes an unknown compression name as zip without a word: the names of the

@@ -183,6 +183,38 @@ TEST_CASE("verbose output names the active config and why, and the config used i
     CHECK(max_difference(by_flag, embedded) > 0.01);  // the BT.709 and sRGB curves differ
 }
 
+TEST_CASE("a built-in config name OCIO 2.1 cannot load (OCIO=ocio://default) gives the embedded config, with a warning",
+          "[cli][colour]") {
+    const std::string in = make_input("colour-builtin-in.exr", 16, 12);
+    const std::string develop = "develop " + in + " --iscolorspace srgb --ociodisplay sRGB Standard -o ";
+    std::vector<float> embedded;
+    {
+        ScopedOcioVariable unset(std::nullopt);
+        Result r = darkroom(develop + tmp("colour-builtin-unset.exr"));
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+        CHECK_THAT(r.output, !Catch::Contains("warning"));
+        embedded = pixels(tmp("colour-builtin-unset.exr"));
+    }
+    auto check_falls_back = [&](const std::string& out, const std::string& flags, const std::string& origin) {
+        Result r = darkroom(develop + tmp(out) + flags);
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+        CHECK_THAT(r.output, Catch::Contains("darkroom: warning: " + origin + " names 'ocio://default'") &&
+                                 Catch::Contains("using the embedded Darkroom config"));
+        CHECK(std::count(r.output.begin(), r.output.end(), '\n') == 1);  // one line
+        CHECK(pixels(tmp(out)) == embedded);
+    };
+    {
+        ScopedOcioVariable set(std::string("ocio://default"));
+        check_falls_back("colour-builtin-variable.exr", "", "$OCIO");
+    }
+    {
+        ScopedOcioVariable unset(std::nullopt);
+        check_falls_back("colour-builtin-flag.exr", " --colorconfig ocio://default", "--colorconfig");
+    }
+}
+
 TEST_CASE("colour conversions keep a window equal to that window of the full render", "[cli][colour][determinism]") {
     const std::string in = make_input("colour-window-in.exr", 80, 60), full = tmp("colour-window-full.exr"),
                       part = tmp("colour-window-part.exr");

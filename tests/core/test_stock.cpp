@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include "core/did_you_mean.h"
 #include "core/stock.h"
 #include "test_support.h"
 
@@ -67,6 +68,28 @@ TEST_CASE("unknown stock ids list the built-in ones", "[stock]") {
     CHECK_THROWS_WITH(find_stock("no-such-film"), Catch::Contains("unknown stock 'no-such-film'") &&
                                                       Catch::Contains("built-in:"));
     CHECK_THROWS_WITH(find_stock("/nonexistent/stock.json"), Catch::Contains("cannot open"));
+}
+
+TEST_CASE("an unknown stock id a typo away from built-in ones suggests them, and only them", "[stock]") {
+    CHECK_THROWS_WITH(find_stock("kodak-vison3-250d"), Catch::Contains("did you mean 'kodak-vision3-250d'?"));
+    CHECK_THROWS_WITH(find_stock("Kodak-2383"), Catch::Contains("did you mean 'kodak-2383'?"));
+    CHECK_THROWS_WITH(find_stock("kodak-t-max-200"),
+                      Catch::Contains("did you mean 'kodak-t-max-100' or 'kodak-t-max-400'?"));
+    CHECK_THROWS_WITH(find_stock("no-such-film"), !Catch::Contains("did you mean"));
+    CHECK_THROWS_WITH(find_stock("kodak"), !Catch::Contains("did you mean"));
+}
+
+TEST_CASE("edit distance counts insertions, deletions, substitutions and swaps, case aside", "[stock]") {
+    CHECK(edit_distance("develop", "develop") == 0);
+    CHECK(edit_distance("devlop", "develop") == 1);
+    CHECK(edit_distance("developp", "develop") == 1);
+    CHECK(edit_distance("devalop", "develop") == 1);
+    CHECK(edit_distance("dveelop", "develop") == 1);
+    CHECK(edit_distance("DEVELOP", "develop") == 0);
+    CHECK(edit_distance("", "abc") == 3);
+    CHECK(edit_distance("kitten", "sitting") == 3);
+    CHECK(close_names("stock", {"stocks", "demo", "plot"}) == std::vector<std::string>{"stocks"});
+    CHECK(close_names("xyz", {"stocks", "demo", "plot"}).empty());
 }
 
 TEST_CASE("built-in presets parse and cite their sources", "[stock]") {

@@ -469,6 +469,33 @@ TEST_CASE("a missing or invalid config is an error naming the file, never the em
     }
 }
 
+TEST_CASE("a built-in config name this OCIO cannot load gives the embedded config, with a warning",
+          "[ocio][config]") {
+    if (OCIO::GetVersionHex() >= 0x02020000) {
+        WARN("OCIO " << OCIO::GetVersion() << " loads its built-in configs: skipped");
+        return;
+    }
+    SECTION("by $OCIO, as hosts set it") {
+        ScopedOcioVariable set(std::string("ocio://default"));
+        const ActiveConfig active = resolve_config();
+        CHECK(active.source == ConfigSource::embedded);
+        CHECK(active.config == embedded_config());
+        CHECK(active.warning.find("$OCIO names 'ocio://default'") != std::string::npos);
+        CHECK(active.describe().find("ocio://default") != std::string::npos);
+    }
+    SECTION("given explicitly") {
+        ScopedOcioVariable unset(std::nullopt);
+        const ActiveConfig active = resolve_config("ocio://cg-config-latest", "the OFX host");
+        CHECK(active.source == ConfigSource::embedded);
+        CHECK(active.warning.find("the OFX host names 'ocio://cg-config-latest'") != std::string::npos);
+    }
+    SECTION("a file is never replaced, whatever its name holds") {
+        ScopedOcioVariable unset(std::nullopt);
+        CHECK(resolve_config().warning.empty());
+        CHECK_THROWS_AS(resolve_config("shots/ocio://default"), ConfigError);
+    }
+}
+
 TEST_CASE("a config without displays is an error naming the config", "[ocio][config]") {
     TempDir dir;
     const std::string path = dir.file("no-displays.ocio");

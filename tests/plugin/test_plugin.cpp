@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "look/parameters.h"
+#include "tests/ocio/ocio_variable.h"
 #include "tests/plugin/test_host.h"
 
 namespace fs = std::filesystem;
@@ -509,6 +510,35 @@ TEST_CASE("settings that change nothing are reported as identity", "[plugin]") {
         inst->set_double3("grainAmount", 0, 0, 0);
         CHECK(inst->is_identity(1) == kOfxStatOK);
     }
+}
+
+TEST_CASE("OCIO=ocio://default, as hosts set it for OCIO 2.2, renders with the embedded config", "[plugin]") {
+    const int w = 32, h = 24;
+    std::string message;
+    auto render = [&](const std::string& config_parameter) {
+        auto inst = make_instance();
+        set_common_look(*inst);
+        inst->set_string("inputColorspace", "sRGB - Texture");
+        inst->set_string("outputColorspace", "ACEScg");
+        inst->set_string("ocioConfig", config_parameter);
+        inst->set_source(Frame::from_top_down(scene(w, h, 3), w, h, 3), kOfxImageOpaque);
+        RenderResult r = inst->render(1, {0, 0, w, h});
+        message = inst->effect().persistent_message;
+        INFO(message);
+        REQUIRE(r.status == kOfxStatOK);
+        return r.output;
+    };
+    const Frame embedded = render("");
+    CHECK(message.empty());
+    {
+        ScopedOcioVariable set(std::string("ocio://default"));
+        CHECK(same_bits(render(""), embedded));
+        // The node says which config it renders with, in the host's terms: no program flags.
+        CHECK_THAT(message, Catch::Contains("ocio://default") && Catch::Contains("embedded"));
+        CHECK(message.find("--") == std::string::npos);
+    }
+    CHECK(same_bits(render("ocio://default"), embedded));
+    CHECK_THAT(message, Catch::Contains("OCIO config") && Catch::Contains("embedded"));
 }
 
 TEST_CASE("a reference render that will take hours says so on the node before it starts", "[plugin]") {
