@@ -389,8 +389,9 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
                 DevelopSettings d = s;
                 off.turn_off(d);
                 const Plan off_plan = Plan::compile(film, &paper, d, frame, o.threads);
-                d.skip_noop_stages = false;
-                const Plan neutral_plan = Plan::compile(film, &paper, d, frame, o.threads);
+                PlanStructure all_stages;
+                all_stages.skip_noop_stages = false;
+                const Plan neutral_plan = Plan::compile(film, &paper, d, frame, o.threads, all_stages);
                 const std::vector<Timed> t =
                     time_in_turn({{plan, on_out}, {off_plan, out}, {neutral_plan, out_neutral}}, scene, o.runs, o.threads);
                 const Timed &on = t[0], &timed = t[1], &neutral = t[2];
@@ -399,9 +400,10 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
                                       on.seconds - timed.seconds, neutral.seconds, out.pixels == out_neutral.pixels});
             }
             say("fast stage after stage");
-            DevelopSettings staged = s;
+            PlanStructure staged;
             staged.one_pass = false;
-            Timed timed = time_frame(Plan::compile(film, &paper, staged, frame, o.threads), scene, out_neutral, o.runs, o.threads);
+            Timed timed =
+                time_frame(Plan::compile(film, &paper, s, frame, o.threads, staged), scene, out_neutral, o.runs, o.threads);
             r.fast_run_variants.push_back({"stage after stage", timed.seconds, fast_pixels.pixels == out_neutral.pixels});
             const simd::Isa widest = simd::isa();
             for (simd::Isa isa : {simd::Isa::avx2, simd::Isa::baseline}) {

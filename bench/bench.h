@@ -100,14 +100,14 @@ struct DisabledStage {
     double stage_seconds_when_on = 0;  // that stage's time in that full run (grain: its share of develop + grain)
     double saved_seconds = 0;          // that full run less this one
     // The same settings with the stage kept in the plan at its neutral value
-    // (DevelopSettings::skip_noop_stages = false): what leaving it out saves, and whether
+    // (PlanStructure::skip_noop_stages = false): what leaving it out saves, and whether
     // the two give the same pixels (they must).
     double neutral_seconds = 0;
     bool identical_pixels = false;
 };
 
 // The fast tier's frame run another way: stage after stage over whole planes
-// (DevelopSettings::one_pass = false), or at narrower vectors (core/simd.h): what one pass and
+// (PlanStructure::one_pass = false), or at narrower vectors (core/simd.h): what one pass and
 // wide vectors save; the pixels must be the fast tier's own.
 struct RunVariant {
     std::string way;

@@ -9,10 +9,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include <glm/glm.hpp>
-
 #include "core/develop_rows.h"
+#include "core/material_stages.h"
 #include "core/parallel.h"
+#include "core/print_grain_fold.h"
 #include "core/stages/filters.h"
 #include "core/spectral.h"
 
@@ -63,7 +63,8 @@ GrainSpec layer_grain(const GrainSpec& stock, const DevelopSettings& s, size_t c
 constexpr double kMinPixelPitchUm = 0.1;
 
 MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width_px, const DevelopSettings& s,
-                            uint32_t stream_base, const char* role, std::vector<std::string>& skipped, int threads) {
+                            const PlanStructure& structure, uint32_t stream_base, const char* role,
+                            std::vector<std::string>& skipped, int threads) {
     const QualityTier& tier = quality_tier(s.quality);
     MaterialStages m;
     m.stock = stock;
@@ -84,7 +85,7 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         HalationKernel halation = design_halation(layer.halation.strength * s.halation, layer.halation.radius_um,
                                                   m.pixel_pitch_um, tier.halation_decimation);
         m.halation.push_back(std::nullopt);
-        if (!halation.is_noop() || !s.skip_noop_stages)
+        if (!halation.is_noop() || !structure.skip_noop_stages)
             m.halation.back() = halation;
         else if (layer.halation.strength > 0)
             skipped.push_back("halation (" + where + "): " + (s.halation == 0 ? "turned off" : "below 1e-5"));
@@ -111,14 +112,14 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         // (The texture output takes its exposure fluctuation from the filtered-noise field.)
         if (tier.grain == GrainMethod::boolean_model && s.output != OutputMode::texture) {
             BooleanGrain boolean = design_boolean_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um, key);
-            if (!boolean.is_noop() || !s.skip_noop_stages) {
+            if (!boolean.is_noop() || !structure.skip_noop_stages) {
                 m.boolean_grain.back() = boolean;
                 continue;
             }
         }
         GrainModel g = design_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um, key,
                                     tier.grain == GrainMethod::hashed_noise);
-        if (!s.skip_noop_stages)
+        if (!structure.skip_noop_stages)
             m.grain.back() = g;
         else if (!s.grain)
             skipped.push_back("grain (" + where + "): grain turned off");
@@ -282,14 +283,6 @@ void develop_paper(const Stock& paper, const double* paper_exposure_lux_s, doubl
             paper.layers[j].density_curve(std::log10(std::clamp(paper_exposure_lux_s[j], 1e-30, kMaxInput)));
 }
 
-// The paper's layer densities printed from the negative's (colour on colour): the enlarger's
-// exposure developed through the paper's curves.
-void print_densities(const PrintExposure& enlarger, const Stock& paper, const double* negative_density,
-                     double* paper_density) {
-    double h[3];
-    enlarger.expose(negative_density, h);
-    develop_paper(paper, h, paper_density);
-}
 
 // The one print table of a colour negative on colour paper: the negative's densities -> the
 // print's linear Rec.709, the high tier's print at each node, held as cube roots (tables.h).
@@ -345,304 +338,14 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
     return table;
 }
 
-// A film layer's grain as the print table reads it: unit white noise through the grain's 2D
-// kernel G (its 1D kernel's outer product) and the paper's scatter K as applied, K * G, on lags
-// -radius ... radius in x and y.
-struct ScatteredGrain {
-    int radius = 0;
-    std::vector<double> taps;  // row-major
-    // sum (K * G)_a (K * G)_b over their common lags: the covariance of two such fields of one
-    // white noise (with itself: the field's variance).
-    double dot(const ScatteredGrain& o) const {
-        const int r = std::min(radius, o.radius);
-        double sum = 0;
-        for (int y = -r; y <= r; ++y)
-            for (int x = -r; x <= r; ++x) sum += at(x, y) * o.at(x, y);
-        return sum;
-    }
-    double at(int x, int y) const { return taps[size_t(y + radius) * (2 * radius + 1) + x + radius]; }
-};
-
-ScatteredGrain scattered_grain(const GrainModel& grain, const ScatterKernel& scatter) {
-    const int rg = grain.radius, rs = scatter.radius, side_s = 2 * rs + 1;
-    const std::vector<double> taps = scatter.applied_taps();
-    ScatteredGrain k{rg + rs, {}};
-    for (int y = -k.radius; y <= k.radius; ++y)
-        for (int x = -k.radius; x <= k.radius; ++x) {
-            double v = 0;
-            for (int sy = -rs; sy <= rs; ++sy)
-                for (int sx = -rs; sx <= rs; ++sx) {
-                    const int gy = y - sy, gx = x - sx;
-                    if (std::abs(gy) > rg || std::abs(gx) > rg) continue;
-                    v += taps[size_t(sy + rs) * side_s + sx + rs] * grain.kernel[gy + rg] * grain.kernel[gx + rg];
-                }
-            k.taps.push_back(v);
-        }
-    return k;
-}
-
-// Gauss-Hermite quadrature for the standard normal: E[f(Z)] ~ sum_k weight_k f(node_k), exact
-// for polynomials to degree 2n - 1 (Golub & Welsch 1969: the nodes are the eigenvalues of the
-// probabilists' Hermite recurrence's Jacobi matrix, the weights the squared first components
-// of its unit eigenvectors).
-struct NormalQuadrature {
-    explicit NormalQuadrature(int n) {
-        std::vector<double> jacobi(size_t(n) * n, 0.0), values, vectors;
-        for (int k = 1; k < n; ++k) jacobi[size_t(k - 1) * n + k] = jacobi[size_t(k) * n + k - 1] = std::sqrt(double(k));
-        symmetric_eigen(jacobi, n, values, vectors);
-        for (int k = 0; k < n; ++k) {
-            node.push_back(values[k]);
-            weight.push_back(vectors[k] * vectors[k]);
-        }
-    }
-    std::vector<double> node, weight;
-};
-
-// The x >= 0 that minimises |A x - b| for a 3x3 A, with x_i held at 0 where !free[i]: exact
-// minimisation along one coordinate at a time, projected onto x_i >= 0 (it converges for
-// this convex problem; the sweeps are far more than three unknowns need).
-std::array<double, 3> nonnegative_least_squares(const double (&a)[3][3], const double (&b)[3], const bool (&free)[3]) {
-    std::array<double, 3> x{};
-    for (int sweep = 0; sweep < 300; ++sweep)
-        for (int i = 0; i < 3; ++i) {
-            double column_norm = 0, gradient = 0;  // of |A x - b|^2 / 2 along x_i
-            for (int j = 0; j < 3; ++j) {
-                gradient += a[j][i] * (a[j][0] * x[0] + a[j][1] * x[1] + a[j][2] * x[2] - b[j]);
-                column_norm += a[j][i] * a[j][i];
-            }
-            if (free[i] && column_norm > 0) x[i] = std::max(0.0, x[i] - gradient / column_norm);
-        }
-    return x;
-}
-
-// The x in [lo, hi] where an increasing f reaches `aim` (within `tolerance`), and f there,
-// given f_lo = f(lo); hi and f(hi) where f(hi) < aim. Regula falsi with the Illinois step
-// (Dowell & Jarratt 1971), which keeps the bracket and converges superlinearly: a few
-// evaluations of f.
-template <typename F>
-std::pair<double, double> solve_increasing(const F& f, double lo, double f_lo, double hi, double aim, double tolerance) {
-    double below = f_lo - aim, above = f(hi) - aim;
-    if (above <= 0) return {hi, above + aim};
-    if (below >= 0) return {lo, below + aim};
-    int kept = 0;  // the end kept by the last step: -1 lo, +1 hi
-    for (int step = 0; step < 60; ++step) {
-        const double x = hi - above * (hi - lo) / (above - below), v = f(x) - aim;
-        if (std::abs(v) <= tolerance || !(x > lo && x < hi)) return {x, v + aim};
-        if (v > 0) {
-            hi = x, above = v;
-            if (kept == +1) below /= 2;
-            kept = +1;
-        } else {
-            lo = x, below = v;
-            if (kept == -1) above /= 2;
-            kept = -1;
-        }
-    }
-    return {hi, above + aim};
-}
-
-// Printing through one table leaves no place for the paper's grain, so it is folded into the
-// film's: each film layer's grain amplitude is raised so that each channel of the viewed print
-// (log10 of its linear Rec.709, as a plate's grain is measured) has the grain variance of both,
-// level by level along the grey scale. The extra variances are solved together (non-negative
-// least squares over the three channels, through the print itself where it bends over the
-// grain), and the layers' grains are correlated (a Cholesky mix of their white noises) as the
-// print's channels need. The derivation: docs/model/print-grain-fold.md.
-constexpr double kMaxFoldedGrainD = 0.5;
-void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
-                      double exposure_scale, int curve_table_bits, int threads) {
-    // (The tiers that print through one table tabulate curves; a colour film has three layers.)
-    if (film.curve_tables.empty() || film.grain.size() != 3) return;
-    bool grained[3], any = false;
-    ScatteredGrain spread[3];
-    double gain[3] = {0, 0, 0};  // the spread at the table's input per unit amplitude: kappa_i sqrt(rho_i)
-    for (size_t i = 0; i < 3; ++i) {
-        if (film.grain[i]) {
-            spread[i] = scattered_grain(*film.grain[i], paper.scatter[i]);
-            gain[i] = std::sqrt(spread[i].dot(spread[i]));
-        }
-        grained[i] = gain[i] > 0;
-        any = any || (grained[i] && paper.grain[i]);
-    }
-    if (!any) return;
-    // The grey scale's negative densities every quarter stop (beyond the film's curves, where
-    // a step changes no density, once).
-    std::vector<std::array<double, 3>> levels;
-    std::vector<double> level_stops;
-    for (double stops = -16; stops <= 16; stops += 0.25) {
-        std::array<double, 3> d;
-        for (size_t l = 0; l < 3; ++l) {
-            const auto& w = film.rgb_weights[l];
-            const double h = 0.18 * std::exp2(stops) * exposure_scale * (w[0] + w[1] + w[2]);
-            d[l] = film.stock.layers[l].density_curve(std::log10(std::max(h, 1e-30)));
-        }
-        if (levels.empty() || d != levels.back()) levels.push_back(d), level_stops.push_back(stops);
-    }
-    const NormalQuadrature normal(8);
-    const PrintView view(paper.stock);
-    auto log_view = [&](const double* paper_density, double* out) {
-        double rgb[3];
-        view.rgb(paper_density, rgb);
-        for (int c = 0; c < 3; ++c) out[c] = std::log10(std::max(rgb[c], 1e-30));
-    };
-    auto log_print = [&](const double* negative, double* out) {
-        double dp[3];
-        print_densities(enlarger, paper.stock, negative, dp);
-        log_view(dp, out);
-    };
-    // Grey: the film's mid-grey exposure, which the printer lights print at the paper's aim (with
-    // the input in lux seconds the scale's 0 stops is 0.18 lux s, not grey).
-    const double grey_stops = std::log2(mid_grey_exposure_lux_s(film.stock.iso_speed) / (0.18 * exposure_scale));
-    const size_t grey = size_t(std::min_element(level_stops.begin(), level_stops.end(), [&](double a, double b) {
-                                   return std::abs(a - grey_stops) < std::abs(b - grey_stops);
-                               }) - level_stops.begin());
-    // Each level's equations (3), and T (4) at grey (glm: column-major, [j][i] is T_ij; the
-    // identity where M is singular there).
-    struct Level {
-        double a[3][3], b[3], m[3][3], film_variance[3];
-    };
-    std::vector<Level> equations(levels.size());
-    glm::dmat3 at_grey(1.0);
-    parallel_for(0, int(levels.size()), threads, [&](int begin, int end) {
-        for (int level = begin; level < end; ++level) {
-            const double* d = levels[size_t(level)].data();
-            Level& e = equations[size_t(level)];
-            double dp[3], seen[3], v[3][3];  // V_cj
-            constexpr double kStep = 0.01;
-            print_densities(enlarger, paper.stock, d, dp);
-            log_view(dp, seen);
-            for (int k = 0; k < 3; ++k) {
-                double dp_up[3] = {dp[0], dp[1], dp[2]}, d_up[3] = {d[0], d[1], d[2]}, up[3];
-                dp_up[k] += kStep, d_up[k] += kStep;
-                log_view(dp_up, up);
-                for (int c = 0; c < 3; ++c) v[c][k] = (up[c] - seen[c]) / kStep;
-                log_print(d_up, up);
-                for (int c = 0; c < 3; ++c) e.m[c][k] = (up[c] - seen[c]) / kStep;
-            }
-            double paper_variance[3];
-            for (int j = 0; j < 3; ++j)
-                paper_variance[j] = paper.grain[j] ? std::pow(grain_sigma_at(*paper.grain[j], dp[j]), 2) : 0.0;
-            for (int i = 0; i < 3; ++i)
-                e.film_variance[i] = grained[i] ? std::pow(film.grain[i]->amplitude_at(d[i]) * gain[i], 2) : 0.0;
-            if (size_t(level) == grey) {
-                glm::dmat3 m_inverse(0.0), paper_covariance(0.0);
-                for (int c = 0; c < 3; ++c)
-                    for (int i = 0; i < 3; ++i) {
-                        m_inverse[i][c] = e.m[c][i];
-                        for (int j = 0; j < 3; ++j) paper_covariance[i][c] += v[c][j] * v[i][j] * paper_variance[j];
-                    }
-                m_inverse = glm::inverse(m_inverse);
-                glm::dmat3 t = m_inverse * paper_covariance * glm::transpose(m_inverse);
-                for (int i = 0; i < 3; ++i) t[i][i] += e.film_variance[i];
-                bool finite = true;
-                for (int i = 0; i < 3; ++i)
-                    for (int j = 0; j < 3; ++j) finite = finite && std::isfinite(t[j][i]);
-                if (finite) at_grey = t;
-            }
-            for (int c = 0; c < 3; ++c) {
-                e.b[c] = 0;
-                for (int j = 0; j < 3; ++j) e.b[c] += v[c][j] * v[c][j] * paper_variance[j];
-                for (int i = 0; i < 3; ++i) e.a[c][i] = e.m[c][i] * e.m[c][i];
-                if (!grained[c] || e.b[c] == 0) continue;
-                // Var v_c(D + s Z e_c), the other layers' densities held.
-                auto print_variance = [&](double s) {
-                    double mean = 0, square = 0;
-                    for (size_t k = 0; k < normal.node.size(); ++k) {
-                        double dk[3] = {d[0], d[1], d[2]}, vk[3];
-                        dk[c] += s * normal.node[k];
-                        log_print(dk, vk);
-                        mean += normal.weight[k] * vk[c];
-                        square += normal.weight[k] * vk[c] * vk[c];
-                    }
-                    return std::max(0.0, square - mean * mean);
-                };
-                const double s_film = std::sqrt(e.film_variance[c]);
-                const double film_variance = print_variance(s_film);
-                const double s_max = std::max(s_film, kMaxFoldedGrainD);
-                const auto [s, variance] = solve_increasing(print_variance, s_film, film_variance, s_max,
-                                                           film_variance + e.b[c], 1e-3 * e.b[c]);
-                if (s > s_film) e.a[c][c] = (variance - film_variance) / (s * s - s_film * s_film);
-            }
-        }
-    });
-    // 4: T at grey, its correlation over the kernels' overlaps, factored.
-    std::vector<double> wanted(9, 0.0), kernels(9, 1.0);  // the layers' grains' correlations, their kernels' overlaps
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-            const size_t ij = size_t(i) * 3 + j;
-            if (i == j) wanted[ij] = 1.0;
-            if (i == j || !grained[i] || !grained[j] || !(at_grey[i][i] > 0 && at_grey[j][j] > 0)) continue;
-            kernels[ij] = spread[i].dot(spread[j]) / (gain[i] * gain[j]);
-            wanted[ij] = at_grey[j][i] / std::sqrt(at_grey[i][i] * at_grey[j][j]);
-        }
-    const std::vector<double> factor = white_noise_mixing(wanted, kernels, 3);  // L, row-major
-    double correlation[3][3];  // Q: the layers' grains' at the table's input
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-            correlation[i][j] = 0;
-            for (int k = 0; k < 3; ++k) correlation[i][j] += factor[size_t(i) * 3 + k] * factor[size_t(j) * 3 + k];
-            correlation[i][j] *= kernels[size_t(i) * 3 + j];
-        }
-    // 3 with the cross terms, each level on its own.
-    std::vector<std::array<double, 3>> extra(levels.size());  // e_i at each level
-    parallel_for(0, int(levels.size()), threads, [&](int begin, int end) {
-        for (int level = begin; level < end; ++level) {
-            const Level& e = equations[size_t(level)];
-            std::array<double, 3> t = nonnegative_least_squares(e.a, e.b, grained);
-            for (int iteration = 0; iteration < 30; ++iteration) {
-                double s[3], b[3];
-                for (int i = 0; i < 3; ++i) s[i] = std::sqrt(e.film_variance[i] + t[i]);
-                for (int c = 0; c < 3; ++c) {
-                    b[c] = e.b[c];
-                    for (int i = 0; i < 3; ++i)
-                        for (int j = 0; j < 3; ++j)
-                            if (i != j) b[c] -= e.m[c][i] * e.m[c][j] * s[i] * s[j] * correlation[i][j];
-                }
-                const std::array<double, 3> next = nonnegative_least_squares(e.a, b, grained);
-                if (next == t) break;  // (settled: every later sweep would repeat it)
-                t = next;
-            }
-            for (int i = 0; i < 3; ++i) extra[size_t(level)][size_t(i)] = grained[i] ? std::sqrt(t[i]) / gain[i] : 0.0;
-        }
-    });
-    for (size_t i = 0; i < 3; ++i) {
-        if (!grained[i]) continue;
-        std::vector<double> density_i, extra_i;
-        for (size_t level = 0; level < levels.size(); ++level)
-            density_i.push_back(levels[level][i]), extra_i.push_back(extra[level][i]);
-        GrainModel& film_grain = *film.grain[i];
-        if (factor[i * 3 + i] != 1.0)
-            for (size_t j = 0; j <= i; ++j)
-                if (factor[i * 3 + j] != 0.0)
-                    film_grain.mixed_noise.push_back({film.grain[j]->key, float(factor[i * 3 + j])});
-        const Curve extra_at = make_curve(std::move(density_i), std::move(extra_i), "paper grain on the film's densities");
-        film.curve_tables[i] = LogAxisTable(film.stock.layers[i].density_curve, curve_table_bits,
-                                            [film_grain, extra_at](double d) {
-                                                return std::hypot(film_grain.amplitude_at(d), extra_at(d));
-                                            });
-    }
-}
-
-// Printing through one table (QualityTier::print_table_nodes) runs no grain or halation on
-// the paper (nor its tabulated curves, which the table composes): its grain is in the film's
-// where the film layer has grain (fold_paper_grain), and its MTF is applied to the negative's
-// densities (Plan::print).
-void leave_out_paper_grain(MaterialStages& paper, const MaterialStages& film, std::vector<std::string>& skipped) {
-    for (size_t i = 0; i < paper.stock.layers.size(); ++i) {
-        const std::string where = "paper layer " + paper.stock.layers[i].name;
-        if (paper.grain[i] || paper.boolean_grain[i])
-            skipped.push_back("grain (" + where + "): " +
-                              (film.grain[i] ? "folded into the film layer's" : "left out (the film layer has none)") +
-                              ", the print being one table");
-        if (paper.halation[i]) skipped.push_back("halation (" + where + "): left out, the print being one table");
-        paper.grain[i].reset();
-        paper.boolean_grain[i].reset();
-        paper.halation[i].reset();
-    }
-    paper.curve_tables.clear();
-}
-
 }  // namespace
+
+void print_densities(const PrintExposure& enlarger, const Stock& paper, const double* negative_density,
+                     double* paper_density) {
+    double h[3];
+    enlarger.expose(negative_density, h);
+    develop_paper(paper, h, paper_density);
+}
 
 int MaterialStages::halo_px() const {
     int r = 0;
@@ -674,7 +377,7 @@ Window image_window(const FrameGeometry& frame) {
 }  // namespace
 
 Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
-                   const FrameGeometry& frame, int threads) {
+                   const FrameGeometry& frame, int threads, const PlanStructure& structure) {
     const Window image = image_window(frame);
     if (film.kind != StockKind::negative) throw std::invalid_argument("'" + film.id + "' is not a film stock (it is a paper or print film)");
     if (paper && paper->kind == StockKind::negative)
@@ -685,6 +388,7 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
 
     Plan p;
     p.settings_ = settings;
+    p.structure_ = structure;
     p.frame_ = image;
     p.film_width_px_ = frame.film_width_px();
     p.monochrome_ = frame.monochrome;
@@ -695,8 +399,11 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     const double film_width_mm = settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm;
     const double print_width_mm =
         !printing ? 0.0 : settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm;
-    p.film_stages_ = build_stages(film, film_width_mm, p.film_width_px_, settings, 0, "film", p.skipped_, threads);
-    p.monochrome_input_ = frame.monochrome && settings.skip_noop_stages;
+    auto film_stages =
+        std::make_shared<MaterialStages>(build_stages(film, film_width_mm, p.film_width_px_, settings, structure, 0, "film",
+                                                      p.skipped_, threads));
+    auto paper_stages = std::make_shared<MaterialStages>();
+    p.monochrome_input_ = frame.monochrome && structure.skip_noop_stages;
     if (p.monochrome_input_ && settings.output != OutputMode::texture)
         p.skipped_.push_back("spectral sensitivity: the input is grey, so each layer's exposure is one scale of it");
     p.film_exposure_scale_ = settings.input_units == InputUnits::lux_seconds
@@ -704,20 +411,22 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
                                  : mid_grey_exposure_lux_s(film.iso_speed) / 0.18 * std::exp2(settings.exposure_ev);
 
     if (printing) {
-        p.paper_stages_ = build_stages(*paper, print_width_mm, p.film_width_px_, settings, 16, "paper", p.skipped_,
-                                       threads);
+        *paper_stages = build_stages(*paper, print_width_mm, p.film_width_px_, settings, structure, 16, "paper", p.skipped_,
+                                     threads);
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev});
         if (one_print_table) {
-            fold_paper_grain(p.film_stages_, p.paper_stages_, *p.print_, p.film_exposure_scale_,
-                             tier.curve_table_bits, threads);
-            leave_out_paper_grain(p.paper_stages_, p.film_stages_, p.skipped_);
+            fold_paper_grain(*film_stages, *paper_stages, *p.print_, p.film_exposure_scale_, tier.curve_table_bits,
+                             threads);
+            leave_out_paper_grain(*paper_stages, *film_stages, p.skipped_);
             p.print_table_ = shared_print_table(film, *paper, *p.print_, tier.print_table_nodes, threads);
         }
     } else if (paper) {
         p.skipped_.push_back("print: the output stops at the negative");
     }
+    p.film_stages_ = std::move(film_stages);
+    p.paper_stages_ = std::move(paper_stages);
     return p;
 }
 
@@ -732,7 +441,8 @@ Plan Plan::in_image(const FrameGeometry& image) const {
 Plan Plan::for_frame(int frame) const {
     Plan p = *this;
     p.settings_.frame = frame;
-    for (MaterialStages* m : {&p.film_stages_, &p.paper_stages_}) {
+    for (std::shared_ptr<const MaterialStages>* stages : {&p.film_stages_, &p.paper_stages_}) {
+        auto m = std::make_shared<MaterialStages>(**stages);
         for (auto& g : m->grain) {
             if (!g) continue;
             g->key.frame = frame;
@@ -740,20 +450,21 @@ Plan Plan::for_frame(int frame) const {
         }
         for (auto& g : m->boolean_grain)
             if (g) g->key.frame = frame;
+        *stages = std::move(m);
     }
     return p;
 }
 
-int Plan::halo_px() const { return film_stages_.halo_px() + (print_ ? paper_stages_.halo_px() : 0); }
+int Plan::halo_px() const { return film_stages_->halo_px() + (print_ ? paper_stages_->halo_px() : 0); }
 
 Window Plan::input_window(const Window& output) const { return output.grown(halo_px()).intersected(frame_); }
 
 std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& film_out, int threads,
                                       StageTimes* times) const {
-    const Window film_in = film_out.grown(film_stages_.halo_px()).intersected(frame_);
+    const Window film_in = film_out.grown(film_stages_->halo_px()).intersected(frame_);
     std::vector<Plane> exposure;
     StageTimer expose_timer(times, "expose");
-    const auto& weights = film_stages_.rgb_weights;
+    const auto& weights = film_stages_->rgb_weights;
     for (size_t l = 0; l < weights.size(); ++l) exposure.push_back(Plane::unset(film_in));
     const FilmExposure exposer(in, weights, monochrome_input_, film_exposure_scale_);
     parallel_for(film_in.y0, film_in.y1, threads, [&](int y0, int y1) {
@@ -764,7 +475,7 @@ std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& fi
         }
     });
     expose_timer.stop();
-    return develop_material(film_stages_, std::move(exposure), film_out, frame_, threads, times);
+    return develop_material(*film_stages_, std::move(exposure), film_out, frame_, threads, times);
 }
 
 std::vector<Plane> Plan::print(std::vector<Plane> negative, const Window& out, int threads,
@@ -772,11 +483,11 @@ std::vector<Plane> Plan::print(std::vector<Plane> negative, const Window& out, i
     if (print_table_) {
         // The paper's MTF on the negative's densities, layer i's kernel on film layer i (the
         // paper layer its dye mostly prints on: cyan dye modulates the red light).
-        if (paper_stages_.halo_px() > 0) {
+        if (paper_stages_->halo_px() > 0) {
             StageTimer timer(times, "scatter");
             for (size_t l = 0; l < negative.size(); ++l) {
                 Plane spread = Plane::unset(out);
-                scatter(negative[l], spread, paper_stages_.scatter[l], frame_, threads);
+                scatter(negative[l], spread, paper_stages_->scatter[l], frame_, threads);
                 negative[l] = std::move(spread);
             }
         }
@@ -794,9 +505,9 @@ std::vector<Plane> Plan::print(std::vector<Plane> negative, const Window& out, i
         });
     enlarger_timer.stop();
     std::vector<Plane> paper_density =
-        develop_material(paper_stages_, std::move(paper_exposure), out, frame_, threads, times);
+        develop_material(*paper_stages_, std::move(paper_exposure), out, frame_, threads, times);
     StageTimer view_timer(times, "view");
-    const PrintView view(paper_stages_.stock);
+    const PrintView view(paper_stages_->stock);
     return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view.rgb(d, rgb); });
 }
 
@@ -810,14 +521,16 @@ double developed_density(const MaterialStages& m, size_t layer, double exposure_
 
 }  // namespace
 
+const Stock& Plan::film() const { return film_stages_->stock; }
+
 std::array<double, 3> Plan::film_exposure_weights(size_t layer) const {
-    std::array<double, 3> w = film_stages_.rgb_weights[layer];
+    std::array<double, 3> w = film_stages_->rgb_weights[layer];
     for (double& v : w) v *= film_exposure_scale_;
     return w;
 }
 
 double Plan::film_density(size_t layer, double exposure_lux_s) const {
-    return developed_density(film_stages_, layer, exposure_lux_s);
+    return developed_density(*film_stages_, layer, exposure_lux_s);
 }
 
 void Plan::result_of_negative(const double* density, double* result) const {
@@ -834,15 +547,15 @@ void Plan::result_of_negative(const double* density, double* result) const {
         double h[3], paper_density[3];
         print_->expose(density, h);
         for (int j = 0; j < print_->paper_layers(); ++j)
-            paper_density[j] = developed_density(paper_stages_, size_t(j), std::clamp(h[j], 0.0, kMaxInput));
-        PrintView(paper_stages_.stock).rgb(paper_density, result);
+            paper_density[j] = developed_density(*paper_stages_, size_t(j), std::clamp(h[j], 0.0, kMaxInput));
+        PrintView(paper_stages_->stock).rgb(paper_density, result);
         return;
     }
-    const size_t layers = film_stages_.stock.layers.size();
+    const size_t layers = film_stages_->stock.layers.size();
     for (size_t c = 0; c < 3; ++c) {
         const size_t l = std::min(c, layers - 1);  // (a single layer serves all three)
         float v = float(density[l]);
-        convert_row(settings_.output, film_stages_.stock.layers[l].density_curve.y_min(), &v, 1);
+        convert_row(settings_.output, film_stages_->stock.layers[l].density_curve.y_min(), &v, 1);
         result[c] = v;
     }
 }
@@ -855,7 +568,7 @@ void Plan::result_of_negative(const double* density, double* result) const {
 // gamma the curve's slope at mid grey: a log-normal factor of mean exactly 1, so a flat
 // patch keeps its mean. Negative input values keep their sign.
 std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, int threads, StageTimes* times) const {
-    const MaterialStages& m = film_stages_;
+    const MaterialStages& m = *film_stages_;
     const Window film_in = out.grown(m.halo_px()).intersected(frame_);
     // Where the scene's mid grey falls (with the input in lux seconds, 0.18 is no grey: the film's
     // own mid grey at its ISO speed).
@@ -925,13 +638,13 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
     if (settings_.output == OutputMode::texture) {
         result = texture(in, out_window, threads, times);
     } else if (print_) {
-        const Window film_out = out_window.grown(paper_stages_.halo_px()).intersected(frame_);
+        const Window film_out = out_window.grown(paper_stages_->halo_px()).intersected(frame_);
         result = print(develop_film(in, film_out, threads, times), out_window, threads, times);
     } else {
         result = develop_film(in, out_window, threads, times);
         StageTimer timer(times, "convert");
         for (size_t l = 0; l < result.size(); ++l)
-            convert_row(settings_.output, film_stages_.stock.layers[l].density_curve.y_min(), result[l].pixels.data(),
+            convert_row(settings_.output, film_stages_->stock.layers[l].density_curve.y_min(), result[l].pixels.data(),
                         int(result[l].pixels.size()));
     }
 
@@ -947,7 +660,7 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
 
 double Plan::silver_grains_per_pixel() const {
     double grains = 0;
-    for (const MaterialStages* m : {&film_stages_, &paper_stages_})
+    for (const MaterialStages* m : {film_stages_.get(), paper_stages_.get()})
         for (const auto& g : m->boolean_grain)
             if (g) grains += g->grains_per_pixel_at(1.0);
     return grains;
@@ -1013,8 +726,8 @@ std::vector<std::string> Plan::describe() const {
         lines.push_back("expose: input pixels are exposures in lux-seconds");
     else
         lines.push_back("expose: scene-linear 0.18 -> " + fmt(0.18 * film_exposure_scale_) + " lux-s (ISO " +
-                        fmt(film_stages_.stock.iso_speed) + ", " + fmt(settings_.exposure_ev) + " EV)");
-    material(film_stages_, "film", settings_.output != OutputMode::texture);
+                        fmt(film_stages_->stock.iso_speed) + ", " + fmt(settings_.exposure_ev) + " EV)");
+    material(*film_stages_, "film", settings_.output != OutputMode::texture);
     switch (settings_.output) {
         case OutputMode::print: {
             const PrintExposure& e = *print_;
@@ -1029,7 +742,7 @@ std::vector<std::string> Plan::describe() const {
                             std::string(e.spectral() ? "spectral transmittance of the dyed negative"
                                                      : "neutral (silver) negative") +
                             "; lights through clear base " + lights + " lux-s");
-            material(paper_stages_, "paper", false);
+            material(*paper_stages_, "paper", false);
             lines.push_back("convert: print density -> linear Rec.709 under D65");
             break;
         }

@@ -82,18 +82,23 @@ struct DevelopSettings {
     std::array<double, 3> filtration_ymc{0.0, 0.0, 0.0};
     // How each stage is computed (core/quality.h).
     Quality quality = kDefaultQuality;
-    // Leave out the stages that cannot change the result (and say why in describe()).
-    // false runs them with their neutral values, so tests and the benchmark can show that
-    // leaving them out changes no pixel and saves their time.
-    bool skip_noop_stages = true;
-    // The fast tiers run every stage a row at a time, so that the frame's planes never meet in
-    // memory (develop_one_pass.cpp); false runs them stage after stage over whole planes, as
-    // the other tiers do: the same pixels, so that tests and the benchmark can compare them.
-    bool one_pass = true;
     uint64_t seed = 0;
     int frame = 0;
     double frame_width_mm = 0.0;  // width of the film frame; 0 = the film stock's format
     double print_width_mm = 0.0;  // width of the print; 0 = the paper stock's format
+};
+
+// How a plan is built where the pixels are the same either way, so that tests and the
+// benchmark can compare the structures: not a setting of the look.
+struct PlanStructure {
+    // Leave out the stages that cannot change the result (and say why in describe()).
+    // false runs them with their neutral values: leaving them out changes no pixel and saves
+    // their time.
+    bool skip_noop_stages = true;
+    // The fast tiers run every stage a row at a time, so that the frame's planes never meet in
+    // memory (develop_one_pass.cpp); false runs them stage after stage over whole planes, as
+    // the other tiers do: the same pixels.
+    bool one_pass = true;
 };
 
 // What the full frame is: its size in pixels. Render scale is already in the size (a
@@ -114,19 +119,9 @@ struct FrameGeometry {
     int film_width_px() const { return film_width > 0 ? film_width : width; }
 };
 
-// One material's run of the pipeline, precomputed.
-struct MaterialStages {
-    Stock stock;
-    double pixel_pitch_um = 0;
-    std::vector<std::array<double, 3>> rgb_weights;  // per layer: exposure per unit RGB
-    std::vector<std::optional<HalationKernel>> halation;  // per layer; none when skipped
-    std::vector<ScatterKernel> scatter;              // per layer; identity when skipped
-    std::vector<std::optional<GrainModel>> grain;    // per layer; none when skipped
-    // per layer, the reference tier's grain instead (then `grain` is none)
-    std::vector<std::optional<BooleanGrain>> boolean_grain;
-    std::vector<LogAxisTable> curve_tables;          // per layer, when the tier tabulates curves
-    int halo_px() const;
-};
+// One material's run of the pipeline, precomputed (core/material_stages.h: the plan's
+// internals, not part of the API).
+struct MaterialStages;
 
 // The fast tiers develop and add grain in one pass over the rows (one table lookup gives a
 // pixel's density and its grain amplitude), timed as one stage.
@@ -145,7 +140,7 @@ public:
     // threads (0: every core), the budget a host or --threads gives renders too; their values
     // do not depend on how many.
     static Plan compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
-                        const FrameGeometry& frame, int threads = 0);
+                        const FrameGeometry& frame, int threads = 0, const PlanStructure& structure = {});
 
     // The input window needed to render `output` (grown by the halo, clipped to the frame).
     Window input_window(const Window& output) const;
@@ -182,7 +177,7 @@ public:
     //   exposure_l = film_exposure_weights(l) . rgb   (lux-seconds; below 0 no light)
     //   density_l  = film_density(l, exposure_l)
     //   result     = result_of_negative(density)      (channels 0-2 of what run() writes)
-    const Stock& film() const { return film_stages_.stock; }
+    const Stock& film() const;
     std::array<double, 3> film_exposure_weights(size_t layer) const;
     double film_density(size_t layer, double exposure_lux_s) const;
     void result_of_negative(const double* density, double* result) const;
@@ -199,8 +194,11 @@ private:
                       StageTimes* times) const;
 
     DevelopSettings settings_;
+    PlanStructure structure_;
     Window frame_;
-    MaterialStages film_stages_, paper_stages_;
+    // Shared by the plan's copies for other frames and image windows (for_frame copies the
+    // film's and paper's to give their grain the frame).
+    std::shared_ptr<const MaterialStages> film_stages_, paper_stages_;
     std::optional<PrintExposure> print_;     // set when the output is a print
     // The fast tiers' print of a colour negative on colour paper: the negative's densities
     // -> the print's linear Rec.709 (QualityTier::print_table_nodes, stages/tables.h). Shared by

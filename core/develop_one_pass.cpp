@@ -15,6 +15,7 @@
 
 #include "core/develop.h"
 #include "core/develop_rows.h"
+#include "core/material_stages.h"
 #include "core/parallel.h"
 #include "core/stages/filters.h"
 
@@ -110,8 +111,8 @@ struct Rows {
 }  // namespace
 
 bool Plan::runs_in_one_pass() const {
-    if (!settings_.one_pass || settings_.output == OutputMode::texture) return false;
-    const MaterialStages& film = film_stages_;
+    if (!structure_.one_pass || settings_.output == OutputMode::texture) return false;
+    const MaterialStages& film = *film_stages_;
     if (film.curve_tables.empty() || !separable_scatter(film)) return false;  // (the tiers that tabulate curves)
     int decimation = 0;  // the film's halation on one coarse grid
     for (size_t l = 0; l < film.halation.size(); ++l) {
@@ -123,14 +124,14 @@ bool Plan::runs_in_one_pass() const {
     if (!print_) return true;
     // A print through the one table (the paper's grain and halation folded into the film's or
     // left out, its MTF on the negative's densities).
-    return print_table_ && separable_scatter(paper_stages_);
+    return print_table_ && separable_scatter(*paper_stages_);
 }
 
 void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
                         StageTimes* times) const {
-    const MaterialStages& film = film_stages_;
+    const MaterialStages& film = *film_stages_;
     const size_t layers = film.stock.layers.size();
-    const int paper_halo = print_ ? paper_stages_.halo_px() : 0;
+    const int paper_halo = print_ ? paper_stages_->halo_px() : 0;
     const Window film_window = out_window.grown(paper_halo).intersected(frame_);  // the film's densities
     const ScatterFilters film_scatter_filters(film);
     const int film_radius = film_scatter_filters.radius;
@@ -141,7 +142,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
     for (const auto& h : film.halation) halation_kernels.push_back(h ? &*h : nullptr);
     const bool halated = std::any_of(film.halation.begin(), film.halation.end(), [](const auto& h) { return bool(h); });
 
-    const ScatterFilters paper_scatter_filters(paper_stages_);  // (none when the output is no print)
+    const ScatterFilters paper_scatter_filters(*paper_stages_);  // (none when the output is no print)
     std::mutex times_mutex;
     const int bands = std::min(resolve_thread_count(threads), out_window.height());  // as parallel_for splits
     parallel_for(out_window.y0, out_window.y1, threads, [&](int band_begin, int band_end) {

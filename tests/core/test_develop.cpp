@@ -210,8 +210,9 @@ TEST_CASE("leaving out the stages that cannot change a colour print changes no p
         s.halation = 0;
         s.grain_amount = {0, 0, 0};
         Plan skipping = Plan::compile(film, &paper, s, {64, 48});
-        s.skip_noop_stages = false;
-        Plan running = Plan::compile(film, &paper, s, {64, 48});
+        PlanStructure all_stages;
+        all_stages.skip_noop_stages = false;
+        Plan running = Plan::compile(film, &paper, s, {64, 48}, 0, all_stages);
         auto has = [](const Plan& p, const std::string& what) {
             for (const std::string& line : p.describe())
                 if (line.find(what) != std::string::npos) return true;
@@ -268,9 +269,10 @@ TEST_CASE("grey and alpha input develops as its grey alone and passes its alpha"
         INFO("skip_noop_stages " << skip << ", output " << int(output));
         DevelopSettings s;
         s.frame_width_mm = 2.0;
-        s.skip_noop_stages = skip;
         s.output = output;
-        Plan plan = Plan::compile(film, &paper, s, {48, 32, true});
+        PlanStructure structure;
+        structure.skip_noop_stages = skip;
+        Plan plan = Plan::compile(film, &paper, s, {48, 32, true}, 0, structure);
         Image a(colour.window, 3), b(colour.window, 4);
         plan.run(grey.view(), a.view(), 1);
         plan.run(grey_alpha.view(), b.view(), 1);
@@ -331,14 +333,15 @@ TEST_CASE("the fast tiers' run a row at a time gives the pixels of the stage-by-
             grey.at(x, y)[0] = rgb.at(x, y)[1];
         }
     int one_pass_runs = 0, runs = 0;
-    auto compare = [&](const Stock& f, const Stock* p, DevelopSettings s, const Image& scene, int threads, Window w) {
+    auto compare = [&](const Stock& f, const Stock* p, DevelopSettings s, const Image& scene, int threads, Window w,
+                       PlanStructure structure = {}) {
         s.frame_width_mm = f.frame_width_mm * width / 4096;
         s.print_width_mm = p ? p->frame_width_mm * width / 4096 : 0.0;
         FrameGeometry frame{width, height};
         frame.monochrome = scene.channels == 1;
-        const Plan plan = Plan::compile(f, s.output == OutputMode::print ? p : nullptr, s, frame);
-        s.one_pass = false;
-        const Plan staged = Plan::compile(f, s.output == OutputMode::print ? p : nullptr, s, frame);
+        const Plan plan = Plan::compile(f, s.output == OutputMode::print ? p : nullptr, s, frame, 0, structure);
+        structure.one_pass = false;
+        const Plan staged = Plan::compile(f, s.output == OutputMode::print ? p : nullptr, s, frame, 0, structure);
         const std::vector<std::string> lines = plan.describe();
         one_pass_runs += std::count(lines.begin(), lines.end(), "run: every stage a row at a time, the frame's planes never stored");
         Image a(w, 4, -1.0f), b(w, 4, -1.0f);
@@ -372,9 +375,10 @@ TEST_CASE("the fast tiers' run a row at a time gives the pixels of the stage-by-
             off.grain = false;
             compare(film, &paper, off, rgb, 2, whole);
             off = s;
-            off.skip_noop_stages = false;
             off.grain_amount = {0, 0, 0};
-            compare(film, &paper, off, rgb, 2, whole);
+            PlanStructure all_stages;
+            all_stages.skip_noop_stages = false;
+            compare(film, &paper, off, rgb, 2, whole, all_stages);
         }
     // All but the one-layer film's prints (no tables to stream: they run stage by stage).
     CHECK(one_pass_runs == runs - 2);

@@ -1,0 +1,39 @@
+// The plan's internals: one material's run of the pipeline (the film's or the paper's),
+// precomputed, shared by the plan's two runs (develop.cpp, develop_one_pass.cpp) and the
+// print-grain fold (print_grain_fold.cpp). Not part of the API (core/develop.h).
+#pragma once
+
+#include <array>
+#include <optional>
+#include <vector>
+
+#include "core/stages/grain.h"
+#include "core/stages/grain_boolean.h"
+#include "core/stages/halation.h"
+#include "core/stages/print.h"
+#include "core/stages/scatter.h"
+#include "core/stages/tables.h"
+#include "core/stock.h"
+
+namespace darkroom {
+
+// One material's run of the pipeline, precomputed.
+struct MaterialStages {
+    Stock stock;
+    double pixel_pitch_um = 0;
+    std::vector<std::array<double, 3>> rgb_weights;  // per layer: exposure per unit RGB
+    std::vector<std::optional<HalationKernel>> halation;  // per layer; none when skipped
+    std::vector<ScatterKernel> scatter;              // per layer; identity when skipped
+    std::vector<std::optional<GrainModel>> grain;    // per layer; none when skipped
+    // per layer, the reference tier's grain instead (then `grain` is none)
+    std::vector<std::optional<BooleanGrain>> boolean_grain;
+    std::vector<LogAxisTable> curve_tables;          // per layer, when the tier tabulates curves
+    int halo_px() const;
+};
+
+// The paper's layer densities printed from the negative's (colour on colour): the enlarger's
+// exposure developed through the paper's curves.
+void print_densities(const PrintExposure& enlarger, const Stock& paper, const double* negative_density,
+                     double* paper_density);
+
+}  // namespace darkroom

@@ -1,0 +1,24 @@
+// The fast tiers' print grain: printing through one table leaves no place for the paper's
+// grain, so it is folded into the film's (docs/model/print-grain-fold.md), and the paper's
+// own grain and halation are left out of the plan. Part of the plan's internals.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/material_stages.h"
+
+namespace darkroom {
+
+// Raises each film layer's grain amplitude, and correlates the layers' grains, so that each
+// channel of the viewed print has the grain variance of film and paper both, along the grey
+// scale exposed at `exposure_scale` (lux-seconds per input unit). Only where the tier
+// tabulates curves (`curve_table_bits`) and the film has three layers.
+void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
+                      double exposure_scale, int curve_table_bits, int threads);
+
+// Leaves the paper's grain, halation and curve tables out of a plan that prints through one
+// table, saying so in `skipped`.
+void leave_out_paper_grain(MaterialStages& paper, const MaterialStages& film, std::vector<std::string>& skipped);
+
+}  // namespace darkroom
