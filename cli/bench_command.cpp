@@ -262,9 +262,9 @@ void print_report(const bench::BenchReport& r) {
                     "kernels compiled for a narrower instruction set)\n");
     }
     if (!r.target.evaluated)
-        std::printf("\ntarget (issue 8): not evaluated, the fast tier was not run\n");
+        std::printf("\ntarget: not evaluated, the fast tier was not run\n");
     else
-        std::printf("\ntarget (issue 8, fast tier, %dx%d, %d threads): %.2fx copy (<= %g), mean CIEDE2000 %.3g (<= %g), "
+        std::printf("\ntarget (fast tier, %dx%d, %d threads): %.2fx copy (<= %g), mean CIEDE2000 %.3g (<= %g), "
                     "grain %s tolerances: %s\n",
                     r.width, r.height, r.threads, r.target.copy_ratio, r.target.max_copy_ratio, r.target.mean_de2000,
                     r.target.max_mean_de2000, r.target.grain_within ? "within" : "outside",

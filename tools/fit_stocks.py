@@ -2,7 +2,7 @@
 """Fit Darkroom's colour stock presets (format version 2) to digitised data-sheet curves.
 
 Reads the reference data (never shipped with the project, see its README.md), fits per
-stock and layer the analytic forms of docs in /work/briefs/stock-format-v2.md:
+stock and layer the analytic forms of the stock format (docs/reference/stocks.md):
   - characteristic curve  -> CURVE "softplus" (2-4 knots)
   - spectral sensitivity  -> SPECTRAL "gaussians" (1-4 components), fitted in log10
   - dye spectral density  -> SPECTRAL "gaussians"
@@ -385,7 +385,7 @@ GRAIN_NOTE = ("estimate: per-layer RMS granularity derived from the sheet's sing
               "(green = sheet value, red x1.15, blue x1.4: blue layer grainiest); grain_size_um is not "
               "published (plausible dye-cloud size); density_exponent 0.5 (dye clouds) is an assumption")
 MTF_NOTE = ("estimate: MTF per layer shaped after the sheet's modulation-transfer graph as remembered, "
-            "not read from the PDF in this session; the adjacency-effect rise above 1.0 at low "
+            "not read from the PDF; the adjacency-effect rise above 1.0 at low "
             "frequencies is left out (response capped at 1.0)")
 VISION3_NOTE = ("note: the digitised Vision3 characteristic curves span -2.4..+2.4 log units (+-8 camera stops) "
                 "and all three speeds (50D, 250D, 500T) leave base+fog at the same x (about -1.25): the axis "
@@ -702,8 +702,8 @@ def print_table(rows):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--reference-data", type=Path, default=Path("/work/shared/reference-data"),
-                        help="the reference data folder (holds datasheets/ and spektrafilm-profiles/)")
+    parser.add_argument("--reference-data", type=Path, default=Path(__file__).resolve().parent.parent.parent / "shared" / "reference-data",
+                        help="the reference data folder (holds datasheets/ and spektrafilm-profiles/; default: shared/reference-data beside the repository)")
     parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent.parent / "core" / "stocks",
                         help="where the <id>.json presets are written (default: core/stocks)")
     mode = parser.add_mutually_exclusive_group()

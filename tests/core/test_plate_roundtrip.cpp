@@ -1,5 +1,5 @@
 // Plate matching end to end: grain of a known profile on a plate, analysed, resynthesised
-// with another seed and compared (issue 7's acceptance tolerances: response 5 %, NPS 1 dB,
+// with another seed and compared (plate matching's acceptance tolerances: response 5 %, NPS 1 dB,
 // channel correlation 0.05).
 #include <catch2/catch.hpp>
 #include <functional>

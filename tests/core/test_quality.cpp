@@ -299,7 +299,7 @@ TEST_CASE("every tier prints within its stated colour error of the reference tie
     s.print_width_mm = 96 * 0.0054;
     s.quality = Quality::reference;
     Image reference = test::render(film, &paper, s, scene, 2);
-    // high: the same spectral print, the PSF within 1e-6 per tap; fast: issue 8's 0.5;
+    // high: the same spectral print, the PSF within 1e-6 per tap; fast: the benchmark target's 0.5;
     // preview: twice that (a one-term PSF is not round, and this small frame is mostly edges).
     for (auto [quality, mean_limit] :
          {std::pair{Quality::high, 0.01}, std::pair{Quality::fast, 0.5}, std::pair{Quality::preview, 1.0}}) {
