@@ -2,6 +2,7 @@
 #include <chrono>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "cli/batch.h"
 #include "cli/commands.h"
@@ -16,6 +17,7 @@ namespace {
 struct DevelopOptions {
     BatchOptions batch;
     std::vector<int> window;  // X, Y, W, H
+    std::optional<std::string> layer;  // --layer: the input's layer to develop
     LookFlags flags;
 };
 
@@ -39,7 +41,7 @@ void develop_frame(const DevelopOptions& o, const Renderer& renderer, PlanCache&
                    const FrameJob& job, int threads, FrameReport& report, Progress& progress) {
     const ColourIO& colour = renderer.colour();
     auto start = std::chrono::steady_clock::now();
-    LoadedImage in = read_image(job.input);
+    LoadedImage in = read_image(job.input, o.layer);
     report.read_seconds = seconds_since(start);
     // An input read in another space than its tag names (an sRGB PNG taken as scene-linear
     // without --iscolorspace), and parts left out: said once, for a sequence's frames share them.
@@ -121,6 +123,9 @@ void add_run_flags(CLI::App& cmd, DevelopOptions& o) {
     cmd.add_option("--window", o.window, "Render only this window X,Y,W,H of the input (from its first pixel)")
         ->delimiter(',')
         ->expected(4);
+    cmd.add_option("--layer", o.layer,
+                   "The layer of a layered input (a render's AOVs) to develop, e.g. 'diffuse' (default: the "
+                   "channels without a layer name, else the only layer with colour); the others pass through");
 }
 
 }  // namespace

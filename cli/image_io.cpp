@@ -27,18 +27,127 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
     return in;
 }
 
+// A channel's layer ("diffuse" of "diffuse.R", "" of "R") and its name within it.
+std::string layer_of(const std::string& channel) {
+    const size_t dot = channel.rfind('.');
+    return dot == std::string::npos ? "" : channel.substr(0, dot);
+}
+
+// The channels of `layer` named `bases`, in that order; empty unless it has them all.
+std::vector<int> layer_channels(const std::vector<std::string>& names, const std::string& layer,
+                                const std::vector<std::string>& bases) {
+    std::vector<int> found;
+    for (const std::string& base : bases) {
+        const auto at = std::find(names.begin(), names.end(), layer.empty() ? base : layer + "." + base);
+        if (at == names.end()) return {};
+        found.push_back(int(at - names.begin()));
+    }
+    return found;
+}
+
+// The colour channels of `layer`: R, G, B, else Y; empty when it has neither.
+std::vector<int> layer_colour(const std::vector<std::string>& names, const std::string& layer) {
+    std::vector<int> rgb = layer_channels(names, layer, {"R", "G", "B"});
+    return rgb.empty() ? layer_channels(names, layer, {"Y"}) : rgb;
+}
+
+std::string layer_list(const std::vector<std::string>& layers) {
+    std::string text;
+    for (const std::string& l : layers) text += (text.empty() ? "" : ", ") + (l.empty() ? "(unnamed)" : "'" + l + "'");
+    return text;
+}
+
+// The layer read_image develops: the file channel of each of its channels (the layer's colour,
+// its alpha, the rest in the file's order) and how many are colour and alpha.
+struct LayerOrder {
+    std::vector<int> channels;
+    int colours = 0;
+    bool alpha = false;
+};
+
+// None for a file without layered names and no `layer` asked for: it is read as it is.
+std::optional<LayerOrder> developed_channel_order(const OIIO::ImageSpec& spec, const std::optional<std::string>& layer,
+                                                  const std::string& path) {
+    const std::vector<std::string>& names = spec.channelnames;
+    std::vector<std::string> layers, coloured;  // in the file's order
+    for (const std::string& n : names)
+        if (std::find(layers.begin(), layers.end(), layer_of(n)) == layers.end()) {
+            layers.push_back(layer_of(n));
+            if (!layer_colour(names, layers.back()).empty()) coloured.push_back(layers.back());
+        }
+    if (!layer && layers == std::vector<std::string>{""}) return std::nullopt;
+    std::string chosen;
+    if (layer) {
+        if (std::find(layers.begin(), layers.end(), *layer) == layers.end())
+            throw UserError("--layer '" + *layer + "': '" + path + "' has no such layer; its layers are " +
+                            layer_list(layers));
+        if (std::find(coloured.begin(), coloured.end(), *layer) == coloured.end())
+            throw UserError("--layer '" + *layer + "' of '" + path + "' has no colour channels (R, G, B or Y); "
+                            "the layers with colour are " + (coloured.empty() ? "none" : layer_list(coloured)));
+        chosen = *layer;
+    } else if (std::find(coloured.begin(), coloured.end(), "") != coloured.end()) {
+        chosen = "";
+    } else if (coloured.size() == 1) {
+        chosen = coloured.front();
+    } else {
+        throw UserError("'" + path + "' has " + (coloured.empty() ? "no layer with colour (R, G, B or Y)" :
+                        "several layers with colour, " + layer_list(coloured)) +
+                        ": name the one to develop with --layer (its layers are " + layer_list(layers) + ")");
+    }
+    LayerOrder order;
+    order.channels = layer_colour(names, chosen);
+    order.colours = int(order.channels.size());
+    for (const std::string& alpha : {"A", "Alpha"})
+        if (std::vector<int> a = layer_channels(names, chosen, {alpha}); !a.empty()) {
+            order.channels.push_back(a.front());
+            order.alpha = true;
+            break;
+        }
+    const std::vector<int> first = order.channels;
+    for (int c = 0; c < int(names.size()); ++c)
+        if (std::find(first.begin(), first.end(), c) == first.end()) order.channels.push_back(c);
+    return order;
+}
+
+// `image` and its spec with channel i taken from the file's channel order.channels[i].
+void reorder_channels(LoadedImage& image, const LayerOrder& layer) {
+    const std::vector<int>& order = layer.channels;
+    OIIO::ImageSpec& s = image.spec;
+    const OIIO::ImageSpec file = s;
+    const int n = s.nchannels;
+    std::vector<float> pixel(n);
+    for (size_t p = 0; p < size_t(s.width) * s.height; ++p) {
+        float* px = image.pixels.pixels.data() + p * n;
+        for (int c = 0; c < n; ++c) pixel[c] = px[order[c]];
+        std::copy(pixel.begin(), pixel.end(), px);
+    }
+    auto moved = [&](int channel) {
+        const auto at = std::find(order.begin(), order.end(), channel);
+        return channel >= 0 && at != order.end() ? int(at - order.begin()) : -1;
+    };
+    for (int c = 0; c < n; ++c) {
+        s.channelnames[c] = file.channelnames[order[c]];
+        if (!file.channelformats.empty()) s.channelformats[c] = file.channelformats[order[c]];
+    }
+    // The alpha is the developed layer's own, else none (another layer's passes through).
+    s.alpha_channel = layer.alpha ? layer.colours : -1;
+    s.z_channel = moved(file.z_channel);
+}
+
 }  // namespace
 
 OIIO::ImageSpec read_image_spec(const std::string& path) { return open_image(path)->spec(); }
 
-LoadedImage read_image(const std::string& path) {
+LoadedImage read_image(const std::string& path, const std::optional<std::string>& layer) {
     auto in = open_image(path);
     LoadedImage out;
     out.spec = in->spec();
     const OIIO::ImageSpec& s = out.spec;
+    const std::optional<LayerOrder> order = developed_channel_order(s, layer, path);
     out.pixels = Image(s.width, s.height, s.nchannels);
     if (!in->read_image(0, 0, 0, s.nchannels, OIIO::TypeDesc::FLOAT, out.pixels.pixels.data()))
         throw UserError("cannot read pixels of '" + path + "': " + in->geterror());
+    if (order) reorder_channels(out, *order);
     while (in->seek_subimage(out.subimages, 0)) ++out.subimages;
     return out;
 }
@@ -151,7 +260,9 @@ const std::vector<std::string>& output_data_types() {
 
 WriteOptions with_input_data_type(WriteOptions options, const OIIO::ImageSpec& input, const std::string& path) {
     if (!options.data_type.empty()) return options;
-    const OIIO::TypeDesc type = input.format;
+    // (The developed colour's own type: a layered file's others may differ.)
+    const OIIO::TypeDesc type = input.channelformat(0);
+    options.keep_channel_types = true;
     if (type == OIIO::TypeDesc::HALF || type == OIIO::TypeDesc::FLOAT) {
         if (is_float_format(path)) options.data_type = type.c_str();
         return options;
@@ -208,15 +319,26 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
     spec.full_width = like.full_width > 0 ? like.full_width : spec.width;
     spec.full_height = like.full_height > 0 ? like.full_height : spec.height;
     // The input's channels under their names and roles (a layer's "diffuse.R" stays so). A grey
-    // input developed (develop_image's layout) has R, G, B for its one channel of colour, and
-    // the channels past it two places on: its depth stays "Z", the z channel, not alpha.
+    // input developed (develop_image's layout) has R, G, B for its one channel of colour (in its
+    // layer: "diffuse.Y" gives "diffuse.R"), and the channels past it two places on: its depth
+    // stays "Z", the z channel, not alpha.
     const int shift = colour_channel_count(like) == 1 && image.channels == like.nchannels + 2 ? 2 : 0;
+    const std::string grey_layer = shift > 0 ? layer_of(like.channelnames[0]) : "";
     std::vector<int> from(image.channels);  // the input channel of each output channel, -1: none
     for (int c = 0; c < image.channels; ++c) {
         from[c] = shift > 0 && c < 3 ? -1 : c - shift;
         const char* rgb[3] = {"R", "G", "B"};
         const bool named = from[c] >= 0 && from[c] < like.nchannels;
-        spec.channelnames[c] = named ? like.channelnames[from[c]] : c < 3 ? rgb[c] : "A";
+        spec.channelnames[c] = named ? like.channelnames[from[c]]
+                               : c < 3 ? (grey_layer.empty() ? "" : grey_layer + ".") + rgb[c]
+                                       : "A";
+    }
+    // Without -d, the channels past the colour keep their own types where the format stores
+    // one per channel (a float depth beside half colour), so that they pass through bit for bit.
+    if (options.keep_channel_types && !like.channelformats.empty() && lower_extension(path) == ".exr") {
+        spec.channelformats.assign(image.channels, type);
+        for (int c = 3; c < image.channels; ++c)
+            if (from[c] >= 0 && from[c] < like.nchannels) spec.channelformats[c] = like.channelformats[from[c]];
     }
     auto output_of = [&](int input) {
         const auto at = std::find(from.begin(), from.end(), input);

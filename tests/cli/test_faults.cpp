@@ -1,0 +1,182 @@
+// The fault suite: the program run as a pipeline runs it, on bad inputs and in bad
+// conditions (layered and odd-shaped files, corrupt and huge ones, settings at and past their
+// limits, signals a wrapper ignores, full disks, writers racing). Each case ends in a result
+// or a named refusal with its documented exit status, never a crash, a hang or wrong pixels.
+#include <OpenImageIO/imageio.h>
+#include <chrono>
+#include <csignal>
+#include <nlohmann/json.hpp>
+#include <sys/mount.h>
+#include <thread>
+#include <unistd.h>
+
+#include "cli_support.h"
+
+using namespace darkroom_test;
+
+namespace {
+
+fs::path fresh_dir(const std::string& name) {
+    fs::path dir = kTmp / "faults" / name;
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+const std::string kLook = " --seed 7 --frame-width-mm 3 --print-width-mm 20 --threads 1";
+
+// A 16x12 file of the named channels, each of its own type; a channel's value at (x, y) is
+// 0.1 k + 0.001 x + 1e-7 y, k by its name without the layer (R 1, G 2, B 3, ...), the last term
+// one that half cannot hold, to see float kept float.
+std::string layered_file(const fs::path& dir, const std::string& name, const std::vector<std::string>& channels,
+                         const std::vector<OIIO::TypeDesc>& types) {
+    OIIO::ImageSpec spec(16, 12, int(channels.size()), OIIO::TypeDesc::FLOAT);
+    spec.channelnames = channels;
+    spec.channelformats = types;
+    spec.alpha_channel = spec.z_channel = -1;
+    std::vector<float> px(16 * 12 * channels.size());
+    for (int y = 0; y < 12; ++y)
+        for (int x = 0; x < 16; ++x)
+            for (size_t c = 0; c < channels.size(); ++c)
+                px[(y * 16 + x) * channels.size() + c] =
+                    0.1f * float(std::string("RGBAZY").find(channels[c].back()) + 1) + 0.001f * x + 1e-7f * y;
+    const std::string path = (dir / name).string();
+    auto out = OIIO::ImageOutput::create(path);
+    REQUIRE(out);
+    REQUIRE(out->open(path, spec));
+    REQUIRE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    REQUIRE(out->close());
+    return path;
+}
+
+// A channel of a file by name, as float, with its stored type.
+std::vector<float> channel(const std::string& path, const std::string& name, OIIO::TypeDesc* type = nullptr) {
+    auto in = OIIO::ImageInput::open(path);
+    REQUIRE(in);
+    const OIIO::ImageSpec& s = in->spec();
+    const auto at = std::find(s.channelnames.begin(), s.channelnames.end(), name);
+    REQUIRE(at != s.channelnames.end());
+    const int c = int(at - s.channelnames.begin());
+    if (type) *type = s.channelformat(c);
+    std::vector<float> out(size_t(s.width) * s.height);
+    REQUIRE(in->read_image(0, 0, c, c + 1, OIIO::TypeDesc::FLOAT, out.data()));
+    return out;
+}
+
+}  // namespace
+
+// Layered EXRs (a render's AOVs): the developed layer is chosen by name, and every other
+// channel comes out under its own name, with its own type, bit for bit.
+TEST_CASE("faults: a layered EXR develops its colour layer and passes the others through bit for bit",
+          "[cli][faults][layers]") {
+    const fs::path dir = fresh_dir("layers");
+    const OIIO::TypeDesc half = OIIO::TypeDesc::HALF, flt = OIIO::TypeDesc::FLOAT;
+    // OpenImageIO lists them so: depth first, the colour after it.
+    const std::string aovs = layered_file(dir, "aovs.exr", {"depth.Z", "diffuse.R", "diffuse.G", "diffuse.B"},
+                                          {flt, half, half, half});
+    const std::string alone = layered_file(dir, "alone.exr", {"diffuse.R", "diffuse.G", "diffuse.B"}, {half, half, half});
+    const std::string out = (dir / "out.exr").string(), out_alone = (dir / "out-alone.exr").string();
+    Result r = darkroom("develop " + aovs + " -o " + out + kLook);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    REQUIRE(darkroom("develop " + alone + " -o " + out_alone + kLook).exit_code == 0);
+    OIIO::TypeDesc type;
+    CHECK(channel(out, "depth.Z", &type) == channel(aovs, "depth.Z"));
+    CHECK(type == flt);
+    for (const char* c : {"diffuse.R", "diffuse.G", "diffuse.B"}) {
+        CHECK(channel(out, c, &type) == channel(out_alone, c));
+        CHECK(type == half);
+    }
+
+    // A beauty with its AOVs: the unnamed RGBA develops, the specular layer passes through.
+    const std::string beauty = layered_file(
+        dir, "beauty.exr", {"R", "G", "B", "A", "specular.R", "specular.G", "specular.B", "depth.Z"},
+        {half, half, half, half, half, half, half, flt});
+    REQUIRE(darkroom("develop " + beauty + " -o " + out + kLook).exit_code == 0);
+    for (const char* c : {"A", "specular.R", "specular.G", "specular.B", "depth.Z"})
+        CHECK(channel(out, c) == channel(beauty, c));
+    CHECK(channel(out, "R") != channel(beauty, "R"));
+}
+
+TEST_CASE("faults: a file with several colour layers needs --layer, and the error lists them",
+          "[cli][faults][layers]") {
+    const fs::path dir = fresh_dir("layer-choice");
+    const OIIO::TypeDesc half = OIIO::TypeDesc::HALF;
+    const std::string two = layered_file(dir, "two.exr", {"diffuse.R", "diffuse.G", "diffuse.B", "specular.R",
+                                                          "specular.G", "specular.B"},
+                                         std::vector<OIIO::TypeDesc>(6, half));
+    const std::string out = (dir / "out.exr").string();
+    Result r = darkroom("develop " + two + " -o " + out + kLook);
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("--layer") && Catch::Contains("'diffuse'") && Catch::Contains("'specular'"));
+    CHECK_FALSE(fs::exists(out));
+
+    r = darkroom("develop " + two + " -o " + out + kLook + " --layer specular");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    for (const char* c : {"diffuse.R", "diffuse.G", "diffuse.B"}) CHECK(channel(out, c) == channel(two, c));
+    CHECK(channel(out, "specular.R") != channel(two, "specular.R"));
+
+    r = darkroom("develop " + two + " -o " + out + kLook + " --layer spec");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("no such layer") && Catch::Contains("'specular'"));
+
+    // A grey layer develops to that layer's R, G, B; its depth passes through.
+    const std::string grey = layered_file(dir, "grey.exr", {"depth.Z", "matte.Y"}, {OIIO::TypeDesc::FLOAT, half});
+    r = darkroom("develop " + grey + " -o " + out + kLook);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(channel(out, "depth.Z") == channel(grey, "depth.Z"));
+    CHECK(channel(out, "matte.B").size() == 16 * 12);
+}
+
+// A farm wrapper or nohup ignores SIGHUP (or SIGINT) for the program it starts: it runs on.
+TEST_CASE("faults: a signal ignored by the caller stays ignored", "[cli][faults][signals]") {
+    const fs::path dir = fresh_dir("inherited-signals");
+    const std::string in = make_input("faults-signal-plate.exr", 96, 72);
+    for (int signal_number : {SIGHUP, SIGINT}) {
+        INFO("signal " << signal_number);
+        const std::string out = (dir / "still.####.exr").string();
+        for (const auto& entry : fs::directory_iterator(dir)) fs::remove(entry.path());
+        const std::string trap = signal_number == SIGHUP ? "HUP" : "INT";
+        pid_t pid = fork();
+        REQUIRE(pid >= 0);
+        if (pid == 0) {
+            const std::string command = "trap '' " + trap + "; exec " + std::string(DARKROOM_EXE) + " develop " + in +
+                                        " -o " + out + " --frames 1-6 -q --frames-at-once 1" + kLook;
+            execl("/bin/sh", "sh", "-c", command.c_str(), (char*)nullptr);
+            _exit(127);
+        }
+        int status = 0;
+        bool exited = false;
+        const char* first = "still.0001.exr";
+        while (!fs::exists(dir / first) && !exited) {
+            exited = waitpid(pid, &status, WNOHANG) == pid;
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        if (!exited) {
+            kill(pid, signal_number);
+            waitpid(pid, &status, 0);
+        }
+        REQUIRE(WIFEXITED(status));
+        CHECK(WEXITSTATUS(status) == 0);
+        CHECK(fs::exists(dir / "still.0006.exr"));
+    }
+    // Not ignored, it stops the run as before.
+    const std::string out = (dir / "stopped.####.exr").string();
+    pid_t pid = fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+        const std::string command = "exec " + std::string(DARKROOM_EXE) + " develop " + in + " -o " + out +
+                                    " --frames 1-200 -q --frames-at-once 1" + kLook;
+        execl("/bin/sh", "sh", "-c", command.c_str(), (char*)nullptr);
+        _exit(127);
+    }
+    while (!fs::exists(dir / "stopped.0001.exr")) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    kill(pid, SIGHUP);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 128 + SIGHUP);
+    CHECK(temp_files_in(dir) == 0);
+}
