@@ -61,6 +61,8 @@ void develop_frame(const DevelopOptions& o, const Renderer& renderer, PlanCache&
     view.colour_channels = colour_channel_count(in.spec);
     const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width), job.frame);
     const Window out_window = window_flag(o.window, in.pixels.window, "--window").moved(dx, dy);
+    // The output's channels: the developed colour's three, then the input's past its colour.
+    require_format_holds(job.output, "", 3 + in.spec.nchannels - view.colour_channels);
     // Before the render starts, that a reference render will take long (core/develop.h).
     if (const std::string w = long_reference_render_warning(plan, out_window, "--quality "); !w.empty())
         progress.warn_once("long reference render", report, w);
@@ -114,6 +116,7 @@ void run_develop(DevelopOptions& o) {
                   };
               },
               [&](const FrameJob& job, const OIIO::ImageSpec& input, FrameReport& report, Progress& progress) {
+                  require_format_holds(job.output, "", 3 + input.nchannels - colour_channel_count(input));
                   frame_write_options(o, renderer.colour(), output, input, job, report, progress);
               });
 }

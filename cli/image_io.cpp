@@ -6,12 +6,23 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <unistd.h>
 
 #include "cli/atomic_file.h"
 
 namespace darkroom::cli {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+}  // namespace
+
+double frame_memory_bytes(const OIIO::ImageSpec& spec) {
+    // The input and output as float, and the working planes of a layer or three.
+    constexpr int kWorkingPlanes = 6;
+    return double(spec.width) * spec.height * (2.0 * spec.nchannels + 2 + kWorkingPlanes) * sizeof(float);
+}
 
 namespace {
 
@@ -24,6 +35,13 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
     if (s.width <= 0 || s.height <= 0 || s.nchannels <= 0) throw UserError("'" + path + "' has no pixels");
     if ((long long)s.width * s.height * s.nchannels > (1LL << 32))
         throw UserError("'" + path + "' is too large (" + std::to_string(s.width) + "x" + std::to_string(s.height) + ")");
+    // Refused from its header, before its pixels are: a frame that would not fit in memory.
+    const double bytes = frame_memory_bytes(s), memory = double(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+    if (memory > 0 && bytes > memory)
+        throw UserError("'" + path + "' is " + std::to_string(s.width) + "x" + std::to_string(s.height) + " with " +
+                        std::to_string(s.nchannels) + " channels: developing it takes some " +
+                        std::to_string(int(bytes / 1e9 + 0.5)) + " GB, more than this machine's " +
+                        std::to_string(int(memory / 1e9)) + " GB of memory");
     return in;
 }
 
@@ -97,7 +115,7 @@ std::optional<LayerOrder> developed_channel_order(const OIIO::ImageSpec& spec, c
     LayerOrder order;
     order.channels = layer_colour(names, chosen);
     order.colours = int(order.channels.size());
-    for (const std::string& alpha : {"A", "Alpha"})
+    for (const char* alpha : {"A", "Alpha"})
         if (std::vector<int> a = layer_channels(names, chosen, {alpha}); !a.empty()) {
             order.channels.push_back(a.front());
             order.alpha = true;
@@ -162,14 +180,16 @@ std::string other_subimages_warning(const std::string& path, const LoadedImage& 
 
 Window window_flag(const std::vector<int>& xywh, const Window& image, const std::string& flag) {
     if (xywh.empty()) return image;
-    const Window w{xywh[0], xywh[1], xywh[0] + xywh[2], xywh[1] + xywh[3]};
     const std::string given = flag + " " + std::to_string(xywh[0]) + "," + std::to_string(xywh[1]) + "," +
                               std::to_string(xywh[2]) + "," + std::to_string(xywh[3]);
-    if (w.empty()) throw UserError(given + " has no pixels: its width and height (the last two) must be above 0");
-    if (!image.contains(w))
+    if (xywh[2] <= 0 || xywh[3] <= 0)
+        throw UserError(given + " has no pixels: its width and height (the last two) must be above 0");
+    // (In 64 bits: a width near INT_MAX would overflow its end.)
+    const long long x1 = (long long)xywh[0] + xywh[2], y1 = (long long)xywh[1] + xywh[3];
+    if (xywh[0] < image.x0 || xywh[1] < image.y0 || x1 > image.x1 || y1 > image.y1)
         throw UserError(given + " is not inside the " + std::to_string(image.width()) + "x" +
                         std::to_string(image.height()) + " image");
-    return w;
+    return Window{xywh[0], xywh[1], int(x1), int(y1)};
 }
 
 int colour_channel_count(const OIIO::ImageSpec& spec) {
@@ -251,6 +271,38 @@ void require_known_compression(const std::string& path, const std::string& compr
 void require_writable(const std::string& path) {
     if (!OIIO::ImageOutput::create(path)) throw UserError("cannot write '" + path + "': " + OIIO::geterror());
     require_folder(path);
+}
+
+void require_format_holds(const std::string& path, const std::string& data_type, int channels) {
+    struct Limits {
+        const char* name;
+        std::vector<int> channels;          // empty: any count
+        std::vector<std::string> types;     // -d values it stores
+    };
+    // What each writer stores (OpenImageIO 2.4): DPX's writer aborts on 2 or more than 4
+    // channels; the others drop channels or change the type quietly.
+    static const std::vector<std::pair<std::vector<std::string>, Limits>> formats{
+        {{".dpx"}, {"DPX", {1, 3, 4}, {"uint8", "uint10", "uint12", "uint16", "float"}}},
+        {{".png"}, {"PNG", {1, 2, 3, 4}, {"uint8", "uint10", "uint12", "uint16"}}},  // (10, 12: as 16)
+        {{".jpg", ".jpeg"}, {"JPEG", {1, 3}, {"uint8"}}},
+        {{".hdr"}, {"Radiance HDR", {3}, {"float"}}},
+        {{".exr"}, {"OpenEXR", {}, {"half", "float"}}},
+    };
+    const std::string ext = lower_extension(path);
+    for (const auto& [extensions, limits] : formats) {
+        if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end()) continue;
+        const std::vector<int>& counts = limits.channels;
+        if (channels > 0 && !counts.empty() && std::find(counts.begin(), counts.end(), channels) == counts.end()) {
+            std::vector<std::string> held;
+            for (int c : counts) held.push_back(std::to_string(c));
+            throw UserError("cannot write '" + path + "': " + limits.name + " holds " +
+                            OIIO::Strutil::join(held, ", ") + " channels, and the output has " +
+                            std::to_string(channels) + ": write OpenEXR (.exr) or TIFF (.tif), which hold any");
+        }
+        if (!data_type.empty() && std::find(limits.types.begin(), limits.types.end(), data_type) == limits.types.end())
+            throw UserError("-d " + data_type + ": " + limits.name + " ('" + path + "') stores " +
+                            OIIO::Strutil::join(limits.types, ", "));
+    }
 }
 
 const std::vector<std::string>& output_data_types() {
@@ -374,6 +426,7 @@ void write_image(const std::string& path, const Image& image, const OIIO::ImageS
                  const std::function<void()>& committed) {
     if (!protected_input.empty() && same_file(path, protected_input))
         throw UserError("refusing to overwrite the input '" + path + "' with the output");
+    require_format_holds(path, "", image.channels);
     OIIO::ImageSpec spec = output_spec(image, like, path, options);
     auto out = OIIO::ImageOutput::create(path);
     if (!out) throw UserError("cannot write '" + path + "': " + OIIO::geterror());

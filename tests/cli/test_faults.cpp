@@ -180,3 +180,41 @@ TEST_CASE("faults: a signal ignored by the caller stays ignored", "[cli][faults]
     CHECK(WEXITSTATUS(status) == 128 + SIGHUP);
     CHECK(temp_files_in(dir) == 0);
 }
+
+// Each writer's limits are checked before the work: DPX's writer aborts on more than 4
+// channels, the others drop channels or change the type without a word.
+TEST_CASE("faults: an output format that cannot hold the channels or the type is refused before the work",
+          "[cli][faults][formats]") {
+    const fs::path dir = fresh_dir("formats");
+    const OIIO::TypeDesc half = OIIO::TypeDesc::HALF;
+    const std::string five =
+        layered_file(dir, "five.exr", {"R", "G", "B", "A", "Z"}, std::vector<OIIO::TypeDesc>(5, half));
+    const std::string rgb = layered_file(dir, "rgb.exr", {"R", "G", "B"}, std::vector<OIIO::TypeDesc>(3, half));
+    struct Case {
+        std::string input, output, flags, message;
+    };
+    for (const Case& c : std::vector<Case>{
+             {five, "five.dpx", "", "DPX holds 1, 3, 4 channels, and the output has 5"},
+             {five, "five.png", "", "PNG holds 1, 2, 3, 4 channels"},
+             {five, "five.hdr", "", "Radiance HDR holds 3 channels"},
+             {five, "five.jpg", "", "JPEG holds 1, 3 channels"},
+             {rgb, "out.exr", " -d uint16", "-d uint16: OpenEXR"},
+             {rgb, "rgb.png", " -d half", "-d half: PNG"},
+             {rgb, "rgb.jpg", " -d uint16", "-d uint16: JPEG"},
+             {rgb, "rgb.hdr", " -d half", "-d half: Radiance HDR"},
+             {rgb, "rgb.dpx", " -d half", "-d half: DPX"},
+         }) {
+        const std::string out = (dir / c.output).string();
+        for (const std::string& dry : {"", " -n"}) {
+            Result r = darkroom("develop " + c.input + " -o " + out + c.flags + kLook + dry);
+            INFO(c.output << c.flags << dry << "\n" << r.output);
+            CHECK(r.exit_code == (dry.empty() || !c.flags.empty() ? 1 : 0));
+            CHECK_THAT(r.output, Catch::Contains(c.message));
+            CHECK_FALSE(fs::exists(out));
+        }
+    }
+    // What they hold is written.
+    for (const char* ok : {"rgb.dpx", "rgb.png", "rgb.hdr", "rgb.jpg", "rgb.tif"})
+        CHECK(darkroom("develop " + rgb + " -o " + (dir / ok).string() + kLook).exit_code == 0);
+    CHECK(darkroom("develop " + five + " -o " + (dir / "five.tif").string() + kLook).exit_code == 0);
+}
