@@ -205,7 +205,7 @@ TEST_CASE("faults: an output format that cannot hold the channels or the type is
              {rgb, "rgb.dpx", " -d half", "-d half: DPX"},
          }) {
         const std::string out = (dir / c.output).string();
-        for (const std::string& dry : {"", " -n"}) {
+        for (const std::string& dry : std::vector<std::string>{"", " -n"}) {
             Result r = darkroom("develop " + c.input + " -o " + out + c.flags + kLook + dry);
             INFO(c.output << c.flags << dry << "\n" << r.output);
             CHECK(r.exit_code == (dry.empty() || !c.flags.empty() ? 1 : 0));
@@ -217,4 +217,61 @@ TEST_CASE("faults: an output format that cannot hold the channels or the type is
     for (const char* ok : {"rgb.dpx", "rgb.png", "rgb.hdr", "rgb.jpg", "rgb.tif"})
         CHECK(darkroom("develop " + rgb + " -o " + (dir / ok).string() + kLook).exit_code == 0);
     CHECK(darkroom("develop " + five + " -o " + (dir / "five.tif").string() + kLook).exit_code == 0);
+}
+
+// Settings and files at and past their limits: each refused before the work, naming what to
+// change, with the status its kind of problem has (docs/reference/exit-codes.md).
+TEST_CASE("faults: flags, files and sizes past their limits are refused before the work", "[cli][faults][limits]") {
+    const fs::path dir = fresh_dir("limits");
+    const std::string in = make_input("faults-limits.exr", 64, 64), out = (dir / "out.exr").string();
+    std::ofstream((dir / "corrupt.exr").string()) << "v/1\x01 not an image";
+    {
+        std::ofstream big((dir / "big.json").string());
+        big << "{\"format\": \"darkroom-look\", \"version\": 1, \"settings\": {}, \"pad\": \"";
+        big << std::string(17u << 20, 'x') << "\"}";
+    }
+    std::ofstream((dir / "both.json").string())
+        << R"({"format": "darkroom-look", "version": 1, "settings": {"tocolorspace": "ACEScg", "ociodisplay": ["sRGB", ""]}})";
+    struct Case {
+        std::string args, message;
+        int exit_code;
+    };
+    const std::string develop = "develop " + in + " -o " + out;
+    for (const Case& c : std::vector<Case>{
+             {"develop " + in + " -o " + (dir / "o.####.exr").string() + " --frames 1-100000000 -n",
+              "more than 1000000 frames", 1},
+             {develop + " --grain-size 100 --halation 0 --frame-width-mm 0.0064", "the grain of film layer", 1},
+             {develop + " --frame-width-mm 0.0064", "the halation of film layer", 1},
+             {develop + " --look " + (dir / "big.json").string(), "more than the 16 MB a look file may be", 1},
+             {develop + " --film " + (dir / "big.json").string(), "more than the 16 MB a stock file may be", 1},
+             {develop + " --look " + (dir / "both.json").string(), "both say where the result goes", 1},
+             {"develop " + (dir / "corrupt.exr").string() + " -o " + out, "cannot read", 1},
+             {develop + " --log " + (dir / "no-folder" / "log.json").string(), "does not exist", 1},
+             {develop + " --window 0,0,2147483647,5", "is not inside the 64x64 image", 1},
+             {develop + " --seed 18446744073709551616", "--seed: must be a whole number", 105},
+             {develop + " --seed -1", "--seed: must be a whole number", 104},
+             {develop + " --exposure 65", "--exposure: must be a number from -64 to 64", 105},
+             {develop + " --exposure lots", "--exposure: must be a number", 104},
+         }) {
+        Result r = darkroom(c.args);
+        INFO(c.args << "\n" << r.output);
+        CHECK(r.exit_code == c.exit_code);
+        CHECK_THAT(r.output, Catch::Contains(c.message));
+        CHECK_FALSE(fs::exists(out));
+    }
+}
+
+// A seed above 2^63 is kept exactly in the image's metadata, as in look files.
+TEST_CASE("faults: a 64-bit seed is kept exactly in the output's metadata", "[cli][faults][limits]") {
+    const fs::path dir = fresh_dir("seed");
+    const std::string in = make_input("faults-seed.exr", 16, 12), out = (dir / "out.exr").string();
+    const std::string seed = "18446744073709551615";
+    Result r = darkroom("develop " + in + " -o " + out + " --seed " + seed + " --save-look " + (dir / "look.json").string());
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    auto file = OIIO::ImageInput::open(out);
+    REQUIRE(file);
+    const nlohmann::json look = nlohmann::json::parse(file->spec().get_string_attribute("darkroom:look"));
+    CHECK(look["settings"]["seed"].get<uint64_t>() == 18446744073709551615ull);
+    CHECK_THAT(file_bytes(dir / "look.json"), Catch::Contains(seed));
 }
