@@ -62,7 +62,13 @@ std::function<void(int)>& interrupt_hook() {
 void install_interrupt_cleanup() {
     static sigset_t signals;
     sigemptyset(&signals);
-    for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, s);
+    // A signal ignored when the program started stays ignored (nohup's SIGHUP, a farm
+    // wrapper's or a shell's background job's SIGINT): the caller decided it should not stop us.
+    for (int s : {SIGINT, SIGTERM, SIGHUP}) {
+        struct sigaction inherited {};
+        if (sigaction(s, nullptr, &inherited) == 0 && inherited.sa_handler == SIG_IGN) continue;
+        sigaddset(&signals, s);
+    }
     pthread_sigmask(SIG_BLOCK, &signals, nullptr);
     std::thread([] {
         int signal_number = 0;

@@ -16,7 +16,8 @@ namespace darkroom::cli {
 
 // Blocks the termination signals in the calling thread (and so in every thread it starts
 // afterwards) and starts a thread that waits for them, removes the temporaries in flight
-// and exits. Call once, first thing in main, before any other thread exists.
+// and exits. A signal ignored when the program started (nohup, trap '' HUP) is left
+// ignored. Call once, first thing in main, before any other thread exists.
 void install_interrupt_cleanup();
 
 // What to do on such a signal before the temporaries are removed (the develop command writes

@@ -58,7 +58,20 @@ FrameReport::Status process_frame(const RunOptions& run, const FrameWork& work, 
 // --skip-bad-frames the first failure stops new frames from starting.
 void run_frames(const RunOptions& run, const std::vector<FrameJob>& jobs, int threads, bool verbose,
                 const PrepareFrames& prepare, const DryRunCheck& dry_run_check, Progress& progress) {
-    const int most = run.frames_at_once > 0 ? run.frames_at_once : std::min(threads, kDefaultMaxFramesAtOnce);
+    int most = run.frames_at_once > 0 ? run.frames_at_once : std::min(threads, kDefaultMaxFramesAtOnce);
+    // No more frames at once than the memory holds, by the first frame's header.
+    try {
+        const double memory = double(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+        const int fit = int(std::min(1024.0, memory / frame_memory_bytes(read_image_spec(jobs.front().input))));
+        if (!run.dry_run && fit >= 1 && fit < most) {
+            if (run.frames_at_once > 0)
+                std::cerr << "darkroom: warning: --frames-at-once " << run.frames_at_once << ": only " << fit
+                          << " of these frames fit in memory at once; running " << fit << "\n";
+            most = fit;
+        }
+    } catch (const UserError&) {
+        // (a frame that cannot be read fails as it runs)
+    }
     const int workers = std::max(1, std::min(int(jobs.size()), most));
     const int threads_per_frame = std::max(1, threads / workers);
     if (verbose)
@@ -162,8 +175,10 @@ void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int thr
     const ExpandedFrames expanded = expand_frames(o.input, o.output, o.sequence, single_frame);
     const std::vector<FrameJob>& jobs = expanded.jobs;
     require_known_compression(o.output, o.write.compression);
+    require_format_holds(o.output, o.write.data_type);
     const std::map<fs::path, std::string> folders = output_folders(jobs);
     for (const auto& [folder, output] : folders) require_writable(output);  // a sequence's frames share theirs
+    if (!o.run.log_path.empty()) require_folder(o.run.log_path);  // (else found after every frame is written)
     // Only an output named as the input itself replaces it; an output that merely resolves
     // to an input (another spelling of a pattern, a link) is refused frame by frame.
     o.run.in_place = fs::absolute(o.input).lexically_normal() == fs::absolute(o.output).lexically_normal();

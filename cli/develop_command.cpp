@@ -2,6 +2,7 @@
 #include <chrono>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "cli/batch.h"
 #include "cli/commands.h"
@@ -16,6 +17,7 @@ namespace {
 struct DevelopOptions {
     BatchOptions batch;
     std::vector<int> window;  // X, Y, W, H
+    std::optional<std::string> layer;  // --layer: the input's layer to develop
     LookFlags flags;
 };
 
@@ -39,7 +41,7 @@ void develop_frame(const DevelopOptions& o, const Renderer& renderer, PlanCache&
                    const FrameJob& job, int threads, FrameReport& report, Progress& progress) {
     const ColourIO& colour = renderer.colour();
     auto start = std::chrono::steady_clock::now();
-    LoadedImage in = read_image(job.input);
+    LoadedImage in = read_image(job.input, o.layer);
     report.read_seconds = seconds_since(start);
     // An input read in another space than its tag names (an sRGB PNG taken as scene-linear
     // without --iscolorspace), and parts left out: said once, for a sequence's frames share them.
@@ -59,6 +61,8 @@ void develop_frame(const DevelopOptions& o, const Renderer& renderer, PlanCache&
     view.colour_channels = colour_channel_count(in.spec);
     const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width), job.frame);
     const Window out_window = window_flag(o.window, in.pixels.window, "--window").moved(dx, dy);
+    // The output's channels: the developed colour's three, then the input's past its colour.
+    require_format_holds(job.output, "", 3 + in.spec.nchannels - view.colour_channels);
     // Before the render starts, that a reference render will take long (core/develop.h).
     if (const std::string w = long_reference_render_warning(plan, out_window, "--quality "); !w.empty())
         progress.warn_once("long reference render", report, w);
@@ -112,6 +116,7 @@ void run_develop(DevelopOptions& o) {
                   };
               },
               [&](const FrameJob& job, const OIIO::ImageSpec& input, FrameReport& report, Progress& progress) {
+                  require_format_holds(job.output, "", 3 + input.nchannels - colour_channel_count(input));
                   frame_write_options(o, renderer.colour(), output, input, job, report, progress);
               });
 }
@@ -121,6 +126,9 @@ void add_run_flags(CLI::App& cmd, DevelopOptions& o) {
     cmd.add_option("--window", o.window, "Render only this window X,Y,W,H of the input (from its first pixel)")
         ->delimiter(',')
         ->expected(4);
+    cmd.add_option("--layer", o.layer,
+                   "The layer of a layered input (a render's AOVs) to develop, e.g. 'diffuse' (default: the "
+                   "channels without a layer name, else the only layer with colour); the others pass through");
 }
 
 }  // namespace

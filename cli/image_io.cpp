@@ -6,12 +6,23 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <unistd.h>
 
 #include "cli/atomic_file.h"
 
 namespace darkroom::cli {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+}  // namespace
+
+double frame_memory_bytes(const OIIO::ImageSpec& spec) {
+    // The input and output as float, and the working planes of a layer or three.
+    constexpr int kWorkingPlanes = 6;
+    return double(spec.width) * spec.height * (2.0 * spec.nchannels + 2 + kWorkingPlanes) * sizeof(float);
+}
 
 namespace {
 
@@ -24,21 +35,137 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
     if (s.width <= 0 || s.height <= 0 || s.nchannels <= 0) throw UserError("'" + path + "' has no pixels");
     if ((long long)s.width * s.height * s.nchannels > (1LL << 32))
         throw UserError("'" + path + "' is too large (" + std::to_string(s.width) + "x" + std::to_string(s.height) + ")");
+    // Refused from its header, before its pixels are: a frame that would not fit in memory.
+    const double bytes = frame_memory_bytes(s), memory = double(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
+    if (memory > 0 && bytes > memory)
+        throw UserError("'" + path + "' is " + std::to_string(s.width) + "x" + std::to_string(s.height) + " with " +
+                        std::to_string(s.nchannels) + " channels: developing it takes some " +
+                        std::to_string(int(bytes / 1e9 + 0.5)) + " GB, more than this machine's " +
+                        std::to_string(int(memory / 1e9)) + " GB of memory");
     return in;
+}
+
+// A channel's layer ("diffuse" of "diffuse.R", "" of "R") and its name within it.
+std::string layer_of(const std::string& channel) {
+    const size_t dot = channel.rfind('.');
+    return dot == std::string::npos ? "" : channel.substr(0, dot);
+}
+
+// The channels of `layer` named `bases`, in that order; empty unless it has them all.
+std::vector<int> layer_channels(const std::vector<std::string>& names, const std::string& layer,
+                                const std::vector<std::string>& bases) {
+    std::vector<int> found;
+    for (const std::string& base : bases) {
+        const auto at = std::find(names.begin(), names.end(), layer.empty() ? base : layer + "." + base);
+        if (at == names.end()) return {};
+        found.push_back(int(at - names.begin()));
+    }
+    return found;
+}
+
+// The colour channels of `layer`: R, G, B, else Y; empty when it has neither.
+std::vector<int> layer_colour(const std::vector<std::string>& names, const std::string& layer) {
+    std::vector<int> rgb = layer_channels(names, layer, {"R", "G", "B"});
+    return rgb.empty() ? layer_channels(names, layer, {"Y"}) : rgb;
+}
+
+std::string layer_list(const std::vector<std::string>& layers) {
+    std::string text;
+    for (const std::string& l : layers) text += (text.empty() ? "" : ", ") + (l.empty() ? "(unnamed)" : "'" + l + "'");
+    return text;
+}
+
+// The layer read_image develops: the file channel of each of its channels (the layer's colour,
+// its alpha, the rest in the file's order) and how many are colour and alpha.
+struct LayerOrder {
+    std::vector<int> channels;
+    int colours = 0;
+    bool alpha = false;
+};
+
+// None for a file without layered names and no `layer` asked for: it is read as it is.
+std::optional<LayerOrder> developed_channel_order(const OIIO::ImageSpec& spec, const std::optional<std::string>& layer,
+                                                  const std::string& path) {
+    const std::vector<std::string>& names = spec.channelnames;
+    std::vector<std::string> layers, coloured;  // in the file's order
+    for (const std::string& n : names)
+        if (std::find(layers.begin(), layers.end(), layer_of(n)) == layers.end()) {
+            layers.push_back(layer_of(n));
+            if (!layer_colour(names, layers.back()).empty()) coloured.push_back(layers.back());
+        }
+    if (!layer && layers == std::vector<std::string>{""}) return std::nullopt;
+    std::string chosen;
+    if (layer) {
+        if (std::find(layers.begin(), layers.end(), *layer) == layers.end())
+            throw UserError("--layer '" + *layer + "': '" + path + "' has no such layer; its layers are " +
+                            layer_list(layers));
+        if (std::find(coloured.begin(), coloured.end(), *layer) == coloured.end())
+            throw UserError("--layer '" + *layer + "' of '" + path + "' has no colour channels (R, G, B or Y); "
+                            "the layers with colour are " + (coloured.empty() ? "none" : layer_list(coloured)));
+        chosen = *layer;
+    } else if (std::find(coloured.begin(), coloured.end(), "") != coloured.end()) {
+        chosen = "";
+    } else if (coloured.size() == 1) {
+        chosen = coloured.front();
+    } else {
+        throw UserError("'" + path + "' has " + (coloured.empty() ? "no layer with colour (R, G, B or Y)" :
+                        "several layers with colour, " + layer_list(coloured)) +
+                        ": name the one to develop with --layer (its layers are " + layer_list(layers) + ")");
+    }
+    LayerOrder order;
+    order.channels = layer_colour(names, chosen);
+    order.colours = int(order.channels.size());
+    for (const char* alpha : {"A", "Alpha"})
+        if (std::vector<int> a = layer_channels(names, chosen, {alpha}); !a.empty()) {
+            order.channels.push_back(a.front());
+            order.alpha = true;
+            break;
+        }
+    const std::vector<int> first = order.channels;
+    for (int c = 0; c < int(names.size()); ++c)
+        if (std::find(first.begin(), first.end(), c) == first.end()) order.channels.push_back(c);
+    return order;
+}
+
+// `image` and its spec with channel i taken from the file's channel order.channels[i].
+void reorder_channels(LoadedImage& image, const LayerOrder& layer) {
+    const std::vector<int>& order = layer.channels;
+    OIIO::ImageSpec& s = image.spec;
+    const OIIO::ImageSpec file = s;
+    const int n = s.nchannels;
+    std::vector<float> pixel(n);
+    for (size_t p = 0; p < size_t(s.width) * s.height; ++p) {
+        float* px = image.pixels.pixels.data() + p * n;
+        for (int c = 0; c < n; ++c) pixel[c] = px[order[c]];
+        std::copy(pixel.begin(), pixel.end(), px);
+    }
+    auto moved = [&](int channel) {
+        const auto at = std::find(order.begin(), order.end(), channel);
+        return channel >= 0 && at != order.end() ? int(at - order.begin()) : -1;
+    };
+    for (int c = 0; c < n; ++c) {
+        s.channelnames[c] = file.channelnames[order[c]];
+        if (!file.channelformats.empty()) s.channelformats[c] = file.channelformats[order[c]];
+    }
+    // The alpha is the developed layer's own, else none (another layer's passes through).
+    s.alpha_channel = layer.alpha ? layer.colours : -1;
+    s.z_channel = moved(file.z_channel);
 }
 
 }  // namespace
 
 OIIO::ImageSpec read_image_spec(const std::string& path) { return open_image(path)->spec(); }
 
-LoadedImage read_image(const std::string& path) {
+LoadedImage read_image(const std::string& path, const std::optional<std::string>& layer) {
     auto in = open_image(path);
     LoadedImage out;
     out.spec = in->spec();
     const OIIO::ImageSpec& s = out.spec;
+    const std::optional<LayerOrder> order = developed_channel_order(s, layer, path);
     out.pixels = Image(s.width, s.height, s.nchannels);
     if (!in->read_image(0, 0, 0, s.nchannels, OIIO::TypeDesc::FLOAT, out.pixels.pixels.data()))
         throw UserError("cannot read pixels of '" + path + "': " + in->geterror());
+    if (order) reorder_channels(out, *order);
     while (in->seek_subimage(out.subimages, 0)) ++out.subimages;
     return out;
 }
@@ -53,14 +180,16 @@ std::string other_subimages_warning(const std::string& path, const LoadedImage& 
 
 Window window_flag(const std::vector<int>& xywh, const Window& image, const std::string& flag) {
     if (xywh.empty()) return image;
-    const Window w{xywh[0], xywh[1], xywh[0] + xywh[2], xywh[1] + xywh[3]};
     const std::string given = flag + " " + std::to_string(xywh[0]) + "," + std::to_string(xywh[1]) + "," +
                               std::to_string(xywh[2]) + "," + std::to_string(xywh[3]);
-    if (w.empty()) throw UserError(given + " has no pixels: its width and height (the last two) must be above 0");
-    if (!image.contains(w))
+    if (xywh[2] <= 0 || xywh[3] <= 0)
+        throw UserError(given + " has no pixels: its width and height (the last two) must be above 0");
+    // (In 64 bits: a width near INT_MAX would overflow its end.)
+    const long long x1 = (long long)xywh[0] + xywh[2], y1 = (long long)xywh[1] + xywh[3];
+    if (xywh[0] < image.x0 || xywh[1] < image.y0 || x1 > image.x1 || y1 > image.y1)
         throw UserError(given + " is not inside the " + std::to_string(image.width()) + "x" +
                         std::to_string(image.height()) + " image");
-    return w;
+    return Window{xywh[0], xywh[1], int(x1), int(y1)};
 }
 
 int colour_channel_count(const OIIO::ImageSpec& spec) {
@@ -144,6 +273,38 @@ void require_writable(const std::string& path) {
     require_folder(path);
 }
 
+void require_format_holds(const std::string& path, const std::string& data_type, int channels) {
+    struct Limits {
+        const char* name;
+        std::vector<int> channels;          // empty: any count
+        std::vector<std::string> types;     // -d values it stores
+    };
+    // What each writer stores (OpenImageIO 2.4): DPX's writer aborts on 2 or more than 4
+    // channels; the others drop channels or change the type quietly.
+    static const std::vector<std::pair<std::vector<std::string>, Limits>> formats{
+        {{".dpx"}, {"DPX", {1, 3, 4}, {"uint8", "uint10", "uint12", "uint16", "float"}}},
+        {{".png"}, {"PNG", {1, 2, 3, 4}, {"uint8", "uint10", "uint12", "uint16"}}},  // (10, 12: as 16)
+        {{".jpg", ".jpeg"}, {"JPEG", {1, 3}, {"uint8"}}},
+        {{".hdr"}, {"Radiance HDR", {3}, {"float"}}},
+        {{".exr"}, {"OpenEXR", {}, {"half", "float"}}},
+    };
+    const std::string ext = lower_extension(path);
+    for (const auto& [extensions, limits] : formats) {
+        if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end()) continue;
+        const std::vector<int>& counts = limits.channels;
+        if (channels > 0 && !counts.empty() && std::find(counts.begin(), counts.end(), channels) == counts.end()) {
+            std::vector<std::string> held;
+            for (int c : counts) held.push_back(std::to_string(c));
+            throw UserError("cannot write '" + path + "': " + limits.name + " holds " +
+                            OIIO::Strutil::join(held, ", ") + " channels, and the output has " +
+                            std::to_string(channels) + ": write OpenEXR (.exr) or TIFF (.tif), which hold any");
+        }
+        if (!data_type.empty() && std::find(limits.types.begin(), limits.types.end(), data_type) == limits.types.end())
+            throw UserError("-d " + data_type + ": " + limits.name + " ('" + path + "') stores " +
+                            OIIO::Strutil::join(limits.types, ", "));
+    }
+}
+
 const std::vector<std::string>& output_data_types() {
     static const std::vector<std::string> types{"uint8", "uint10", "uint12", "uint16", "half", "float"};
     return types;
@@ -151,7 +312,9 @@ const std::vector<std::string>& output_data_types() {
 
 WriteOptions with_input_data_type(WriteOptions options, const OIIO::ImageSpec& input, const std::string& path) {
     if (!options.data_type.empty()) return options;
-    const OIIO::TypeDesc type = input.format;
+    // (The developed colour's own type: a layered file's others may differ.)
+    const OIIO::TypeDesc type = input.channelformat(0);
+    options.keep_channel_types = true;
     if (type == OIIO::TypeDesc::HALF || type == OIIO::TypeDesc::FLOAT) {
         if (is_float_format(path)) options.data_type = type.c_str();
         return options;
@@ -208,15 +371,26 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
     spec.full_width = like.full_width > 0 ? like.full_width : spec.width;
     spec.full_height = like.full_height > 0 ? like.full_height : spec.height;
     // The input's channels under their names and roles (a layer's "diffuse.R" stays so). A grey
-    // input developed (develop_image's layout) has R, G, B for its one channel of colour, and
-    // the channels past it two places on: its depth stays "Z", the z channel, not alpha.
+    // input developed (develop_image's layout) has R, G, B for its one channel of colour (in its
+    // layer: "diffuse.Y" gives "diffuse.R"), and the channels past it two places on: its depth
+    // stays "Z", the z channel, not alpha.
     const int shift = colour_channel_count(like) == 1 && image.channels == like.nchannels + 2 ? 2 : 0;
+    const std::string grey_layer = shift > 0 ? layer_of(like.channelnames[0]) : "";
     std::vector<int> from(image.channels);  // the input channel of each output channel, -1: none
     for (int c = 0; c < image.channels; ++c) {
         from[c] = shift > 0 && c < 3 ? -1 : c - shift;
         const char* rgb[3] = {"R", "G", "B"};
         const bool named = from[c] >= 0 && from[c] < like.nchannels;
-        spec.channelnames[c] = named ? like.channelnames[from[c]] : c < 3 ? rgb[c] : "A";
+        spec.channelnames[c] = named ? like.channelnames[from[c]]
+                               : c < 3 ? (grey_layer.empty() ? "" : grey_layer + ".") + rgb[c]
+                                       : "A";
+    }
+    // Without -d, the channels past the colour keep their own types where the format stores
+    // one per channel (a float depth beside half colour), so that they pass through bit for bit.
+    if (options.keep_channel_types && !like.channelformats.empty() && lower_extension(path) == ".exr") {
+        spec.channelformats.assign(image.channels, type);
+        for (int c = 3; c < image.channels; ++c)
+            if (from[c] >= 0 && from[c] < like.nchannels) spec.channelformats[c] = like.channelformats[from[c]];
     }
     auto output_of = [&](int input) {
         const auto at = std::find(from.begin(), from.end(), input);
@@ -252,6 +426,7 @@ void write_image(const std::string& path, const Image& image, const OIIO::ImageS
                  const std::function<void()>& committed) {
     if (!protected_input.empty() && same_file(path, protected_input))
         throw UserError("refusing to overwrite the input '" + path + "' with the output");
+    require_format_holds(path, "", image.channels);
     OIIO::ImageSpec spec = output_spec(image, like, path, options);
     auto out = OIIO::ImageOutput::create(path);
     if (!out) throw UserError("cannot write '" + path + "': " + OIIO::geterror());

@@ -23,8 +23,19 @@ struct LoadedImage {
 // empty; a UserError naming `flag` when it has no pixels or is not inside `image`.
 Window window_flag(const std::vector<int>& xywh, const Window& image, const std::string& flag);
 
-// The file's first subimage (part), as oiiotool reads a file without -a.
-LoadedImage read_image(const std::string& path);
+// About the memory developing an image of this header takes (its pixels read and written as
+// float, and the working planes): read_image refuses a file past the machine's memory, and a
+// batch runs no more frames at once than fit.
+double frame_memory_bytes(const OIIO::ImageSpec& spec);
+
+// The file's first subimage (part), as oiiotool reads a file without -a, with the channels
+// of the layer to develop first: its colour (R, G, B or Y), then its alpha, then every other
+// channel in the file's order, under its own name (a render's AOVs: depth.Z, diffuse.R, ...),
+// which passes through untouched. The layer is `layer` ("" for the channels without one), or
+// by default the unnamed layer where it has colour, else the only layer that has. UserError
+// listing the layers where the choice is ambiguous or `layer` has no colour. A file without
+// layered names ("name.channel") is read as it is, its first channels the colour.
+LoadedImage read_image(const std::string& path, const std::optional<std::string>& layer = std::nullopt);
 
 // Its header alone (a dry run's look at an input), with read_image's checks and messages.
 OIIO::ImageSpec read_image_spec(const std::string& path);
@@ -63,11 +74,20 @@ struct WriteOptions {
     std::optional<std::string> colour_space;
     // The pixels are Cineon printing density code values (a scan): a DPX says so in its header.
     bool printing_density = false;
+    // data_type is the input's own (no -d): the channels that pass through keep each their
+    // own type where the format stores one per channel (OpenEXR), so they are bit for bit.
+    bool keep_channel_types = false;
 };
 
 // Throws UserError, before any work, when `path` cannot be written: OpenImageIO has no writer
 // for its format (by its extension), or its folder does not exist.
 void require_writable(const std::string& path);
+
+// Throws UserError, before any work, when the output's format (by the extension of `path`)
+// cannot hold `channels` channels (DPX 1, 3 or 4; PNG 1 to 4; JPEG 1 or 3; Radiance HDR 3;
+// 0: not checked) or the data type -d asks for (`data_type`, "" for the default): its writer
+// would abort, drop channels or write another type without a word. OpenEXR and TIFF hold any.
+void require_format_holds(const std::string& path, const std::string& data_type, int channels = 0);
 
 // Whether the file gets integer pixels: a format without float ones (PNG, JPEG, DPX), or
 // -d uint8 or uint16.

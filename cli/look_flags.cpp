@@ -5,7 +5,7 @@
 #include <cstdlib>
 #include <sstream>
 
-#include "look/user_error.h"
+#include "cli/user_error.h"
 
 namespace darkroom::cli {
 
@@ -88,10 +88,19 @@ Look LookFlags::look() const {
     Look l = look_path.empty() ? Look{} : read_look_file(look_path);
     for (const auto& [key, words] : given) {
         const Parameter& p = parameter(key);
+        const json value = flag_value(p, words);
         try {
-            set_value(l, p, flag_value(p, words));
+            set_value(l, p, value);
         } catch (const UserError& e) {
-            throw UserError(p.cli_flag() + ": " + e.what());
+            // A word where a number goes does not convert; a number out of range is not accepted.
+            const bool numeric = p.type == ParameterType::number || p.type == ParameterType::per_channel ||
+                                 p.type == ParameterType::seed;
+            const json& first = value.is_array() && !value.empty() ? value[0] : value;
+            // (A seed of digits past 2^64 - 1 is a number out of range.)
+            const bool word = first.is_string() && first.get<std::string>().find_first_not_of("0123456789") !=
+                                                       std::string::npos;
+            throw FlagValueError(p.cli_flag() + ": " + e.what(), numeric && word ? CLI::ExitCodes::ConversionError
+                                                                                   : CLI::ExitCodes::ValidationError);
         }
     }
     return l;

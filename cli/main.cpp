@@ -113,6 +113,9 @@ int main(int argc, char** argv) {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         return darkroom::cli::report_parse_error(app, e, argc, argv);
+    } catch (const darkroom::cli::FlagValueError& e) {
+        std::cerr << "darkroom: error: " << e.what() << "\n";
+        return e.exit_code;
     } catch (const darkroom::cli::UserError& e) {
         std::cerr << "darkroom: error: " << e.what() << "\n";
         return darkroom::cli::kExitUserError;

@@ -1,7 +1,10 @@
 #include "cli/sequence.h"
 
 #include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/strutil.h>
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 
 #include "cli/user_error.h"
 
@@ -36,7 +39,29 @@ Pattern parse(const std::string& path, int framepadding) {
     return p;
 }
 
+// How many frames `framespec` names, counted without listing them (as OpenImageIO's parser
+// would, into memory): "1-100000000" is 100 million; 0 where it is not a range it reads.
+double frame_count(const std::string& framespec) {
+    double count = 0;
+    for (const std::string& part : OIIO::Strutil::splits(framespec, ",")) {
+        long long first = 0, last = 0, step = 1;
+        char kind = 'x';
+        const int read = std::sscanf(part.c_str(), "%lld-%lld%c%lld", &first, &last, &kind, &step);
+        if (read < 2) {
+            ++count;
+            continue;
+        }
+        const double span = std::abs(double(last) - double(first)) + 1;
+        const double every = read == 4 && step > 0 ? std::ceil(span / double(step)) : span;
+        count += kind == 'y' && read == 4 ? span - every : every;
+    }
+    return count;
+}
+
 std::vector<int> enumerate(const std::string& framespec) {
+    if (frame_count(framespec) > kMaxFrames)
+        throw UserError("--frames '" + framespec + "' names more than " + std::to_string(kMaxFrames) +
+                        " frames, the most a run takes: split it into several runs");
     std::vector<int> frames;
     if (!Filesystem::enumerate_sequence(framespec, frames) || frames.empty())
         throw UserError("--frames '" + framespec + "' is not a frame range (e.g. 1-100, 1-100x2, 1,5,9-12)");
@@ -49,25 +74,20 @@ std::vector<std::string> names(const Pattern& p, const std::vector<int>& frames)
     return out;
 }
 
-// The frames between the first and last of `found` (ascending) that are not in it.
-std::vector<int> gaps(const std::vector<int>& found) {
-    std::vector<int> missing;
-    for (size_t i = 1; i < found.size(); ++i)
-        for (int f = found[i - 1] + 1; f < found[i]; ++f) missing.push_back(f);
-    return missing;
-}
-
-}  // namespace
-
-std::string frame_ranges(const std::vector<int>& frames) {
+// The frames between the first and last of `found` (ascending) that are not in it, as
+// ranges ("6, 9-11"), without listing them: two files numbered 1 and 99999999 leave
+// a gap of a hundred million.
+std::string gaps(const std::vector<int>& found) {
     std::string text;
-    for (size_t start = 0, end; start < frames.size(); start = end) {
-        for (end = start + 1; end < frames.size() && frames[end] == frames[end - 1] + 1;) ++end;
-        text += (text.empty() ? "" : ", ") + std::to_string(frames[start]);
-        if (end - start > 1) text += "-" + std::to_string(frames[end - 1]);
+    for (size_t i = 1; i < found.size(); ++i) {
+        const long long first = found[i - 1] + 1LL, last = found[i] - 1LL;
+        if (first > last) continue;
+        text += (text.empty() ? "" : ", ") + std::to_string(first) + (last > first ? "-" + std::to_string(last) : "");
     }
     return text;
 }
+
+}  // namespace
 
 bool is_sequence_pattern(const std::string& path) { return parse(path, 0).is_sequence; }
 
@@ -97,7 +117,7 @@ ExpandedFrames expand_frames(const std::string& input, const std::string& output
             throw UserError("no files match the input sequence '" + input + "' (" + in.printf_pattern +
                             "); name the frames with --frames");
         std::sort(frames.begin(), frames.end());
-        missing_frames = frame_ranges(gaps(frames));
+        missing_frames = gaps(frames);
     } else {
         throw UserError("the output '" + output + "' is a sequence of a single input: name the frames with --frames");
     }

@@ -14,6 +14,10 @@
 
 namespace darkroom::cli {
 
+// The most frames one run takes (11.5 hours at 24 fps): each costs a few hundred bytes
+// before any work, so a mistyped range would fill the memory.
+inline constexpr int kMaxFrames = 1000000;
+
 struct FrameJob {
     int frame = 0;
     std::string input, output;
@@ -41,8 +45,5 @@ bool is_sequence_pattern(const std::string& path);
 // a sequence with no frames.
 ExpandedFrames expand_frames(const std::string& input, const std::string& output, const SequenceOptions& sequence,
                              int single_frame);
-
-// Frame numbers as ranges, in their order: {1, 2, 3, 7, 9, 10} -> "1-3, 7, 9-10".
-std::string frame_ranges(const std::vector<int>& frames);
 
 }  // namespace darkroom::cli

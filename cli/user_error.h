@@ -16,6 +16,14 @@ using darkroom::UserError;
 inline constexpr int kExitUserError = 1;
 inline constexpr int kExitInternalError = 3;
 
+// A look flag's value refused after CLI11 parsed the command line (by the look layer's
+// table): the exit status CLI11 gives its own refusals of the kind, so that one kind of
+// problem has one status whichever check finds it.
+struct FlagValueError : UserError {
+    FlagValueError(const std::string& message, CLI::ExitCodes kind) : UserError(message), exit_code(int(kind)) {}
+    int exit_code;
+};
+
 struct ExitStatus {
     std::string status, meaning;
 };

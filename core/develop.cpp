@@ -62,8 +62,28 @@ GrainSpec layer_grain(const GrainSpec& stock, const DevelopSettings& s, size_t c
 // (halation's hundreds of um) grow past what memory holds.
 constexpr double kMinPixelPitchUm = 0.1;
 
-MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width_px, const DevelopSettings& s,
-                            const PlanStructure& structure, uint32_t stream_base, const char* role,
+// The most pixels a layer's working plane may have: the frame grown by a kernel's reach on
+// every side (a grain or halo many times the frame) past this would take gigabytes and
+// minutes for what the frame cannot show (256 MB a float plane; a 4K frame with its
+// stocks' kernels has some 10 million).
+constexpr double kMaxGrownPlanePx = 64e6;
+
+// Throws std::invalid_argument, before a kernel is designed, when one of `radius_px` makes
+// the frame's working planes larger than kMaxGrownPlanePx: `what` names the kernel and why
+// it is that wide, `remedy` the settings that narrow it.
+void require_kernel_budget(double radius_px, int frame_width_px, int frame_height_px, const std::string& what,
+                           const std::string& remedy) {
+    const double grown = (frame_width_px + 2 * radius_px) * (frame_height_px + 2 * radius_px);
+    if (grown <= kMaxGrownPlanePx) return;
+    throw std::invalid_argument(what + " reaches " + std::to_string((long long)radius_px) + " px, which would make each " +
+                                std::to_string(frame_width_px) + "x" + std::to_string(frame_height_px) +
+                                " px layer " + fmt(grown * 4 / 1e9, 2) + " GB of working memory (at most " +
+                                fmt(kMaxGrownPlanePx * 4 / 1e9, 2) + " GB): " + remedy);
+}
+
+MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width_px, int frame_height_px,
+                            const DevelopSettings& s, const PlanStructure& structure, uint32_t stream_base,
+                            const char* role,
                             std::vector<std::string>& skipped, int threads) {
     const QualityTier& tier = quality_tier(s.quality);
     MaterialStages m;
@@ -77,11 +97,17 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
                                     fmt(kMinPixelPitchUm * frame_width_px / 1000.0) + " mm");
     }
     const std::string pitch = " at " + fmt(m.pixel_pitch_um) + " um pitch";
+    const std::string width_setting = std::string(role) == "film" ? "frame width" : "print width";
     for (size_t i = 0; i < stock.layers.size(); ++i) {
         const Layer& layer = stock.layers[i];
         std::string where = std::string(role) + " layer " + layer.name;
         m.rgb_weights.push_back(rgb_exposure_weights(layer.sensitivity, stock.exposure_illuminant));
 
+        // Each kernel's reach (its design's 4 standard deviations) checked before it is designed.
+        if (s.halation * layer.halation.strength > 0)
+            require_kernel_budget(4 * layer.halation.radius_um / m.pixel_pitch_um, frame_width_px, frame_height_px,
+                                  "the halation of " + where + " (" + fmt(layer.halation.radius_um) + " um" + pitch + ")",
+                                  "give a larger " + width_setting + " or halation 0");
         HalationKernel halation = design_halation(layer.halation.strength * s.halation, layer.halation.radius_um,
                                                   m.pixel_pitch_um, tier.halation_decimation);
         m.halation.push_back(std::nullopt);
@@ -108,6 +134,10 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         m.boolean_grain.push_back(std::nullopt);
         GrainSpec spec = layer_grain(layer.grain, s, i);
         if (!s.grain) spec.rms_granularity = 0;
+        if (spec.rms_granularity > 0)
+            require_kernel_budget(4 * spec.grain_size_um / m.pixel_pitch_um, frame_width_px, frame_height_px,
+                                  "the grain of " + where + " (" + fmt(spec.grain_size_um) + " um" + pitch + ")",
+                                  "give a smaller grain size or a larger " + width_setting);
         const NoiseKey key{s.seed, s.frame, stream_base + uint32_t(i)};
         // (The texture output takes its exposure fluctuation from the filtered-noise field.)
         if (tier.grain == GrainMethod::boolean_model && s.output != OutputMode::texture) {
@@ -399,9 +429,8 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     const double film_width_mm = settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm;
     const double print_width_mm =
         !printing ? 0.0 : settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm;
-    auto film_stages =
-        std::make_shared<MaterialStages>(build_stages(film, film_width_mm, p.film_width_px_, settings, structure, 0, "film",
-                                                      p.skipped_, threads));
+    auto film_stages = std::make_shared<MaterialStages>(build_stages(
+        film, film_width_mm, p.film_width_px_, frame.height, settings, structure, 0, "film", p.skipped_, threads));
     auto paper_stages = std::make_shared<MaterialStages>();
     p.monochrome_input_ = frame.monochrome && structure.skip_noop_stages;
     if (p.monochrome_input_ && settings.output != OutputMode::texture)
@@ -411,8 +440,8 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
                                  : mid_grey_exposure_lux_s(film.iso_speed) / 0.18 * std::exp2(settings.exposure_ev);
 
     if (printing) {
-        *paper_stages = build_stages(*paper, print_width_mm, p.film_width_px_, settings, structure, 16, "paper", p.skipped_,
-                                     threads);
+        *paper_stages = build_stages(*paper, print_width_mm, p.film_width_px_, frame.height, settings, structure, 16,
+                                     "paper", p.skipped_, threads);
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev});

@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/builtin_stock_data.h"
 #include "core/did_you_mean.h"
+#include "core/json_file.h"
 #include "core/stock_json.h"
 
 namespace darkroom {
@@ -31,6 +31,9 @@ namespace {
 using stock_json::kHuge;
 using stock_json::kMaxDensity;
 using stock_json::kMaxIsoSpeed;
+using stock_json::kMaxGrainSizeUm;
+using stock_json::kMaxHalationRadiusUm;
+using stock_json::kMinDensityRise;
 using stock_json::kMinIsoSpeed;
 
 // A density curve may not fall by more than this between samples (rounding in a sampled
@@ -138,6 +141,16 @@ Spectrum peak_normalised(const FieldReader& r, Spectrum s) {
 // errors of up to 1e-9 are clamped), and they never fall as exposure grows (development never
 // removes density; a parametric curve with a sharp toe and a broad shoulder would).
 Curve checked_density_curve(const FieldReader& r, Curve c) {
+    // A curve must rise: a flat one (or one exposure) prints every pixel the same and has no speed.
+    if (c.x.size() < 2 || !(c.x.back() > c.x.front()))
+        r.fail("the curve needs densities at two or more exposures (log H)");
+    const auto [lowest, highest] = std::minmax_element(c.y.begin(), c.y.end());
+    if (!(*highest - *lowest >= kMinDensityRise)) {
+        std::ostringstream problem;
+        problem << "the curve rises " << *highest - *lowest << " D over its exposures: a film's density must rise "
+                << "with exposure, by at least " << kMinDensityRise << " D";
+        r.fail(problem.str());
+    }
     for (size_t i = 0; i < c.y.size(); ++i) {
         if (i > 0 && c.y[i] < c.y[i - 1] - kFallTolerance)
             r.fail("the curve falls at log H " + std::to_string(c.x[i]) + ": density must not decrease with exposure");
@@ -228,7 +241,7 @@ Layer read_layer(const FieldReader& r, const json& v, const Stock& stock) {
     FieldReader rg = r.at("grain");
     const json& g = r.field(v, "grain");
     layer.grain.rms_granularity = rg.at("rms_granularity").number(rg.field(g, "rms_granularity"), 0.0, 1.0);
-    layer.grain.grain_size_um = rg.at("grain_size_um").number(rg.field(g, "grain_size_um"), 0.0, 1000.0);
+    layer.grain.grain_size_um = rg.at("grain_size_um").number(rg.field(g, "grain_size_um"), 0.0, kMaxGrainSizeUm);
     if (g.contains("density_exponent"))
         layer.grain.density_exponent = rg.at("density_exponent").number(g["density_exponent"], 0.0, 4.0);
 
@@ -236,7 +249,7 @@ Layer read_layer(const FieldReader& r, const json& v, const Stock& stock) {
         FieldReader rh = r.at("halation");
         const json& h = v["halation"];
         layer.halation.strength = rh.at("strength").number(rh.field(h, "strength"), 0.0, 10.0);
-        layer.halation.radius_um = rh.at("radius_um").number(rh.field(h, "radius_um"), 0.0, 1e5);
+        layer.halation.radius_um = rh.at("radius_um").number(rh.field(h, "radius_um"), 0.0, kMaxHalationRadiusUm);
     }
     return layer;
 }
@@ -339,11 +352,7 @@ Stock parse_stock_json(const std::string& text, const std::string& origin) {
 }
 
 Stock load_stock_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw StockError(path + ": cannot open stock file");
-    std::stringstream buffer;
-    buffer << in.rdbuf();
-    return parse_stock_json(buffer.str(), path);
+    return parse_stock_json(read_json_file<StockError>(path, "stock file"), path);
 }
 
 std::string stock_to_json(const Stock& s) {

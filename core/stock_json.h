@@ -25,6 +25,12 @@ inline constexpr double kMinIsoSpeed = 1e-6;
 inline constexpr double kMaxIsoSpeed = 1e9;
 // log10 sensitivities are read within +-30, so that 10^x is a finite, non-zero double.
 inline constexpr double kMaxLog10Sensitivity = 30.0;
+// The least a density curve rises over its exposures: a flatter film records no picture.
+inline constexpr double kMinDensityRise = 0.1;
+// Physical ranges: a grain clump is a few um (the coarsest films' under 3); a halo, light
+// reflected by the base's back (some 0.13 mm thick), spreads a few hundred um.
+inline constexpr double kMaxGrainSizeUm = 50.0;
+inline constexpr double kMaxHalationRadiusUm = 5000.0;
 
 // Reads fields of a JSON document, naming the file and the field path in every error.
 class FieldReader {

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <unistd.h>
 
+#include "core/json_file.h"
 #include "core/json_message.h"
 #include "look/parameters.h"
 #include "look/user_error.h"
@@ -130,12 +131,8 @@ void apply_look_text(Look& look, const std::string& text, const std::string& sou
 }
 
 Look read_look_file(const std::string& path, const Look& base) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw UserError("cannot open look file '" + path + "'");
-    std::stringstream text;
-    text << in.rdbuf();
     Look look = base;
-    apply_look_text(look, text.str(), path);
+    apply_look_text(look, read_json_file<UserError>(path, "look file"), path);
     return look;
 }
 

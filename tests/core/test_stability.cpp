@@ -14,6 +14,7 @@
 
 #include "core/develop.h"
 #include "core/stages/grain.h"
+#include "core/stock_json.h"
 #include "test_support.h"
 
 using namespace darkroom;
@@ -393,7 +394,18 @@ TEST_CASE("settings just past their limits are refused, naming the setting", "[s
                Catch::Contains("the film's pixel pitch") && Catch::Contains("give a frame width of at least 0.0004 mm"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.print_width_mm = 1e-300; }),
                Catch::Contains("the paper's pixel pitch") && Catch::Contains("print width"));
-    CHECK(refusal([&](DevelopSettings& s) { s.frame_width_mm = s.print_width_mm = 0.0004 * (1 + 1e-9); }) == "accepted");
+    CHECK(refusal([&](DevelopSettings& s) {
+              s.frame_width_mm = s.print_width_mm = 0.0004 * (1 + 1e-9);
+              s.halation = 0;  // (its 150 um would be 6000 px: the budget below)
+          }) == "accepted");
+    // Kernels whose reach would make the working planes gigabytes are refused before they are
+    // designed (a 150 um halo at 0.1 um pitch; grain 100 times its size there).
+    CHECK_THAT(refusal([&](DevelopSettings& s) { s.frame_width_mm = s.print_width_mm = 0.0004; }),
+               Catch::Contains("the halation of film layer") && Catch::Contains("give a larger frame width or halation 0"));
+    CHECK_THAT(refusal([&](DevelopSettings& s) {
+                   s.frame_width_mm = s.print_width_mm = 0.0004, s.halation = 0, s.grain_size = {100, 100, 100};
+               }),
+               Catch::Contains("the grain of film layer") && Catch::Contains("give a smaller grain size"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.printer_lights[1] = std::nextafter(225.0, 300.0); }),
                Catch::Contains("printer lights"));
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.printer_lights[2] = std::nextafter(-175.0, -300.0); }),
@@ -512,27 +524,15 @@ TEST_CASE("degenerate curves the loader accepts develop to finite, in-range outp
     };
     auto layer0 = [](json& doc) -> json& { return doc["layers"][0]; };
 
-    SECTION("a flat H&D curve develops to its one density; a flat paper curve cannot print mid grey") {
-        Stock flat = with(film, [&](json& d) { for (auto& v : layer0(d)["density_curve"]["density"]) v = 1.0; });
-        CHECK(develop_problem(flat, paper) == "");
-        DevelopSettings s = settings_for(OutputMode::density, Quality::high, 4);
-        s.grain = false;
-        Image in = stress_image(bad_values(6), 3);
-        for (float v : develop(StockPair{"", flat, paper}, s, in).pixels) CHECK(v == 1.0f);
+    SECTION("a flat H&D curve, or a single sample, is refused: it would print every pixel the same") {
+        CHECK_THROWS_WITH(with(film, [&](json& d) { for (auto& v : layer0(d)["density_curve"]["density"]) v = 1.0; }),
+                          Catch::Contains("the curve rises 0 D over its exposures"));
+        CHECK_THROWS_WITH(
+            with(film, [&](json& d) { layer0(d)["density_curve"] = {{"log_h", {-1.0}}, {"density", {0.8}}}; }),
+            Catch::Contains("the curve rises 0 D over its exposures"));
         json paper_doc = json::parse(stock_to_json(paper));
         for (auto& v : layer0(paper_doc)["density_curve"]["density"]) v = 0.5;
-        const Stock flat_paper = parsed(paper_doc);
-        CHECK_THROWS_WITH(Plan::compile(flat, &flat_paper, settings_for(OutputMode::print, Quality::high, 4), {4, 4}),
-                          Catch::Contains("never reaches the density of a neutral mid grey"));
-    }
-    SECTION("a single sample is a constant curve") {
-        Stock single = with(film, [&](json& d) { layer0(d)["density_curve"] = {{"log_h", {-1.0}}, {"density", {0.8}}}; });
-        CHECK(single.layers[0].density_curve(-100) == 0.8);
-        CHECK(single.layers[0].density_curve(100) == 0.8);
-        CHECK(develop_problem(single, paper) == "");
-        json paper_doc = json::parse(stock_to_json(paper));  // a paper that is all one density
-        layer0(paper_doc)["density_curve"] = {{"log_h", {0.0}}, {"density", {2.0}}};
-        CHECK(develop_problem(single, parsed(paper_doc)) == "");
+        CHECK_THROWS_WITH(parsed(paper_doc), Catch::Contains("must rise with exposure, by at least 0.1 D"));
     }
     SECTION("unsorted samples develop as the sorted ones") {
         Stock reversed = with(film, [&](json& d) {
@@ -575,4 +575,27 @@ TEST_CASE("degenerate curves the loader accepts develop to finite, in-range outp
         }
         CHECK(develop_problem(parsed(colour), colour_paper) == "");
     }
+}
+
+// The stock fields' physical ranges, at their ends: the coarsest grain and the widest,
+// strongest halo a stock may have, and the flattest curve, develop to finite, in-range output.
+TEST_CASE("stocks at their accepted extremes develop to finite, in-range output", "[stability]") {
+    const Stock colour_paper = find_stock("kodak-2383"), paper = find_stock("vdr-paper-grade-2");
+    json colour = stock_document("kodak-vision3-250d");
+    for (auto& layer : colour["layers"]) {
+        layer["grain"]["grain_size_um"] = stock_json::kMaxGrainSizeUm;
+        layer["grain"]["rms_granularity"] = 1.0;
+        layer["halation"] = {{"strength", 10.0}, {"radius_um", stock_json::kMaxHalationRadiusUm}};
+    }
+    CHECK(develop_problem(parsed(colour), colour_paper, true) == "");
+    json past = colour;
+    past["layers"][0]["grain"]["grain_size_um"] = std::nextafter(stock_json::kMaxGrainSizeUm, 100.0);
+    CHECK_THAT(refusal_of(past), Catch::Contains("grain_size_um"));
+    past = colour;
+    past["layers"][2]["halation"]["radius_um"] = std::nextafter(stock_json::kMaxHalationRadiusUm, 1e4);
+    CHECK_THAT(refusal_of(past), Catch::Contains("radius_um"));
+
+    json flattest = stock_document("kodak-tri-x-400");
+    flattest["layers"][0]["density_curve"] = {{"log_h", {-3.0, 0.0}}, {"density", {0.3, 0.3 + stock_json::kMinDensityRise}}};
+    CHECK(develop_problem(parsed(flattest), paper) == "");
 }

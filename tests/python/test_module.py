@@ -199,7 +199,7 @@ class TheParameterTable(unittest.TestCase):
                     darkroom.look(**{row["keyword"]: value})
                 result = subprocess.run([DARKROOM_EXE, "develop", "--" + key, str(value), "--save-look",
                                          os.path.join(folder, "refused.json")], capture_output=True, text=True)
-                self.assertEqual(result.returncode, 1)
+                self.assertEqual(result.returncode, 105)  # (a value out of range: docs/reference/exit-codes.md)
                 self.assertIn("--" + key + ": must be a number from", result.stderr)
 
     def test_the_schema_and_reference_in_the_repository_are_the_tables(self):

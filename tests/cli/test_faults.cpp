@@ -1,0 +1,277 @@
+// The fault suite: the program run as a pipeline runs it, on bad inputs and in bad
+// conditions (layered and odd-shaped files, corrupt and huge ones, settings at and past their
+// limits, signals a wrapper ignores, full disks, writers racing). Each case ends in a result
+// or a named refusal with its documented exit status, never a crash, a hang or wrong pixels.
+#include <OpenImageIO/imageio.h>
+#include <chrono>
+#include <csignal>
+#include <nlohmann/json.hpp>
+#include <sys/mount.h>
+#include <thread>
+#include <unistd.h>
+
+#include "cli_support.h"
+
+using namespace darkroom_test;
+
+namespace {
+
+fs::path fresh_dir(const std::string& name) {
+    fs::path dir = kTmp / "faults" / name;
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+const std::string kLook = " --seed 7 --frame-width-mm 3 --print-width-mm 20 --threads 1";
+
+// A 16x12 file of the named channels, each of its own type; a channel's value at (x, y) is
+// 0.1 k + 0.001 x + 1e-7 y, k by its name without the layer (R 1, G 2, B 3, ...), the last term
+// one that half cannot hold, to see float kept float.
+std::string layered_file(const fs::path& dir, const std::string& name, const std::vector<std::string>& channels,
+                         const std::vector<OIIO::TypeDesc>& types) {
+    OIIO::ImageSpec spec(16, 12, int(channels.size()), OIIO::TypeDesc::FLOAT);
+    spec.channelnames = channels;
+    spec.channelformats = types;
+    spec.alpha_channel = spec.z_channel = -1;
+    std::vector<float> px(16 * 12 * channels.size());
+    for (int y = 0; y < 12; ++y)
+        for (int x = 0; x < 16; ++x)
+            for (size_t c = 0; c < channels.size(); ++c)
+                px[(y * 16 + x) * channels.size() + c] =
+                    0.1f * float(std::string("RGBAZY").find(channels[c].back()) + 1) + 0.001f * x + 1e-7f * y;
+    const std::string path = (dir / name).string();
+    auto out = OIIO::ImageOutput::create(path);
+    REQUIRE(out);
+    REQUIRE(out->open(path, spec));
+    REQUIRE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+    REQUIRE(out->close());
+    return path;
+}
+
+// A channel of a file by name, as float, with its stored type.
+std::vector<float> channel(const std::string& path, const std::string& name, OIIO::TypeDesc* type = nullptr) {
+    auto in = OIIO::ImageInput::open(path);
+    REQUIRE(in);
+    const OIIO::ImageSpec& s = in->spec();
+    const auto at = std::find(s.channelnames.begin(), s.channelnames.end(), name);
+    REQUIRE(at != s.channelnames.end());
+    const int c = int(at - s.channelnames.begin());
+    if (type) *type = s.channelformat(c);
+    std::vector<float> out(size_t(s.width) * s.height);
+    REQUIRE(in->read_image(0, 0, c, c + 1, OIIO::TypeDesc::FLOAT, out.data()));
+    return out;
+}
+
+}  // namespace
+
+// Layered EXRs (a render's AOVs): the developed layer is chosen by name, and every other
+// channel comes out under its own name, with its own type, bit for bit.
+TEST_CASE("faults: a layered EXR develops its colour layer and passes the others through bit for bit",
+          "[cli][faults][layers]") {
+    const fs::path dir = fresh_dir("layers");
+    const OIIO::TypeDesc half = OIIO::TypeDesc::HALF, flt = OIIO::TypeDesc::FLOAT;
+    // OpenImageIO lists them so: depth first, the colour after it.
+    const std::string aovs = layered_file(dir, "aovs.exr", {"depth.Z", "diffuse.R", "diffuse.G", "diffuse.B"},
+                                          {flt, half, half, half});
+    const std::string alone = layered_file(dir, "alone.exr", {"diffuse.R", "diffuse.G", "diffuse.B"}, {half, half, half});
+    const std::string out = (dir / "out.exr").string(), out_alone = (dir / "out-alone.exr").string();
+    Result r = darkroom("develop " + aovs + " -o " + out + kLook);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    REQUIRE(darkroom("develop " + alone + " -o " + out_alone + kLook).exit_code == 0);
+    OIIO::TypeDesc type;
+    CHECK(channel(out, "depth.Z", &type) == channel(aovs, "depth.Z"));
+    CHECK(type == flt);
+    for (const char* c : {"diffuse.R", "diffuse.G", "diffuse.B"}) {
+        CHECK(channel(out, c, &type) == channel(out_alone, c));
+        CHECK(type == half);
+    }
+
+    // A beauty with its AOVs: the unnamed RGBA develops, the specular layer passes through.
+    const std::string beauty = layered_file(
+        dir, "beauty.exr", {"R", "G", "B", "A", "specular.R", "specular.G", "specular.B", "depth.Z"},
+        {half, half, half, half, half, half, half, flt});
+    REQUIRE(darkroom("develop " + beauty + " -o " + out + kLook).exit_code == 0);
+    for (const char* c : {"A", "specular.R", "specular.G", "specular.B", "depth.Z"})
+        CHECK(channel(out, c) == channel(beauty, c));
+    CHECK(channel(out, "R") != channel(beauty, "R"));
+}
+
+TEST_CASE("faults: a file with several colour layers needs --layer, and the error lists them",
+          "[cli][faults][layers]") {
+    const fs::path dir = fresh_dir("layer-choice");
+    const OIIO::TypeDesc half = OIIO::TypeDesc::HALF;
+    const std::string two = layered_file(dir, "two.exr", {"diffuse.R", "diffuse.G", "diffuse.B", "specular.R",
+                                                          "specular.G", "specular.B"},
+                                         std::vector<OIIO::TypeDesc>(6, half));
+    const std::string out = (dir / "out.exr").string();
+    Result r = darkroom("develop " + two + " -o " + out + kLook);
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("--layer") && Catch::Contains("'diffuse'") && Catch::Contains("'specular'"));
+    CHECK_FALSE(fs::exists(out));
+
+    r = darkroom("develop " + two + " -o " + out + kLook + " --layer specular");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    for (const char* c : {"diffuse.R", "diffuse.G", "diffuse.B"}) CHECK(channel(out, c) == channel(two, c));
+    CHECK(channel(out, "specular.R") != channel(two, "specular.R"));
+
+    r = darkroom("develop " + two + " -o " + out + kLook + " --layer spec");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("no such layer") && Catch::Contains("'specular'"));
+
+    // A grey layer develops to that layer's R, G, B; its depth passes through.
+    const std::string grey = layered_file(dir, "grey.exr", {"depth.Z", "matte.Y"}, {OIIO::TypeDesc::FLOAT, half});
+    r = darkroom("develop " + grey + " -o " + out + kLook);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(channel(out, "depth.Z") == channel(grey, "depth.Z"));
+    CHECK(channel(out, "matte.B").size() == 16 * 12);
+}
+
+// A farm wrapper or nohup ignores SIGHUP (or SIGINT) for the program it starts: it runs on.
+TEST_CASE("faults: a signal ignored by the caller stays ignored", "[cli][faults][signals]") {
+    const fs::path dir = fresh_dir("inherited-signals");
+    const std::string in = make_input("faults-signal-plate.exr", 96, 72);
+    for (int signal_number : {SIGHUP, SIGINT}) {
+        INFO("signal " << signal_number);
+        const std::string out = (dir / "still.####.exr").string();
+        for (const auto& entry : fs::directory_iterator(dir)) fs::remove(entry.path());
+        const std::string trap = signal_number == SIGHUP ? "HUP" : "INT";
+        pid_t pid = fork();
+        REQUIRE(pid >= 0);
+        if (pid == 0) {
+            const std::string command = "trap '' " + trap + "; exec " + std::string(DARKROOM_EXE) + " develop " + in +
+                                        " -o " + out + " --frames 1-6 -q --frames-at-once 1" + kLook;
+            execl("/bin/sh", "sh", "-c", command.c_str(), (char*)nullptr);
+            _exit(127);
+        }
+        int status = 0;
+        bool exited = false;
+        const char* first = "still.0001.exr";
+        while (!fs::exists(dir / first) && !exited) {
+            exited = waitpid(pid, &status, WNOHANG) == pid;
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        if (!exited) {
+            kill(pid, signal_number);
+            waitpid(pid, &status, 0);
+        }
+        REQUIRE(WIFEXITED(status));
+        CHECK(WEXITSTATUS(status) == 0);
+        CHECK(fs::exists(dir / "still.0006.exr"));
+    }
+    // Not ignored, it stops the run as before.
+    const std::string out = (dir / "stopped.####.exr").string();
+    pid_t pid = fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+        const std::string command = "exec " + std::string(DARKROOM_EXE) + " develop " + in + " -o " + out +
+                                    " --frames 1-200 -q --frames-at-once 1" + kLook;
+        execl("/bin/sh", "sh", "-c", command.c_str(), (char*)nullptr);
+        _exit(127);
+    }
+    while (!fs::exists(dir / "stopped.0001.exr")) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    kill(pid, SIGHUP);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 128 + SIGHUP);
+    CHECK(temp_files_in(dir) == 0);
+}
+
+// Each writer's limits are checked before the work: DPX's writer aborts on more than 4
+// channels, the others drop channels or change the type without a word.
+TEST_CASE("faults: an output format that cannot hold the channels or the type is refused before the work",
+          "[cli][faults][formats]") {
+    const fs::path dir = fresh_dir("formats");
+    const OIIO::TypeDesc half = OIIO::TypeDesc::HALF;
+    const std::string five =
+        layered_file(dir, "five.exr", {"R", "G", "B", "A", "Z"}, std::vector<OIIO::TypeDesc>(5, half));
+    const std::string rgb = layered_file(dir, "rgb.exr", {"R", "G", "B"}, std::vector<OIIO::TypeDesc>(3, half));
+    struct Case {
+        std::string input, output, flags, message;
+    };
+    for (const Case& c : std::vector<Case>{
+             {five, "five.dpx", "", "DPX holds 1, 3, 4 channels, and the output has 5"},
+             {five, "five.png", "", "PNG holds 1, 2, 3, 4 channels"},
+             {five, "five.hdr", "", "Radiance HDR holds 3 channels"},
+             {five, "five.jpg", "", "JPEG holds 1, 3 channels"},
+             {rgb, "out.exr", " -d uint16", "-d uint16: OpenEXR"},
+             {rgb, "rgb.png", " -d half", "-d half: PNG"},
+             {rgb, "rgb.jpg", " -d uint16", "-d uint16: JPEG"},
+             {rgb, "rgb.hdr", " -d half", "-d half: Radiance HDR"},
+             {rgb, "rgb.dpx", " -d half", "-d half: DPX"},
+         }) {
+        const std::string out = (dir / c.output).string();
+        for (const std::string& dry : std::vector<std::string>{"", " -n"}) {
+            Result r = darkroom("develop " + c.input + " -o " + out + c.flags + kLook + dry);
+            INFO(c.output << c.flags << dry << "\n" << r.output);
+            CHECK(r.exit_code == (dry.empty() || !c.flags.empty() ? 1 : 0));
+            CHECK_THAT(r.output, Catch::Contains(c.message));
+            CHECK_FALSE(fs::exists(out));
+        }
+    }
+    // What they hold is written.
+    for (const char* ok : {"rgb.dpx", "rgb.png", "rgb.hdr", "rgb.jpg", "rgb.tif"})
+        CHECK(darkroom("develop " + rgb + " -o " + (dir / ok).string() + kLook).exit_code == 0);
+    CHECK(darkroom("develop " + five + " -o " + (dir / "five.tif").string() + kLook).exit_code == 0);
+}
+
+// Settings and files at and past their limits: each refused before the work, naming what to
+// change, with the status its kind of problem has (docs/reference/exit-codes.md).
+TEST_CASE("faults: flags, files and sizes past their limits are refused before the work", "[cli][faults][limits]") {
+    const fs::path dir = fresh_dir("limits");
+    const std::string in = make_input("faults-limits.exr", 64, 64), out = (dir / "out.exr").string();
+    std::ofstream((dir / "corrupt.exr").string()) << "v/1\x01 not an image";
+    {
+        std::ofstream big((dir / "big.json").string());
+        big << "{\"format\": \"darkroom-look\", \"version\": 1, \"settings\": {}, \"pad\": \"";
+        big << std::string(17u << 20, 'x') << "\"}";
+    }
+    std::ofstream((dir / "both.json").string())
+        << R"({"format": "darkroom-look", "version": 1, "settings": {"tocolorspace": "ACEScg", "ociodisplay": ["sRGB", ""]}})";
+    struct Case {
+        std::string args, message;
+        int exit_code;
+    };
+    const std::string develop = "develop " + in + " -o " + out;
+    for (const Case& c : std::vector<Case>{
+             {"develop " + in + " -o " + (dir / "o.####.exr").string() + " --frames 1-100000000 -n",
+              "more than 1000000 frames", 1},
+             {develop + " --grain-size 100 --halation 0 --frame-width-mm 0.0064", "the grain of film layer", 1},
+             {develop + " --frame-width-mm 0.0064", "the halation of film layer", 1},
+             {develop + " --look " + (dir / "big.json").string(), "more than the 16 MB a look file may be", 1},
+             {develop + " --film " + (dir / "big.json").string(), "more than the 16 MB a stock file may be", 1},
+             {develop + " --look " + (dir / "both.json").string(), "both say where the result goes", 1},
+             {"develop " + (dir / "corrupt.exr").string() + " -o " + out, "cannot read", 1},
+             {develop + " --log " + (dir / "no-folder" / "log.json").string(), "does not exist", 1},
+             {develop + " --window 0,0,2147483647,5", "is not inside the 64x64 image", 1},
+             {develop + " --seed 18446744073709551616", "--seed: must be a whole number", 105},
+             {develop + " --seed -1", "--seed: must be a whole number", 104},
+             {develop + " --exposure 65", "--exposure: must be a number from -64 to 64", 105},
+             {develop + " --exposure lots", "--exposure: must be a number", 104},
+         }) {
+        Result r = darkroom(c.args);
+        INFO(c.args << "\n" << r.output);
+        CHECK(r.exit_code == c.exit_code);
+        CHECK_THAT(r.output, Catch::Contains(c.message));
+        CHECK_FALSE(fs::exists(out));
+    }
+}
+
+// A seed above 2^63 is kept exactly in the image's metadata, as in look files.
+TEST_CASE("faults: a 64-bit seed is kept exactly in the output's metadata", "[cli][faults][limits]") {
+    const fs::path dir = fresh_dir("seed");
+    const std::string in = make_input("faults-seed.exr", 16, 12), out = (dir / "out.exr").string();
+    const std::string seed = "18446744073709551615";
+    Result r = darkroom("develop " + in + " -o " + out + " --seed " + seed + " --save-look " + (dir / "look.json").string());
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    auto file = OIIO::ImageInput::open(out);
+    REQUIRE(file);
+    const nlohmann::json look = nlohmann::json::parse(file->spec().get_string_attribute("darkroom:look"));
+    CHECK(look["settings"]["seed"].get<uint64_t>() == 18446744073709551615ull);
+    CHECK_THAT(file_bytes(dir / "look.json"), Catch::Contains(seed));
+}
