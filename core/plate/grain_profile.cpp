@@ -113,6 +113,11 @@ void validate_grain_profile(const GrainProfile& p, const std::string& origin) {
         if (!ch.samples.empty() && ch.samples.size() != ch.level.size())
             fail(origin, at + ".response.samples",
                  std::to_string(ch.samples.size()) + " values for " + std::to_string(ch.level.size()) + " levels");
+        if (!ch.sigma_error.empty() && ch.sigma_error.size() != ch.level.size())
+            fail(origin, at + ".response.relative_error",
+                 std::to_string(ch.sigma_error.size()) + " values for " + std::to_string(ch.level.size()) + " levels");
+        for (double e : ch.sigma_error)
+            if (!(e >= 0)) fail(origin, at + ".response.relative_error", "must be >= 0");
         for (size_t i = 0; i < ch.level.size(); ++i) {
             if (!std::isfinite(ch.sigma[i]) || ch.sigma[i] < 0)
                 fail(origin, at + ".response.sigma[" + std::to_string(i) + "]", "must be finite and >= 0");
@@ -178,6 +183,8 @@ GrainProfile parse_grain_profile_json(const std::string& text, const std::string
                 ch.samples.push_back(
                     integer_value(samples[i], 0, LLONG_MAX, origin, field + "[" + std::to_string(i) + "]"));
         }
+        if (response.contains("relative_error"))
+            ch.sigma_error = number_array(response["relative_error"], origin, at + ".response.relative_error");
         const json& acf = member(cj, "autocorrelation", origin, at);
         ch.acf_radius = (int)integer_value(member(acf, "radius", origin, at + ".autocorrelation"), 0, 64, origin,
                                            at + ".autocorrelation.radius");
@@ -238,6 +245,7 @@ std::string grain_profile_to_json(const GrainProfile& p) {
     for (const GrainChannel& ch : p.channels) {
         json response = {{"level", ch.level}, {"sigma", ch.sigma}};
         if (!ch.samples.empty()) response["samples"] = ch.samples;
+        if (!ch.sigma_error.empty()) response["relative_error"] = ch.sigma_error;
         channels.push_back({{"name", ch.name},
                             {"response", response},
                             {"autocorrelation", {{"radius", ch.acf_radius}, {"values", ch.autocorrelation}}},

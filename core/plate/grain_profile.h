@@ -24,8 +24,10 @@ struct GrainChannel {
     std::string name;
     // Response curve: grain standard deviation at each signal level (sorted ascending).
     std::vector<double> level, sigma;
-    // Pixels behind each level (analysis confidence); empty for a predicted profile.
+    // Pixels behind each level, and the relative standard error of its sigma (the analysis'
+    // confidence); empty for a predicted profile.
     std::vector<long long> samples;
+    std::vector<double> sigma_error;
     // Normalised autocorrelation, (2 radius + 1)^2 values, row-major from (-r, -r).
     int acf_radius = 0;
     std::vector<double> autocorrelation{1.0};
