@@ -701,4 +701,46 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
     return profile;
 }
 
+const char* quality_name(ProfileQuality quality) {
+    switch (quality) {
+        case ProfileQuality::good: return "good";
+        case ProfileQuality::usable: return "usable";
+        case ProfileQuality::unreliable: return "unreliable";
+    }
+    return "unreliable";
+}
+
+ProfileAssessment assess_grain_profile(const GrainProfile& profile) {
+    struct Grade {
+        ProfileQuality quality;
+        int min_levels;
+        double min_fraction, max_error;
+    };
+    constexpr Grade kGrades[] = {{ProfileQuality::good, 4, 0.5, 0.10}, {ProfileQuality::usable, 2, 0.25, 0.25}};
+    ProfileAssessment out;
+    double worst_rank = 0;
+    for (const GrainChannel& ch : profile.channels) {
+        if (ch.samples.empty()) continue;
+        int within[2] = {0, 0}, seen = (int)ch.level.size();
+        for (const SparseLevel& s : profile.sparse_levels) seen += s.channel == ch.name;
+        for (size_t i = 0; i < ch.level.size(); ++i)
+            for (int g = 0; g < 2; ++g)
+                within[g] += ch.sigma_error.empty() || ch.sigma_error[i] <= kGrades[g].max_error;
+        int grade = 0;
+        while (grade < 2 && !(within[grade] >= kGrades[grade].min_levels && within[grade] >= kGrades[grade].min_fraction * seen))
+            ++grade;
+        // The weakest channel by grade, then by the share of levels it measured well.
+        const double rank = grade + 1.0 - double(within[std::min(grade, 1)]) / seen;
+        if (rank <= worst_rank) continue;
+        worst_rank = rank;
+        out.quality = grade < 2 ? kGrades[grade].quality : ProfileQuality::unreliable;
+        out.reason = "channel " + ch.name + ": " + std::to_string(within[std::min(grade, 1)]) + " of " +
+                     std::to_string(seen) + " levels measured within " +
+                     std::to_string(int(100 * kGrades[std::min(grade, 1)].max_error)) + " %" +
+                     (grade == 0 ? "" : " (the others hold picture content or too few flat blocks)");
+    }
+    if (out.reason.empty()) out.reason = "every level measured within 10 %";
+    return out;
+}
+
 }  // namespace darkroom

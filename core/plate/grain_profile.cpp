@@ -24,6 +24,18 @@ const char* encoding_name(SignalEncoding e) {
     return "linear";
 }
 
+SignalEncoding encoding_of_colorspace(const std::string& colorspace, SignalEncoding fallback) {
+    std::string cs = colorspace;
+    for (char& c : cs) c = char(std::tolower((unsigned char)c));
+    for (const char* log_word : {"log", "cineon", "adx", "acescc", "acescct"})
+        if (cs.find(log_word) != std::string::npos) return SignalEncoding::log;
+    for (const char* display_word : {"srgb", "rec709", "rec.709", "bt.709", "gamma", "display", "output"})
+        if (cs.find(display_word) != std::string::npos) return SignalEncoding::display;
+    for (const char* linear_word : {"linear", "lin_", "scene", "acescg", "aces2065"})
+        if (cs.find(linear_word) != std::string::npos) return SignalEncoding::linear;
+    return fallback;
+}
+
 double GrainChannel::sigma_at(double x) const {
     if (x <= level.front()) return sigma.front();
     if (x >= level.back()) return sigma.back();
@@ -119,8 +131,15 @@ void validate_grain_profile(const GrainProfile& p, const std::string& origin) {
         for (double e : ch.sigma_error)
             if (!(e >= 0)) fail(origin, at + ".response.relative_error", "must be >= 0");
         for (size_t i = 0; i < ch.level.size(); ++i) {
-            if (!std::isfinite(ch.sigma[i]) || ch.sigma[i] < 0)
-                fail(origin, at + ".response.sigma[" + std::to_string(i) + "]", "must be finite and >= 0");
+            if (!(std::abs(ch.level[i]) <= kMaxGrainLevel))
+                fail(origin, at + ".response.level[" + std::to_string(i) + "]",
+                     "must be within +-" + std::to_string((long long)kMaxGrainLevel));
+            // Grain larger than the signal range (1 in code values, the level itself in a bright
+            // linear highlight) is no grain: such a profile would only blow the image up.
+            const double limit = std::max(1.0, std::abs(ch.level[i]));
+            if (!(ch.sigma[i] >= 0 && ch.sigma[i] <= limit))
+                fail(origin, at + ".response.sigma[" + std::to_string(i) + "]",
+                     "must be from 0 to " + std::to_string(limit) + " (grain no larger than the signal range)");
         }
         const size_t side = 2 * (size_t)ch.acf_radius + 1;
         if (ch.acf_radius < 0 || ch.autocorrelation.size() != side * side)
