@@ -20,7 +20,7 @@ struct ExitStatus {
     std::string status, meaning;
 };
 
-// Every exit status the program gives, for its --help; the README's table lists the same
+// Every exit status the program gives, for its --help; docs/reference/exit-codes.md lists the same
 // (a test holds them to it).
 inline std::vector<ExitStatus> exit_statuses() {
     auto cli11 = [](CLI::ExitCodes code) { return std::to_string(int(code)); };

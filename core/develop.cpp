@@ -442,44 +442,12 @@ std::pair<double, double> solve_increasing(const F& f, double lo, double f_lo, d
 }
 
 // Printing through one table leaves no place for the paper's grain, so it is folded into the
-// film's: each film layer's grain amplitude a_i(D) (its tabulated curve's second function) is
-// raised to sqrt(a_i(D)^2 + e_i(D)^2) so that each channel of the viewed print (log10 of its
-// linear Rec.709, as a plate's grain is measured) has the grain variance of both. At the
-// table's input the film layer's grain has the spread s_i = a_i kappa_i sqrt(rho_i), kappa_i
-// the film grain filter's gain per pixel and rho_i the share of variance the paper's MTF keeps
-// of it (it keeps all of the paper's own, which is added after it). Along the grey scale
-// (scene grey exposed at the plan's exposure), each level on its own:
-//  1. The paper layers' grains are independent, so channel c receives
-//     sigma_c^2 = sum_j V_cj^2 sigma_paper_j^2, V_cj = d log rgb_c / d p_j. A film layer's extra
-//     grain moves all three paper layers together (the negative's dyes absorb in more than one
-//     paper layer's band), so matching the paper layers' variances instead would correlate them
-//     and overstate a channel that mixes them (+9 % in 250D on 2383's green five stops under).
-//  2. The print is far from straight over the negative's grain in its toe and shoulder, so each
-//     channel's own layer's extra spread is solved through the print itself, not its slope:
-//     Var v_c(D + s Z e_c) = Var v_c(D + s_c Z e_c) + sigma_c^2 (v_c = log rgb_c of the print, Z
-//     standard normal; Gauss-Hermite quadrature, s by regula falsi, at most kMaxFoldedGrainD:
-//     where the print is flat no spread carries the paper's grain). The variance that spread
-//     adds over the film's, per unit of added variance t_c, is the effective squared contrast g_c.
-//  3. With M_ci = d v_c / d D_i, the t_i >= 0 solve, in the least-squares sense,
-//       g_c t_c + sum_{i != c} M_ci^2 t_i + X_c = sigma_c^2   for each channel c
-//     (t_i = 0 where the film layer has no grain), X_c the cross terms of 4.
-//  4. The extra grain reaches the channels through the negative's dyes, which mix them more
-//     than the paper's own dyes do: with the layers' grains independent the print's channels
-//     were 0.02 (at grey) to 0.13 (four stops under) more correlated than high's (0.049 from
-//     the reference's pooled over the benchmark's wedge, against the plate-matching tolerance
-//     of 0.05). So the layers' grains are correlated as the print needs: the film layers'
-//     covariance at the table's input that gives the print both grains' channel covariance,
-//     linearised,
-//       T = diag(s_i^2) + M^-1 V diag(sigma_paper^2) V^T M^-T,
-//     is taken at grey, its correlation taken back to the white noises (over the correlation
-//     two layers' kernels give one white noise) and factored (Cholesky, W = L L^T): each layer
-//     filters the white noises mixed by its row of L (GrainModel::mixed_noise), so the layers'
-//     grains have one correlation Q_ij along the whole scale. (T's correlations are weakest
-//     near grey, -0.01 to -0.05 on 250D and 2383, and grow towards the scale's ends, where the
-//     paper's grain outweighs the film's: those levels keep some of the excess, README.) Then
-//       X_c = sum_{i != j} M_ci M_cj s_i s_j Q_ij,  s_i^2 the layer's spread and t_i,
-//     and 3 is solved again until t settles.
-// What the negative cannot carry (README, "How preview prints") is measured there.
+// film's: each film layer's grain amplitude is raised so that each channel of the viewed print
+// (log10 of its linear Rec.709, as a plate's grain is measured) has the grain variance of both,
+// level by level along the grey scale. The extra variances are solved together (non-negative
+// least squares over the three channels, through the print itself where it bends over the
+// grain), and the layers' grains are correlated (a Cholesky mix of their white noises) as the
+// print's channels need. The derivation: docs/model/print-grain-fold.md.
 constexpr double kMaxFoldedGrainD = 0.5;
 void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
                       double exposure_scale, int curve_table_bits, int threads) {
@@ -986,7 +954,7 @@ double Plan::silver_grains_per_pixel() const {
 }
 
 // The reference tier's grain costs about this much CPU time per silver grain drawn: 0.75 us
-// on the 2-core AMD EPYC of the README's benchmark (its 4K reference frame, extrapolated from
+// on a 2-core machine, in the benchmark (its 4K reference frame, extrapolated from
 // its sample windows: 24 700 s on 2 threads for 7 500 grains a pixel).
 constexpr double kCpuSecondsPerSilverGrain = 0.75e-6;
 constexpr double kLongRenderCpuSeconds = 900;

@@ -5,7 +5,7 @@ namespace darkroom {
 namespace {
 
 // The settings of each tier; `darkroom bench` measures what each costs and how far it is
-// from the reference (README, "Quality tiers").
+// from the reference (docs/development/quality-tiers.md).
 constexpr QualityTier kTiers[] = {
     {Quality::reference, "reference", {0, 0.0}, 1, GrainMethod::boolean_model, 0, 0},
     {Quality::high, "high", {0, kSeparableTolerance}, 1, GrainMethod::filtered_noise, 0, 0},

@@ -55,7 +55,7 @@ struct QualityTier {
 
 // The default of the command line, the plugin and the Python module: the fastest tier
 // within the colour budget (mean CIEDE2000 <= 0.5 against the reference), from the
-// benchmark's Pareto table (README, "Quality tiers").
+// benchmark's Pareto table (docs/development/quality-tiers.md).
 constexpr Quality kDefaultQuality = Quality::fast;
 
 const QualityTier& quality_tier(Quality q);

@@ -74,7 +74,7 @@ __attribute__((always_inline)) inline void int32_lanes(int32_t (&lanes)[n], cons
 // for_writing, written) a few iterations later, for a loop that streams a row from memory:
 // the hardware's prefetchers stop at each 4 KB page, so a 4K frame's row would otherwise
 // wait on memory at every page (measured: the exposure's input reads and the result's
-// writes, README). A hint only: no value changes; the address is formed as an integer, and
+// writes, docs/development/quality-tiers.md). A hint only: no value changes; the address is formed as an integer, and
 // one past the buffer does not fault.
 constexpr int kPrefetchAheadBytes = 4096;
 template <bool for_writing = false>

@@ -68,7 +68,7 @@ Spectrum read_illuminant(const FieldReader& r, const std::string& name) {
     r.fail("unknown illuminant '" + name + "' (known: D50, D55, D65, A, or a blackbody such as 3200K in 1000-25000 K)");
 }
 
-// A spectral function (see the README's stock format): a sum of Gaussians plus a constant,
+// A spectral function (docs/reference/stocks.md): a sum of Gaussians plus a constant,
 // or a table (linear or log10 values, linearly interpolated, 0 outside its wavelengths),
 // or for black-and-white sensitivities an emulsion class. Tables on any wavelength grid
 // are resampled onto the model's 380-780 nm grid.

@@ -4,7 +4,7 @@
 // green- and blue-sensitive, in that order), each with its spectral sensitivity,
 // characteristic (H&D) curve, MTF, granularity and halation, and for colour its dye's
 // spectral density; plus the stock's ISO speed, the illuminant it is balanced for and its
-// base density. Stocks are data: versioned JSON files (format in the README, "Stocks"),
+// base density. Stocks are data: versioned JSON files (format in docs/reference/stocks.md),
 // with the built-in presets compiled in from core/stocks/*.json. Profiles in spektrafilm's
 // JSON format are imported too (import_spektrafilm_profile).
 #pragma once

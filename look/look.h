@@ -9,7 +9,8 @@
 //    "settings": {"film": "kodak-tri-x-400", "exposure": 0.5, "grain": true, ...}}
 //
 // Keys left out keep their defaults; null leaves a setting unset (its default, or the
-// stock's own value where the table says so). The JSON Schema is look/look.schema.json.
+// stock's own value where the table says so). Their JSON Schema is
+// docs/reference/schemas/look.schema.json.
 #pragma once
 
 #include <nlohmann/json.hpp>
@@ -60,8 +61,8 @@ void apply_look_json(Look& look, const nlohmann::json& file, const std::string& 
 // The same for a file's text (UserError too when it is not JSON) and for a file.
 void apply_look_text(Look& look, const std::string& text, const std::string& source);
 Look read_look_file(const std::string& path, const Look& base = Look{});
-// The JSON Schema of look files, made from the parameter table (look/look.schema.json is
-// this, written out; a test keeps the two the same).
+// The JSON Schema of look files, made from the parameter table (a test keeps
+// docs/reference/schemas/look.schema.json, this written out, the same).
 nlohmann::json look_schema();
 // Writes the look through a temporary file renamed over `path`, so that it is whole or absent.
 void write_look_file(const std::string& path, const Look& look);

@@ -140,9 +140,11 @@ py::list parameter_table() {
     py::list rows;
     const py::object loads = py::module_::import("json").attr("loads");
     for (const darkroom::Parameter& p : darkroom::parameters()) {
-        nlohmann::json row = {{"keyword", p.python_keyword()}, {"key", p.key},       {"unit", p.unit},
-                              {"group", p.group},              {"help", p.help},     {"default", p.default_value()},
-                              {"animatable", p.animatable},    {"per_pixel", p.per_pixel}};
+        nlohmann::json row = {{"keyword", p.python_keyword()}, {"key", p.key},
+                              {"unit", p.unit},                {"group", p.group},
+                              {"help", p.help},                {"default", p.default_value()},
+                              {"animatable", p.animatable},    {"per_pixel", p.per_pixel},
+                              {"label", p.label},              {"ofx_name", p.ofx_name}};
         if (p.type == darkroom::ParameterType::number || p.type == darkroom::ParameterType::per_channel)
             row["min"] = p.min, row["max"] = p.max;
         for (const darkroom::Choice& c : p.choices) row["choices"].push_back(c.name);
@@ -177,7 +179,8 @@ PYBIND11_MODULE(darkroom, m) {
           "The look (a dict, as a look file holds it) that these keywords and look file give.");
     m.def("parameters", &parameter_table,
           "The look's settings (the keywords develop, look and save_look take): a list of dicts with each one's "
-          "keyword, look-file key, unit, group, help, default, range (min, max) and choices.");
+          "keyword, look-file key, unit, group, help, default, range (min, max), choices, and the plugin's label "
+          "and parameter name.");
     m.def(
         "look_schema", [] { return py::module_::import("json").attr("loads")(darkroom::look_schema().dump()); },
         "The JSON Schema of look files (a dict), made from the parameter table.");

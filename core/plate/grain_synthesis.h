@@ -27,7 +27,7 @@ constexpr uint32_t kPlateGrainStream = 0x706c0000u;
 // then differs from the exact 2D convolution's by a field of at most 1e-4 of its variance
 // (1 % of its standard deviation, below the analysis' own 2 % error on sigma; tested). The
 // terms stream down the rows in float vectors (SeparableStream), about 4x faster on a 4K
-// frame than the direct 2D sum in double they replace (README, Plate matching).
+// frame than the direct 2D sum in double they replace (docs/guides/plate-matching.md).
 constexpr double kGrainKernelResidualEnergy = 1e-4;
 
 // A channel's response curve for per-pixel use: GrainChannel::sigma_at's values exactly, the

@@ -140,7 +140,7 @@ TEST_CASE("the printed grain wedge reads the print's densities, and the fast tie
     // spectrum, and the channels' correlation: the fold's extra grain reaches the print through
     // the negative's dyes, which mix the channels more than the paper's own grain does, so the
     // film layers' grains are correlated to undo it (0.051 from high's with them independent,
-    // 0.025 so: README, The print's grain).
+    // 0.025 so: docs/development/quality-tiers.md, the print's grain).
     const GrainMatch m = compare_grain_profiles(high, fast);
     const GrainMatchTolerance tolerance;
     CHECK(m.max_correlation_difference <= tolerance.correlation);

@@ -108,7 +108,7 @@ TEST_CASE("develop in.exr out.exr, oiiotool's habit, is told to name the output 
     CHECK_FALSE(fs::exists(out));
 }
 
-TEST_CASE("every exit status is listed in --help and in the README, and the listed ones are given", "[cli]") {
+TEST_CASE("every exit status is listed in --help and in the reference, and the listed ones are given", "[cli]") {
     Result help = darkroom("--help");
     REQUIRE(help.exit_code == 0);
     const size_t footer = help.output.find("Exit status:\n");
@@ -122,10 +122,10 @@ TEST_CASE("every exit status is listed in --help and in the README, and the list
     }
     REQUIRE(listed.count("0") == 1);
     REQUIRE(listed.count("128+N") == 1);  // (the kill tests check the status itself)
-    const std::string readme = file_bytes(fs::path(DARKROOM_SOURCE_DIR) / "README.md");
+    const std::string reference = file_bytes(fs::path(DARKROOM_SOURCE_DIR) / "docs/reference/exit-codes.md");
     for (const auto& [status, meaning] : listed) {
         INFO(status << " " << meaning);
-        CHECK_THAT(readme, Catch::Contains("| " + status + " | " + meaning + " |"));
+        CHECK_THAT(reference, Catch::Contains("| " + status + " | " + meaning + " |"));
     }
 
     // Each status a command line gives is listed.

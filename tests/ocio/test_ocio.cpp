@@ -963,7 +963,7 @@ TEST_CASE("the embedded config written out is the same config", "[ocio][config]"
 }
 
 TEST_CASE("every output of the embedded config keeps the model's results finite", "[ocio][convert]") {
-    // The model's results are finite and non-negative (README, bad pixels). Working-space
+    // The model's results are finite and non-negative (docs/guides/command-line.md, bad pixels). Working-space
     // values: black, white, a saturated primary and the 1e30 clamp. Scan codes / 1023: 0 up
     // to 2 (code 2046: (2046 - 95) x 0.002 = 3.9 density above the base).
     ColorConverter converter(embedded_active_config());

@@ -5,6 +5,7 @@ Run by CTest with PYTHONPATH at the built module and DARKROOM_EXE naming the pro
 import json
 import os
 import subprocess
+import sys
 import tempfile
 import unittest
 import warnings
@@ -206,10 +207,14 @@ class TheParameterTable(unittest.TestCase):
                 self.assertEqual(result.returncode, 1)
                 self.assertIn("--" + key + ": must be a number from", result.stderr)
 
-    def test_the_schema_in_the_repository_is_the_tables(self):
+    def test_the_schema_and_reference_in_the_repository_are_the_tables(self):
+        sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "tools"))
+        import write_look_reference
+        stale = "out of date: run tools/write_look_reference.py"
         with open(SCHEMA) as f:
-            self.assertEqual(json.load(f), darkroom.look_schema(),
-                             "look/look.schema.json is out of date: run tools/write_look_schema.py")
+            self.assertEqual(json.load(f), darkroom.look_schema(), "docs/reference/schemas/look.schema.json is " + stale)
+        with open(PARAMETERS_PAGE) as f:
+            self.assertEqual(f.read(), write_look_reference.parameters_page(), "docs/reference/look-parameters.md is " + stale)
 
     def test_the_schema_takes_looks_and_refuses_broken_ones(self):
         import jsonschema
@@ -235,7 +240,8 @@ class TheParameterTable(unittest.TestCase):
                     darkroom.look(look=path)
 
 
-SCHEMA = os.path.join(os.path.dirname(__file__), "..", "..", "look", "look.schema.json")
+SCHEMA = os.path.join(os.path.dirname(__file__), "..", "..", "docs", "reference", "schemas", "look.schema.json")
+PARAMETERS_PAGE = os.path.join(os.path.dirname(__file__), "..", "..", "docs", "reference", "look-parameters.md")
 LOOK_DATA = os.path.join(os.path.dirname(__file__), "..", "look", "data")
 
 

@@ -1,0 +1,71 @@
+"""The file formats' JSON Schemas (docs/reference/schemas/) take the files Darkroom ships and
+writes, and refuse broken ones. Run by CTest with Debian's python3-jsonschema."""
+import copy
+import glob
+import json
+import os
+import unittest
+
+import jsonschema
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+SCHEMAS = os.path.join(ROOT, "docs", "reference", "schemas")
+
+
+def validator(name):
+    with open(os.path.join(SCHEMAS, name + ".schema.json")) as f:
+        schema = json.load(f)
+    jsonschema.Draft202012Validator.check_schema(schema)
+    return jsonschema.Draft202012Validator(schema)
+
+
+def load(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+class StockSchema(unittest.TestCase):
+    def setUp(self):
+        self.schema = validator("stock")
+        self.stocks = sorted(glob.glob(os.path.join(ROOT, "core", "stocks", "*.json")))
+
+    def test_every_built_in_stock_is_valid(self):
+        self.assertGreaterEqual(len(self.stocks), 14)
+        for path in self.stocks:
+            with self.subTest(stock=os.path.basename(path)):
+                self.schema.validate(load(path))
+
+    def test_broken_stocks_are_refused(self):
+        good = load(os.path.join(ROOT, "core", "stocks", "kodak-vision3-250d.json"))
+        breakages = {
+            "an unknown kind": lambda s: s.update(kind="slide"),
+            "no layers": lambda s: s.update(layers=[]),
+            "a granularity above 1": lambda s: s["layers"][0]["grain"].update(rms_granularity=3),
+            "an unknown field": lambda s: s.update(colour="orange"),
+            "a layer without its curve": lambda s: s["layers"][1].pop("density_curve"),
+            "a Gaussian without its width": lambda s: s["layers"][0]["spectral_sensitivity"]["gaussians"][0].pop("sigma_nm"),
+            "another format": lambda s: s.update(format="darkroom-look"),
+        }
+        for what, breakage in breakages.items():
+            with self.subTest(what):
+                broken = copy.deepcopy(good)
+                breakage(broken)
+                self.assertFalse(self.schema.is_valid(broken))
+
+
+class LookSchema(unittest.TestCase):
+    def test_the_example_looks_are_valid_and_broken_ones_refused(self):
+        schema = validator("look")
+        looks = sorted(glob.glob(os.path.join(ROOT, "examples", "looks", "*.json")) +
+                       glob.glob(os.path.join(ROOT, "tests", "look", "data", "*.json")))
+        self.assertGreaterEqual(len(looks), 3)
+        for path in looks:
+            with self.subTest(look=os.path.basename(path)):
+                schema.validate(load(path))
+        broken = load(looks[0])
+        broken["settings"]["printer-lights"] = [25, 25]
+        self.assertFalse(schema.is_valid(broken))
+
+
+if __name__ == "__main__":
+    unittest.main()
