@@ -366,7 +366,7 @@ void add_analysis_flags(CLI::App& cmd, AnalyzeOptions& o) {
     cmd.add_option("--iscolorspace", o.colorspace, "The plate's colour space (recorded; implies the encoding)");
     cmd.add_option("--encoding", o.encoding, "linear, log or display (default: from --iscolorspace, else display for "
                                              "integer files and linear for float files)");
-    cmd.add_option("--block-size", o.block_size, "Block size in pixels (default: 64 if that gives 200 blocks, else 32)")
+    cmd.add_option("--block-size", o.block_size, "Block size in pixels (default: from the grain, 16 to 64)")
         ->check(CLI::Range(8, 256));
     cmd.add_option("--levels", o.levels, "Signal level bins of the response curve")->check(CLI::Range(1, 256));
     cmd.add_option("--min-blocks", o.min_blocks, "Grain-only blocks a level needs to be estimated")
