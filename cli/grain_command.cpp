@@ -35,18 +35,6 @@ bool ends_with(const std::string& s, const std::string& suffix) {
     return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-// The encoding a colour-space name implies; `fallback` when the name says nothing.
-SignalEncoding encoding_from(const std::string& colorspace, SignalEncoding fallback) {
-    const std::string cs = lower(colorspace);
-    for (const char* log_word : {"log", "cineon", "adx", "acescc", "acescct"})
-        if (cs.find(log_word) != std::string::npos) return SignalEncoding::log;
-    for (const char* display_word : {"srgb", "rec709", "rec.709", "bt.709", "gamma", "display", "output"})
-        if (cs.find(display_word) != std::string::npos) return SignalEncoding::display;
-    for (const char* linear_word : {"linear", "lin_", "scene", "acescg", "aces2065"})
-        if (cs.find(linear_word) != std::string::npos) return SignalEncoding::linear;
-    return fallback;
-}
-
 SignalEncoding parse_encoding(const std::string& name) {
     if (name == "linear") return SignalEncoding::linear;
     if (name == "log") return SignalEncoding::log;
@@ -114,6 +102,14 @@ LoadedImage read_plate(const std::string& path) {
     return in;
 }
 
+// A file's encoding: as --iscolorspace names it, else as the file's own tag does (OpenImageIO
+// tags a log DPX scan "KodakLog", a PNG "sRGB", an EXR "Linear"), else by the pixels' type.
+SignalEncoding file_encoding(const std::string& colorspace_flag, const OIIO::ImageSpec& spec) {
+    const SignalEncoding by_type = spec.format.is_floating_point() ? SignalEncoding::linear : SignalEncoding::display;
+    return encoding_of_colorspace(colorspace_flag,
+                                  encoding_of_colorspace(spec.get_string_attribute("oiio:ColorSpace"), by_type));
+}
+
 struct AnalyzeOptions {
     std::vector<std::string> plates;
     std::string output, colorspace, encoding, frames, plot;
@@ -137,13 +133,7 @@ GrainProfile analyze_files(const std::vector<std::string>& paths, const AnalyzeO
     settings.channels = colour_channel_count(first);
     for (int c = 0; c < settings.channels && c < (int)first.channelnames.size(); ++c)
         settings.channel_names.push_back(first.channelnames[c]);
-    // The encoding: as given, else as --iscolorspace names it, else as the file's own tag does
-    // (OpenImageIO tags a log DPX scan "KodakLog", a PNG "sRGB", an EXR "Linear"), else by
-    // the pixels' type.
-    const bool integer_pixels = !first.format.is_floating_point();
-    const SignalEncoding by_type = integer_pixels ? SignalEncoding::display : SignalEncoding::linear;
-    settings.encoding = !o.encoding.empty() ? parse_encoding(o.encoding)
-                        : encoding_from(o.colorspace, encoding_from(first.get_string_attribute("oiio:ColorSpace"), by_type));
+    settings.encoding = !o.encoding.empty() ? parse_encoding(o.encoding) : file_encoding(o.colorspace, first);
     for (size_t i = 0; i < images.size(); ++i) {
         if (images[i].pixels.channels < settings.channels)
             throw UserError("'" + paths[i] + "' has " + std::to_string(images[i].pixels.channels) + " channels, '" +
@@ -223,9 +213,11 @@ void print_profile(const GrainProfile& p) {
         double hi = *std::max_element(ch.sigma.begin(), ch.sigma.end());
         long long samples = 0;
         for (long long s : ch.samples) samples += s;
-        std::printf("  %-3s %2zu levels %.4g..%.4g, sigma %.4g..%.4g, %lld px; half-power %.3f cycles/px, noise-equivalent "
-                    "area %.2f px^2\n",
-                    ch.name.c_str(), ch.level.size(), ch.level.front(), ch.level.back(), lo, hi, samples,
+        std::printf("  %-3s %2zu levels %.4g..%.4g, sigma %.4g..%.4g", ch.name.c_str(), ch.level.size(), ch.level.front(),
+                    ch.level.back(), lo, hi);
+        if (!ch.sigma_error.empty())
+            std::printf(" (within %.1f %%)", 100 * *std::max_element(ch.sigma_error.begin(), ch.sigma_error.end()));
+        std::printf(", %lld px; half-power %.3f cycles/px, noise-equivalent area %.2f px^2\n", samples,
                     half_power_frequency(radial_power_spectrum(ch)), noise_equivalent_area_px2(ch));
     }
     const size_t n = p.channels.size();
@@ -234,21 +226,36 @@ void print_profile(const GrainProfile& p) {
         for (size_t b = a + 1; b < n; ++b)
             std::printf(" %s-%s %.3f", p.channels[a].name.c_str(), p.channels[b].name.c_str(), p.correlation((int)a, (int)b));
     std::printf("\n");
-    for (const SparseLevel& s : p.sparse_levels)
-        std::printf("  too few grain-only samples: channel %s at level %.4g (%lld px), left out\n", s.channel.c_str(),
-                    s.level, s.samples);
+    if (!p.sparse_levels.empty()) {
+        std::string per_channel;
+        for (const GrainChannel& ch : p.channels) {
+            const long long left_out = std::count_if(p.sparse_levels.begin(), p.sparse_levels.end(),
+                                                     [&](const SparseLevel& s) { return s.channel == ch.name; });
+            if (left_out > 0) per_channel += " " + ch.name + " " + std::to_string(left_out);
+        }
+        std::printf("  levels left out (too few grain-only blocks, or picture content in all):%s\n", per_channel.c_str());
+    }
+    if (p.block_size_px > 0) {
+        const ProfileAssessment trust = assess_grain_profile(p);
+        std::printf("profile: %s (%s)\n", quality_name(trust.quality), trust.reason.c_str());
+    }
 }
 
 void run_analyze(const AnalyzeOptions& o) {
     GrainProfile profile = analyze_files(expand_frames(o.plates, o.frames), o, o.region, "--region");
     write_text_atomically(o.output, grain_profile_to_json(profile) + "\n");
     print_profile(profile);
+    if (assess_grain_profile(profile).quality == ProfileQuality::unreliable)
+        std::cerr << "darkroom: warning: the grain profile is unreliable: check it against the plate (grain compare) or "
+                     "analyse more frames or a region with flat areas\n";
     if (!o.plot.empty()) plot(o.plot, {response_chart("Grain response", {{"", &profile}}), spectrum_chart({{"", &profile}})});
 }
 
 struct ApplyOptions {
     BatchOptions batch;
     std::string profile, colorspace;
+    std::vector<double> gain{1.0}, size{1.0};
+    double tilt = 0;
     uint64_t seed = 0;
     int frame = 0, threads = 0;
 };
@@ -258,6 +265,20 @@ void apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const F
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_plate(job.input);
     report.read_seconds = seconds_since(start);
+    // Grain levels are code values of the profile's encoding: another encoding's pixels would
+    // get grain of the wrong amount at the wrong levels.
+    const GrainProfile& profile = grain.profile;
+    if (const SignalEncoding input = file_encoding(o.colorspace, in.spec); input != profile.encoding) {
+        const std::string tag = in.spec.get_string_attribute("oiio:ColorSpace");
+        throw UserError("'" + job.input + "' is " + encoding_name(input) + " (" +
+                        (!o.colorspace.empty() ? "--iscolorspace " + o.colorspace
+                         : tag.empty()         ? std::string("its pixel type")
+                                               : "its colour-space tag " + tag) +
+                        "), the grain profile '" + o.profile + "' was measured in " + encoding_name(profile.encoding) +
+                        (profile.colorspace.empty() ? "" : " (" + profile.colorspace + ")") + ": convert the input to " +
+                        (profile.colorspace.empty() ? encoding_name(profile.encoding) : profile.colorspace) +
+                        " first, or give its colour space with --iscolorspace if the file says wrong");
+    }
     if (const std::string w = other_subimages_warning(job.input, in); !w.empty()) progress.warn_once("parts", report, w);
     start = std::chrono::steady_clock::now();
     ImageView view = in.pixels.view();
@@ -273,7 +294,11 @@ void apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const F
 }
 
 void run_apply(ApplyOptions& o, const CLI::App& cmd) {
-    const GrainSynthesisPlan grain = read_plate_grain(o.profile);
+    // One value for every channel, or one each.
+    auto per_channel = [](const std::vector<double>& v) {
+        return std::array<double, 3>{v[0], v[std::min<size_t>(1, v.size() - 1)], v[std::min<size_t>(2, v.size() - 1)]};
+    };
+    const GrainSynthesisPlan grain = read_plate_grain(o.profile, GrainControls{per_channel(o.gain), per_channel(o.size), o.tilt});
     const std::string& measured_in = grain.profile.colorspace;
     if (!o.colorspace.empty() && !measured_in.empty() && lower(o.colorspace) != lower(measured_in))
         throw UserError("'" + o.profile + "' was measured in " + measured_in + ", the input is " + o.colorspace +
@@ -341,7 +366,7 @@ void add_analysis_flags(CLI::App& cmd, AnalyzeOptions& o) {
     cmd.add_option("--iscolorspace", o.colorspace, "The plate's colour space (recorded; implies the encoding)");
     cmd.add_option("--encoding", o.encoding, "linear, log or display (default: from --iscolorspace, else display for "
                                              "integer files and linear for float files)");
-    cmd.add_option("--block-size", o.block_size, "Block size in pixels (default: 64 if that gives 200 blocks, else 32)")
+    cmd.add_option("--block-size", o.block_size, "Block size in pixels (default: from the grain, 16 to 64)")
         ->check(CLI::Range(8, 256));
     cmd.add_option("--levels", o.levels, "Signal level bins of the response curve")->check(CLI::Range(1, 256));
     cmd.add_option("--min-blocks", o.min_blocks, "Grain-only blocks a level needs to be estimated")
@@ -377,6 +402,17 @@ void add_grain_command(CLI::App& app) {
     apply->add_option("--frame", p->frame, "Frame number of a single image (the grain changes with it; a sequence's "
                                            "frames use their own)");
     apply->add_option("--iscolorspace", p->colorspace, "The input's colour space (must be the profile's)");
+    apply->add_option("--gain", p->gain, "Multiplies the profile's sigma: one value, or R,G,B")
+        ->delimiter(',')
+        ->expected(1, 3)
+        ->check(CLI::Range(0.0, kMaxGrainScale));
+    apply->add_option("--size", p->size, "Multiplies the profile's grain size: one value, or R,G,B")
+        ->delimiter(',')
+        ->expected(1, 3)
+        ->check(CLI::Range(kMinGrainSizeScale, kMaxGrainSizeScale));
+    apply->add_option("--tilt", p->tilt, "Tilts the response: stops more sigma at the profile's highest level than at "
+                                         "its lowest")
+        ->check(CLI::Range(-kMaxResponseTilt, kMaxResponseTilt));
     apply->add_option("--threads", p->threads, "Worker threads, 0 = all cores; the result does not depend on it");
     apply->callback([p, apply] { run_apply(*p, *apply); });
 

@@ -41,6 +41,9 @@ struct Look {
     // A plate's grain profile (darkroom grain analyze/predict): replaces the stock's grain
     // and is added to the result in the output's encoding, which should be the plate's.
     std::string grain_profile;
+    // Its grain adjusted (GrainControls): per-channel gain and size, and a response tilt.
+    std::array<double, 3> grain_profile_gain{1.0, 1.0, 1.0}, grain_profile_size{1.0, 1.0, 1.0};
+    double grain_profile_tilt = 0;
 
     // The look as a look file holds it (every setting of the table).
     nlohmann::json to_json() const;

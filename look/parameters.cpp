@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/json_message.h"
+#include "core/plate/grain_synthesis.h"
 #include "look/user_error.h"
 
 namespace darkroom {
@@ -182,6 +183,18 @@ std::vector<Parameter> make_table() {
         kGrain, "Grain profile", "grainProfile", "",
         "A plate's grain profile (.json from 'darkroom grain analyze' or 'predict'): replaces the stock's grain, added "
         "to the result in the output colour space (which should be the plate's)");
+    add(per_channel("grain-profile-gain", [](Look& l) -> auto& { return l.grain_profile_gain; }, 0, kMaxGrainScale, 0, 3),
+        kGrain, "Profile gain", "grainProfileGain", "", "Multiplies the grain profile's sigma per channel")
+        .animatable = true;
+    add(per_channel("grain-profile-size", [](Look& l) -> auto& { return l.grain_profile_size; }, kMinGrainSizeScale,
+                    kMaxGrainSizeScale, 0.5, 2),
+        kGrain, "Profile size", "grainProfileSize", "", "Multiplies the grain profile's grain size per channel")
+        .animatable = true;
+    add(number("grain-profile-tilt", [](Look& l) -> auto& { return l.grain_profile_tilt; }, -kMaxResponseTilt,
+               kMaxResponseTilt, -2, 2),
+        kGrain, "Profile tilt", "grainProfileTilt", "",
+        "Tilts the grain profile's response: stops more sigma at its highest level than at its lowest")
+        .animatable = true;
     add(row<uint64_t>("seed", ParameterType::seed, [](Look& l) -> auto& { return l.settings.seed; }), kGrain, "Seed",
         "seed", "", "Grain seed: the grain is a function of (seed, frame, layer, pixel)");
 

@@ -22,12 +22,25 @@ std::shared_ptr<const GrainSynthesisPlan> plate_grain_of(const Look& look, const
     if (look.grain_profile.empty()) return nullptr;
     GrainSynthesisPlan plan;
     try {
-        plan = read_plate_grain(look.grain_profile);
+        plan = read_plate_grain(look.grain_profile,
+                                GrainControls{look.grain_profile_gain, look.grain_profile_size, look.grain_profile_tilt});
     } catch (const UserError& e) {
         throw UserError(name(parameter("grain-profile")) + ": " + e.what());
     }
+    // The grain is added to the output: its encoding must be the profile's (scan output is
+    // Cineon log, the others scene-linear unless the output colour space says otherwise).
     const GrainProfile& profile = plan.profile;
     const std::string& output_space = look.colour.output_space;
+    const SignalEncoding by_mode =
+        look.settings.output == OutputMode::scan ? SignalEncoding::log : SignalEncoding::linear;
+    const SignalEncoding output = encoding_of_colorspace(output_space, by_mode);
+    if (output != profile.encoding)
+        throw UserError(name(parameter("grain-profile")) + ": '" + look.grain_profile + "' was measured in " +
+                        encoding_name(profile.encoding) + (profile.colorspace.empty() ? "" : " (" + profile.colorspace + ")") +
+                        ", the output is " + encoding_name(output) + " (" +
+                        (output_space.empty() ? "the " + parameter("output").get(look).get<std::string>() + " output"
+                                              : output_space) +
+                        "): set " + name(parameter("tocolorspace")) + " to the plate's colour space");
     if (!profile.colorspace.empty() && !output_space.empty() && profile.colorspace != output_space)
         std::cerr << "darkroom: warning: the grain profile was measured in '" << profile.colorspace
                   << "' but the output is in '" << output_space << "'\n";
@@ -66,9 +79,9 @@ FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px) {
                          in.window.x0,      in.window.y0,       film_width_px};
 }
 
-GrainSynthesisPlan read_plate_grain(const std::string& profile_path) {
+GrainSynthesisPlan read_plate_grain(const std::string& profile_path, const GrainControls& controls) {
     try {
-        return plan_grain_synthesis(load_grain_profile_file(profile_path));
+        return plan_grain_synthesis(load_grain_profile_file(profile_path), controls);
     } catch (const GrainProfileError& e) {
         throw UserError(e.what());
     }

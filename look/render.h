@@ -33,7 +33,7 @@ std::optional<Stock> find_paper(const Look& look, const Naming& name);
 FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px = 0);
 
 // A grain profile file read and planned for synthesis; a bad file is the user's error.
-GrainSynthesisPlan read_plate_grain(const std::string& profile_path);
+GrainSynthesisPlan read_plate_grain(const std::string& profile_path, const GrainControls& controls = {});
 
 class Renderer {
 public:

@@ -5,11 +5,12 @@
 #   vision3-250d.png  a stock's curves, sensitivities, dyes and MTF (darkroom plot)
 #   grain-compare.png a profile (Vision3 500T scanned at 2K, predicted) against the grain
 #                     measured back from a grey ramp it was synthesised onto
-# Usage: tools/make_doc_pictures.sh [BUILD_DIR]   (default build)
+# Usage: tools/make_doc_pictures.sh [BUILD_DIR [IMAGES_DIR]]   (default build, docs/images)
 set -eu
 cd "$(dirname "$0")/.."
-darkroom=${1:-build}/cli/darkroom
-images=docs/images
+darkroom=$(realpath "${1:-build}")/cli/darkroom
+images=${2:-docs/images}
+mkdir -p "$images"
 scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
 
@@ -20,9 +21,11 @@ oiiotool --colorconfig "$scratch/darkroom.ocio" "$scratch/demo/scene.exr" --ocio
          -ch R,G,B "$scratch/demo/print.png" -ch R,G,B --mosaic 2x1 --resize 1024x0 -d uint8 -o "$images/before-after.png"
 "$darkroom" plot kodak-vision3-250d -o "$images/vision3-250d.png" > /dev/null
 "$darkroom" grain predict --stock kodak-vision3-500t --width 2048 -o "$scratch/plate-grain.json" > /dev/null
-oiiotool --pattern fill:left=0.15,0.15,0.15:right=0.95,0.95,0.95 1024x512 3 -d float -o "$scratch/flat.exr"
-"$darkroom" grain apply "$scratch/flat.exr" -o "$scratch/grained.exr" --profile "$scratch/plate-grain.json" > /dev/null
-"$darkroom" grain analyze "$scratch/grained.exr" -o "$scratch/measured.json" > /dev/null
+oiiotool --pattern fill:left=0.15,0.15,0.15:right=0.95,0.95,0.95 1024x512 3 -d float -o "$scratch/ramp.exr"
+# (The ramp's values are Cineon log code values / 1023, the profile's encoding.)
+"$darkroom" grain apply "$scratch/ramp.exr" -o "$scratch/grained.exr" --profile "$scratch/plate-grain.json" \
+    --iscolorspace "Cineon Log" > /dev/null
+"$darkroom" grain analyze "$scratch/grained.exr" -o "$scratch/measured.json" --iscolorspace "Cineon Log" > /dev/null
 "$darkroom" grain compare "$scratch/plate-grain.json" "$scratch/measured.json" --plot "$images/grain-compare.png" \
     > /dev/null || true  # (a chart either way; the tests judge the match)
 echo "wrote $images/before-after.png, vision3-250d.png, grain-compare.png"

@@ -16,7 +16,22 @@ constexpr double kRejectionSigmas = 3.5;   // a block further from the curve tha
 constexpr int kMaxAutocorrelationBlocks = 256, kEarlyAutocorrelationBlocks = 48;
 // Minimal-residual steps of the fit-bias correction of the autocorrelation per pass.
 constexpr int kEarlySolverSteps = 3, kFinalSolverSteps = 10;
-constexpr int kLargeBlockPx = 64, kSmallBlockPx = 32, kLargeBlockMinCount = 200;
+// The default block size follows the grain: the analysis starts at the smallest block and
+// grows it (in steps of 8 px, up to the largest) while the measured grain's correlation
+// reaches past a quarter of the block (its lag grid), as long as the plate holds enough blocks.
+constexpr int kSmallestBlockPx = 16, kLargestBlockPx = 64, kBlockStepPx = 8, kMinAutoBlockCount = 400;
+constexpr int kMinBlockCount = 16;  // fewer blocks of the smallest size: the plate is too small
+// Block size / grain size (the std of a Gaussian autocorrelation exp(-d^2 / (4 s^2)) with the
+// measured lag-1 value) that keeps the correlation's tail (1 %, at 4.3 s) inside the lag grid.
+constexpr double kBlockPerGrainSize = 17.0;
+// The response is the low quantile of the candidate blocks' variance at each level, divided
+// by the same quantile of grain alone: picture content only adds variance, so it is read from
+// the quietest blocks, and a level stays unbiased while most of its blocks hold content.
+constexpr double kResponseQuantile = 0.4;
+// Grain is stationary within a block, edges and local detail are not: the dispersion of the
+// log variances of a block's four quadrants, in units of its grain-only variance, is about
+// chi-square with 3 degrees of freedom; this is its 0.999 quantile.
+constexpr double kStationarityLimit = 16.27;
 // Texture and edges differ from grain in their short-range correlation as well as in
 // their variance: each block's own autocorrelation at these lags must be typical.
 constexpr int kShapeLags[][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}, {2, 0}, {0, 2}, {4, 0}, {0, 4}};
@@ -145,6 +160,7 @@ struct Block {
     std::vector<double> residual;  // channel-planar: [c][y][x]
     std::vector<double> level;     // mean per channel
     std::vector<double> squares;   // residual sum of squares per channel
+    std::vector<double> quadrant_squares;  // per channel, that of each quadrant
     std::vector<double> shape;     // per channel, the block's autocorrelation at kShapeLags
 };
 
@@ -155,9 +171,35 @@ double median_of(std::vector<double> v) {
     return *mid;
 }
 
-// Variance against level: piecewise linear through the bins' (mean level, mean variance).
+// The q-quantile, interpolated between order statistics.
+double quantile_of(std::vector<double> v, double q) {
+    std::sort(v.begin(), v.end());
+    const double at = q * (v.size() - 1);
+    const size_t i = std::min(v.size() - 1, (size_t)at);
+    return i + 1 < v.size() ? v[i] + (at - i) * (v[i + 1] - v[i]) : v[i];
+}
+
+constexpr double kResponseQuantileZ = -0.2533471031357997;  // standard normal quantile of kResponseQuantile
+
+// A grain-only block's variance estimate / sigma^2 is about chi-square / nu with
+// nu = 2 / relative_sd^2: its kResponseQuantile quantile (Wilson-Hilferty).
+double grain_quantile(double relative_sd) {
+    const double h = relative_sd * relative_sd / 9.0;  // 2 / (9 nu)
+    return std::pow(1.0 - h + kResponseQuantileZ * std::sqrt(h), 3.0);
+}
+
+// The relative standard error of sigma read from that quantile of n blocks.
+double quantile_sigma_error(double relative_sd, int n) {
+    const double density = std::exp(-0.5 * kResponseQuantileZ * kResponseQuantileZ) / std::sqrt(2 * M_PI);
+    const double variance_error = relative_sd * std::sqrt(kResponseQuantile * (1 - kResponseQuantile) / n) / density;
+    return 0.5 * variance_error / grain_quantile(relative_sd);
+}
+
+// Variance against level: piecewise linear through the bins' (mean level, variance).
 struct LevelCurve {
     std::vector<double> level, variance;
+    std::vector<double> error;  // relative standard error of sigma
+    std::vector<int> bin, blocks;
     double at(double x) const {
         if (level.empty()) return 0;
         if (x <= level.front()) return variance.front();
@@ -165,6 +207,10 @@ struct LevelCurve {
         size_t i = std::upper_bound(level.begin(), level.end(), x) - level.begin();
         double t = (x - level[i - 1]) / (level[i] - level[i - 1]);
         return variance[i - 1] + t * (variance[i] - variance[i - 1]);
+    }
+    void erase(size_t k) {
+        for (auto* v : {&level, &variance, &error}) v->erase(v->begin() + k);
+        for (auto* v : {&bin, &blocks}) v->erase(v->begin() + k);
     }
 };
 
@@ -193,18 +239,65 @@ void drop_content_bins(LevelCurve& curve) {
             if (ratio > worst_ratio) worst_ratio = ratio, worst = k;
         }
         if (!(worst_ratio > kContentVarianceRatio)) return;
-        curve.level.erase(curve.level.begin() + worst);
-        curve.variance.erase(curve.variance.begin() + worst);
+        curve.erase(worst);
     }
+}
+
+// Across levels, grain changes its amount smoothly and boundedly: at most in proportion to the
+// signal in a linear encoding, by at most this factor per unit of level in log and display
+// code values. A level whose variance exceeds kContentVarianceRatio times what the quieter
+// levels allow holds content at every block (a textured wall, foliage): the quietest blocks
+// of a picture reach grain alone only at some levels.
+constexpr double kMaxSigmaRatioPerUnitLevel = 4.0;
+
+double max_variance_ratio(double level_a, double level_b, SignalEncoding encoding) {
+    if (encoding != SignalEncoding::linear)
+        return std::exp(2.0 * std::log(kMaxSigmaRatioPerUnitLevel) * std::abs(level_a - level_b));
+    if (!(level_a > 0 && level_b > 0)) return INFINITY;
+    return std::pow(std::max(level_a / level_b, level_b / level_a), 2.0);
+}
+
+// Two levels whose variances agree within this (times the encoding's allowance) support each
+// other as grain.
+constexpr double kAnchorVarianceRatio = 4.0;
+
+// The curve without levels above that envelope. A level bounds the others only where another
+// level agrees with it (a lone quiet level, such as clipped highlights, bounds nothing).
+void drop_levels_above_envelope(LevelCurve& curve, SignalEncoding encoding) {
+    const size_t n = curve.level.size();
+    auto consistent = [&](size_t i, size_t j) {
+        const double allowed = kAnchorVarianceRatio * max_variance_ratio(curve.level[i], curve.level[j], encoding);
+        return curve.variance[i] > 0 && curve.variance[j] > 0 && curve.variance[i] <= allowed * curve.variance[j] &&
+               curve.variance[j] <= allowed * curve.variance[i];
+    };
+    std::vector<char> anchor(n, 0), content(n, 0);
+    for (size_t j = 0; j < n; ++j)
+        for (size_t i = 0; i < n && !anchor[j]; ++i) anchor[j] = i != j && consistent(i, j);
+    for (size_t k = 0; k < n; ++k)
+        for (size_t j = 0; j < n && !content[k]; ++j)
+            content[k] = j != k && anchor[j] &&
+                         curve.variance[k] >
+                             kContentVarianceRatio * curve.variance[j] * max_variance_ratio(curve.level[k], curve.level[j], encoding);
+    for (size_t k = n; k-- > 0;)
+        if (content[k]) curve.erase(k);
 }
 
 struct ChannelState {
     std::vector<double> rho;        // autocorrelation on the lag grid
-    std::vector<char> accepted;     // per block
-    std::vector<char> typical;      // per block: its short-range correlation is grain-like
+    std::vector<char> candidate;    // per block: grain-like short-range correlation, stationary
+    std::vector<char> accepted;     // per block: a candidate whose variance fits the curve
     std::vector<int> bin;           // per block
     LevelCurve curve;
     double dof = 0;                 // N - trace: expected residual sum of squares / sigma^2
+    double relative_sd = 0;         // of a grain-only block's variance estimate
+};
+
+// The blocks of the frames at one block size, and what the passes made of them.
+struct BlockAnalysis {
+    int block_px = 0, channels = 0, bins = 0;
+    LagGrid lags;
+    std::vector<Block> blocks;
+    std::vector<ChannelState> state;
 };
 
 std::string format_level(double v) {
@@ -214,32 +307,31 @@ std::string format_level(double v) {
     return s.str();
 }
 
-}  // namespace
+long long count_blocks(const std::vector<ConstImageView>& frames, int size) {
+    long long n = 0;
+    for (const ConstImageView& f : frames) n += (long long)(f.window.width() / size) * (f.window.height() / size);
+    return n;
+}
 
-GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const GrainAnalysisSettings& settings) {
-    if (frames.empty()) throw GrainAnalysisError("no plate to analyse");
-    int nch = settings.channels > 0 ? settings.channels : frames.front().channels;
-    for (const ConstImageView& f : frames)
-        if (f.channels < nch)
-            throw GrainAnalysisError("the frames have different channel counts (" + std::to_string(f.channels) +
-                                     " < " + std::to_string(nch) + ")");
+// Sum over lags of pair_count(size) * rho^2: the variance of a block's sum of squares is
+// twice this (in units of sigma^4), for Gaussian grain.
+double sum_rho2(const std::vector<double>& rho, const LagGrid& lags, int size) {
+    double sum = 0;
+    for (int dy = -lags.radius; dy <= lags.radius; ++dy)
+        for (int dx = -lags.radius; dx <= lags.radius; ++dx)
+            if (std::abs(dx) < size && std::abs(dy) < size)
+                sum += pair_count(size, dx, dy) * rho[lags.index(dx, dy)] * rho[lags.index(dx, dy)];
+    return sum;
+}
 
-    auto count_blocks = [&](int size) {
-        long long n = 0;
-        for (const ConstImageView& f : frames) n += (long long)(f.window.width() / size) * (f.window.height() / size);
-        return n;
-    };
-    int bs = settings.block_size_px;
-    if (bs <= 0) bs = count_blocks(kLargeBlockPx) >= kLargeBlockMinCount ? kLargeBlockPx : kSmallBlockPx;
-    if (bs < 8) throw GrainAnalysisError("the block size must be at least 8 pixels");
-    if (count_blocks(bs) == 0) {
-        const Window& w = frames.front().window;
-        throw GrainAnalysisError("the plate is too small to estimate grain from: " + std::to_string(w.width()) + "x" +
-                                 std::to_string(w.height()) + " pixels holds no " + std::to_string(bs) + "x" +
-                                 std::to_string(bs) + " block");
-    }
-    const int npx = bs * bs;
-    LagGrid lags{bs / 4};
+BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const GrainAnalysisSettings& settings, int nch,
+                             int bs) {
+    BlockAnalysis a;
+    a.block_px = bs;
+    a.channels = nch;
+    const int npx = bs * bs, half = bs / 2;
+    const LagGrid lags{bs / 4};
+    a.lags = lags;
     SurfaceFit surface(bs, lags);
 
     // Cut every frame into blocks and fit the surface in each; blocks with a non-finite pixel
@@ -275,12 +367,14 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                 double mean = 0;
                 for (int p = 0; p < npx; ++p) mean += r[p];
                 b.level.push_back(mean / npx);
-                double squares = 0;
+                double squares = 0, quadrant[4] = {};
                 for (int p = 0; p < npx; ++p) {
                     for (int k = 0; k < SurfaceFit::kTerms; ++k) r[p] -= coef[k] * surface.basis[k][p];
                     squares += r[p] * r[p];
+                    quadrant[2 * ((p / bs) >= half) + ((p % bs) >= half)] += r[p] * r[p];
                 }
                 b.squares.push_back(squares);
+                b.quadrant_squares.insert(b.quadrant_squares.end(), quadrant, quadrant + 4);
                 for (const auto& lag : kShapeLags) {
                     const int dx = lag[0], dy = lag[1];
                     double sum = 0;
@@ -292,31 +386,34 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
             }
         }
     });
-    std::vector<Block> blocks;
+    std::vector<Block>& blocks = a.blocks;
     for (size_t i = 0; i < all.size(); ++i)
         if (finite[i]) blocks.push_back(std::move(all[i]));
     if (blocks.empty()) throw GrainAnalysisError("every block of the plate holds non-finite pixels");
     const int nblocks = (int)blocks.size();
-    const int nbins = std::max(1, settings.level_bins);
+    const int nbins = a.bins = std::max(1, settings.level_bins);
 
-    std::vector<ChannelState> state(nch);
+    std::vector<ChannelState>& state = a.state;
+    state.resize(nch);
     for (int c = 0; c < nch; ++c) {
         ChannelState& s = state[c];
         s.rho.assign(lags.size(), 0.0);
         s.rho[lags.index(0, 0)] = 1.0;
-        double lo = blocks[0].level[c], hi = lo;
-        for (const Block& b : blocks) lo = std::min(lo, b.level[c]), hi = std::max(hi, b.level[c]);
-        double width = (hi - lo) / nbins;
+        // Bins over the blocks' levels without the extreme ones (a hot pixel, a light source),
+        // whose blocks join the end bins.
+        std::vector<double> levels;
+        for (const Block& b : blocks) levels.push_back(b.level[c]);
+        const double lo = quantile_of(levels, 0.005), hi = quantile_of(levels, 0.995);
+        const double width = (hi - lo) / nbins;
         for (const Block& b : blocks)
-            s.bin.push_back(width > 0 ? std::min(nbins - 1, (int)((b.level[c] - lo) / width)) : 0);
+            s.bin.push_back(width > 0 ? std::clamp((int)std::floor((b.level[c] - lo) / width), 0, nbins - 1) : 0);
         s.accepted.assign(nblocks, 0);
-        s.typical.assign(nblocks, 1);
+        s.candidate.assign(nblocks, 0);
     }
 
-    // Marks blocks whose short-range correlation is far from the median of the reference
+    // Whether each block's short-range correlation is near the median of the reference
     // blocks (the quietest ones at first, then the accepted ones).
-    auto mark_typical = [&](int c, const std::vector<char>& reference_blocks) {
-        ChannelState& s = state[c];
+    auto typical_blocks = [&](int c, const std::vector<char>& reference_blocks) {
         std::vector<double> reference(kShapeLagCount);
         for (int l = 0; l < kShapeLagCount; ++l) {
             std::vector<double> values;
@@ -337,78 +434,88 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
         double centre = median_of(reference_distance);
         for (double& d : reference_distance) d = std::abs(d - centre);
         double limit = centre + kShapeOutlierMads * 1.4826 * median_of(reference_distance);
-        for (int i = 0; i < nblocks; ++i) s.typical[i] = distance[i] <= limit;
+        std::vector<char> typical(nblocks);
+        for (int i = 0; i < nblocks; ++i) typical[i] = distance[i] <= limit;
+        return typical;
     };
 
-    // The curve through the accepted blocks of each bin that has any.
+    // Whether each block's four quadrants hold alike grain (kStationarityLimit).
+    auto stationary_blocks = [&](int c) {
+        const ChannelState& s = state[c];
+        // A quadrant's variance estimate: about gamma of shape k; its log has variance
+        // trigamma(k) ~ 1/k + 1/(2 k^2).
+        const double quadrant_dof = s.dof / 4, relative_sd = std::sqrt(2.0 * sum_rho2(s.rho, lags, half)) / quadrant_dof;
+        const double k = 1.0 / (relative_sd * relative_sd), log_variance = 1.0 / k + 0.5 / (k * k);
+        std::vector<char> stationary(nblocks);
+        for (int i = 0; i < nblocks; ++i) {
+            const double* q = &blocks[i].quadrant_squares[(size_t)c * 4];
+            double logs[4], mean = 0, dispersion = 0;
+            for (int j = 0; j < 4; ++j) mean += (logs[j] = std::log(std::max(q[j], 1e-300))) / 4;
+            for (double l : logs) dispersion += (l - mean) * (l - mean);
+            stationary[i] = dispersion / log_variance <= kStationarityLimit;
+        }
+        return stationary;
+    };
+
+    // The response through the candidates of each bin that has enough of them.
     auto fit_curve = [&](int c) {
         ChannelState& s = state[c];
-        std::vector<double> level(nbins, 0.0), variance(nbins, 0.0);
-        std::vector<int> count(nbins, 0);
+        std::vector<std::vector<double>> variance(nbins);
+        std::vector<double> level(nbins, 0.0);
         for (int i = 0; i < nblocks; ++i)
-            if (s.accepted[i]) {
+            if (s.candidate[i]) {
+                variance[s.bin[i]].push_back(blocks[i].squares[c] / s.dof);
                 level[s.bin[i]] += blocks[i].level[c];
-                variance[s.bin[i]] += blocks[i].squares[c] / s.dof;
-                ++count[s.bin[i]];
             }
         LevelCurve curve;
-        for (int k = 0; k < nbins; ++k)
-            if (count[k] > 0) {
-                curve.level.push_back(level[k] / count[k]);
-                curve.variance.push_back(variance[k] / count[k]);
-            }
+        for (int k = 0; k < nbins; ++k) {
+            const int n = (int)variance[k].size();
+            if (n < std::max(1, settings.min_blocks_per_level)) continue;
+            curve.level.push_back(level[k] / n);
+            curve.variance.push_back(quantile_of(variance[k], kResponseQuantile) / grain_quantile(s.relative_sd));
+            curve.error.push_back(quantile_sigma_error(s.relative_sd, n));
+            curve.bin.push_back(k);
+            curve.blocks.push_back(n);
+        }
         drop_content_bins(curve);
+        drop_levels_above_envelope(curve, settings.encoding);
         return curve;
+    };
+
+    auto update_statistics = [&](ChannelState& s) {
+        s.dof = npx - surface.bias(s.rho, lags).trace;
+        s.relative_sd = std::sqrt(2.0 * sum_rho2(s.rho, lags, bs)) / s.dof;
     };
 
     for (int pass = 0; pass < 3; ++pass) {
         parallel_for(0, nch, settings.threads, [&](int c_begin, int c_end) {
             for (int c = c_begin; c < c_end; ++c) {
                 ChannelState& s = state[c];
-                SurfaceFit::Bias bias = surface.bias(s.rho, lags);
-                s.dof = npx - bias.trace;
-                double sum_rho2 = 0;
-                for (int dy = -lags.radius; dy <= lags.radius; ++dy)
-                    for (int dx = -lags.radius; dx <= lags.radius; ++dx)
-                        sum_rho2 += pair_count(bs, dx, dy) * s.rho[lags.index(dx, dy)] * s.rho[lags.index(dx, dy)];
-                const double relative_sd = std::sqrt(2.0 * sum_rho2) / s.dof;
+                update_statistics(s);
+                std::vector<char> reference = s.accepted;
                 if (pass == 0) {
-                    // No autocorrelation yet to say how much a grain-only block varies. Picture
-                    // content only adds variance, so start from the quietest quarter of each bin.
+                    // No grain-only blocks yet to compare shapes with: picture content only adds
+                    // variance, so start from the quietest quarter of each bin.
                     std::vector<std::vector<std::pair<double, int>>> per_bin(nbins);
                     for (int i = 0; i < nblocks; ++i) per_bin[s.bin[i]].push_back({blocks[i].squares[c], i});
-                    std::vector<char> quiet(nblocks, 0);
                     for (auto& bin : per_bin) {
                         std::sort(bin.begin(), bin.end());
-                        for (size_t j = 0; j < (bin.size() + 3) / 4; ++j) quiet[bin[j].second] = 1;
+                        for (size_t j = 0; j < (bin.size() + 3) / 4; ++j) reference[bin[j].second] = 1;
                     }
-                    mark_typical(c, quiet);
-                    for (int i = 0; i < nblocks; ++i) s.accepted[i] = quiet[i] && s.typical[i];
-                    s.curve = fit_curve(c);
-                } else {
-                    mark_typical(c, s.accepted);
-                    for (int round = 0; round < 20; ++round) {
-                        bool changed = false;
-                        for (int i = 0; i < nblocks; ++i) {
-                            double expected = s.curve.at(blocks[i].level[c]);
-                            double variance = blocks[i].squares[c] / s.dof;
-                            bool keep = s.typical[i] && (expected > 0 ? std::abs(variance / expected - 1.0) <=
-                                                                            kRejectionSigmas * relative_sd
-                                                                      : variance <= 0);
-                            changed |= keep != (bool)s.accepted[i];
-                            s.accepted[i] = keep;
-                        }
-                        LevelCurve next = fit_curve(c);
-                        if (next.level.empty()) break;  // nothing is grain-only: reported below
-                        s.curve = next;
-                        if (!changed) break;
-                    }
+                }
+                const std::vector<char> typical = typical_blocks(c, reference), stationary = stationary_blocks(c);
+                for (int i = 0; i < nblocks; ++i) s.candidate[i] = typical[i] && stationary[i];
+                s.curve = fit_curve(c);
+                for (int i = 0; i < nblocks; ++i) {
+                    const double expected = s.curve.at(blocks[i].level[c]), variance = blocks[i].squares[c] / s.dof;
+                    s.accepted[i] = s.candidate[i] && expected > 0 &&
+                                    std::abs(variance / expected - 1.0) <= kRejectionSigmas * s.relative_sd;
                 }
                 // Autocorrelation of the accepted blocks (evenly thinned), each normalised by
                 // the curve's variance at its level.
                 std::vector<int> chosen;
                 for (int i = 0; i < nblocks; ++i)
-                    if (s.accepted[i] && s.curve.at(blocks[i].level[c]) > 0) chosen.push_back(i);
+                    if (s.accepted[i]) chosen.push_back(i);
                 if (chosen.empty()) continue;
                 const int cap = pass == 2 ? kMaxAutocorrelationBlocks : kEarlyAutocorrelationBlocks;
                 int step = std::max<int>(1, (int)(chosen.size() + cap - 1) / cap);
@@ -450,9 +557,59 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
             }
         });
     }
+    // The final autocorrelation sets the fit's degrees of freedom for the final response.
+    for (int c = 0; c < nch; ++c) {
+        update_statistics(state[c]);
+        state[c].curve = fit_curve(c);
+    }
+    return a;
+}
 
-    // The final autocorrelation sets the fit's degrees of freedom for the final sigma.
-    for (ChannelState& s : state) s.dof = npx - surface.bias(s.rho, lags).trace;
+// The block size whose lag grid holds the measured grain's correlation (kBlockPerGrainSize).
+int block_size_for_grain(const BlockAnalysis& a) {
+    int needed = kSmallestBlockPx;
+    for (const ChannelState& s : a.state) {
+        const double lag1 = std::max(s.rho[a.lags.index(1, 0)], s.rho[a.lags.index(0, 1)]);
+        if (!(lag1 > 0.01)) continue;
+        const double size_px = lag1 < 1 ? std::sqrt(-1.0 / (4.0 * std::log(lag1))) : INFINITY;
+        const double block = std::min<double>(kLargestBlockPx, kBlockPerGrainSize * size_px);
+        needed = std::max(needed, kBlockStepPx * (int)std::ceil(block / kBlockStepPx));
+    }
+    return needed;
+}
+
+}  // namespace
+
+GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const GrainAnalysisSettings& settings) {
+    if (frames.empty()) throw GrainAnalysisError("no plate to analyse");
+    int nch = settings.channels > 0 ? settings.channels : frames.front().channels;
+    for (const ConstImageView& f : frames)
+        if (f.channels < nch)
+            throw GrainAnalysisError("the frames have different channel counts (" + std::to_string(f.channels) +
+                                     " < " + std::to_string(nch) + ")");
+    const bool automatic = settings.block_size_px <= 0;
+    const int first_size = automatic ? kSmallestBlockPx : settings.block_size_px;
+    if (first_size < 8) throw GrainAnalysisError("the block size must be at least 8 pixels");
+    if (count_blocks(frames, first_size) < kMinBlockCount) {
+        const Window& w = frames.front().window;
+        throw GrainAnalysisError("the plate is too small to estimate grain from: " + std::to_string(w.width()) + "x" +
+                                 std::to_string(w.height()) + " pixels holds fewer than " +
+                                 std::to_string(kMinBlockCount) + " blocks of " + std::to_string(first_size) + "x" +
+                                 std::to_string(first_size) + " px");
+    }
+    BlockAnalysis a = analyse_blocks(frames, settings, nch, first_size);
+    // Automatic: larger blocks while the grain needs them and the plate has them.
+    while (automatic) {
+        const int needed = std::min(block_size_for_grain(a), kLargestBlockPx);
+        int size = a.block_px;
+        while (size + kBlockStepPx <= needed && count_blocks(frames, size + kBlockStepPx) >= kMinAutoBlockCount)
+            size += kBlockStepPx;
+        if (size == a.block_px) break;
+        a = analyse_blocks(frames, settings, nch, size);
+    }
+    const int bs = a.block_px, npx = bs * bs, nblocks = (int)a.blocks.size(), nbins = a.bins;
+    const std::vector<Block>& blocks = a.blocks;
+    const std::vector<ChannelState>& state = a.state;
 
     // Results, and what could not be estimated.
     GrainProfile profile;
@@ -461,33 +618,29 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
     profile.block_size_px = bs;
     std::vector<std::string> failures;
     for (int c = 0; c < nch; ++c) {
-        ChannelState& s = state[c];
+        const ChannelState& s = state[c];
         GrainChannel ch;
         ch.name = c < (int)settings.channel_names.size() ? settings.channel_names[c]
                   : c < 3                                ? std::string(1, "RGB"[c])
                                                          : "C" + std::to_string(c);
-        std::vector<double> level(nbins, 0.0), all_level(nbins, 0.0), variance(nbins, 0.0);
-        std::vector<int> accepted(nbins, 0), seen(nbins, 0);
+        for (size_t k = 0; k < s.curve.level.size(); ++k) {
+            ch.level.push_back(s.curve.level[k]);
+            ch.sigma.push_back(std::sqrt(s.curve.variance[k]));
+            ch.samples.push_back((long long)s.curve.blocks[k] * npx);
+            ch.sigma_error.push_back(s.curve.error[k]);
+        }
+        // The levels seen but not estimated: too few candidates, or dropped as content.
+        std::vector<double> all_level(nbins, 0.0);
+        std::vector<int> seen(nbins, 0), candidates(nbins, 0);
         for (int i = 0; i < nblocks; ++i) {
-            int k = s.bin[i];
-            ++seen[k];
-            all_level[k] += blocks[i].level[c];
-            if (!s.accepted[i]) continue;
-            ++accepted[k];
-            level[k] += blocks[i].level[c];
-            variance[k] += blocks[i].squares[c] / s.dof;
+            ++seen[s.bin[i]];
+            all_level[s.bin[i]] += blocks[i].level[c];
+            candidates[s.bin[i]] += s.candidate[i];
         }
         std::vector<SparseLevel> sparse;
-        for (int k = 0; k < nbins; ++k) {
-            if (seen[k] == 0) continue;
-            if (accepted[k] >= settings.min_blocks_per_level) {
-                ch.level.push_back(level[k] / accepted[k]);
-                ch.sigma.push_back(std::sqrt(variance[k] / accepted[k]));
-                ch.samples.push_back((long long)accepted[k] * npx);
-            } else {
-                sparse.push_back({ch.name, all_level[k] / seen[k], (long long)accepted[k] * npx});
-            }
-        }
+        for (int k = 0; k < nbins; ++k)
+            if (seen[k] > 0 && std::find(s.curve.bin.begin(), s.curve.bin.end(), k) == s.curve.bin.end())
+                sparse.push_back({ch.name, all_level[k] / seen[k], (long long)candidates[k] * npx});
         // Below this fraction of the signal, what is left is float rounding, not grain.
         double signal = 1.0;
         for (double l : ch.level) signal = std::max(signal, std::abs(l));
@@ -504,13 +657,13 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                                               seen_levels);
         }
         profile.sparse_levels.insert(profile.sparse_levels.end(), sparse.begin(), sparse.end());
-        ch.acf_radius = lags.radius;
+        ch.acf_radius = a.lags.radius;
         ch.autocorrelation = s.rho;
         profile.channels.push_back(std::move(ch));
     }
     if (!failures.empty()) {
-        std::string message = "cannot estimate the grain (too small or too little flat area; try more frames, a "
-                              "region with flat areas or --block-size 32):";
+        std::string message = "cannot estimate the grain (too small or too little flat area; try more frames or a "
+                              "region with flat areas):";
         for (const std::string& f : failures) message += "\n  " + f;
         throw GrainAnalysisError(message);
     }
@@ -546,6 +699,48 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
         for (int b = 0; b < a; ++b)
             profile.channel_correlation[(size_t)b * nch + a] = profile.channel_correlation[(size_t)a * nch + b];
     return profile;
+}
+
+const char* quality_name(ProfileQuality quality) {
+    switch (quality) {
+        case ProfileQuality::good: return "good";
+        case ProfileQuality::usable: return "usable";
+        case ProfileQuality::unreliable: return "unreliable";
+    }
+    return "unreliable";
+}
+
+ProfileAssessment assess_grain_profile(const GrainProfile& profile) {
+    struct Grade {
+        ProfileQuality quality;
+        int min_levels;
+        double min_fraction, max_error;
+    };
+    constexpr Grade kGrades[] = {{ProfileQuality::good, 4, 0.5, 0.10}, {ProfileQuality::usable, 2, 0.25, 0.25}};
+    ProfileAssessment out;
+    double worst_rank = 0;
+    for (const GrainChannel& ch : profile.channels) {
+        if (ch.samples.empty()) continue;
+        int within[2] = {0, 0}, seen = (int)ch.level.size();
+        for (const SparseLevel& s : profile.sparse_levels) seen += s.channel == ch.name;
+        for (size_t i = 0; i < ch.level.size(); ++i)
+            for (int g = 0; g < 2; ++g)
+                within[g] += ch.sigma_error.empty() || ch.sigma_error[i] <= kGrades[g].max_error;
+        int grade = 0;
+        while (grade < 2 && !(within[grade] >= kGrades[grade].min_levels && within[grade] >= kGrades[grade].min_fraction * seen))
+            ++grade;
+        // The weakest channel by grade, then by the share of levels it measured well.
+        const double rank = grade + 1.0 - double(within[std::min(grade, 1)]) / seen;
+        if (rank <= worst_rank) continue;
+        worst_rank = rank;
+        out.quality = grade < 2 ? kGrades[grade].quality : ProfileQuality::unreliable;
+        out.reason = "channel " + ch.name + ": " + std::to_string(within[std::min(grade, 1)]) + " of " +
+                     std::to_string(seen) + " levels measured within " +
+                     std::to_string(int(100 * kGrades[std::min(grade, 1)].max_error)) + " %" +
+                     (grade == 0 ? "" : " (the others hold picture content or too few flat blocks)");
+    }
+    if (out.reason.empty()) out.reason = "every level measured within 10 %";
+    return out;
 }
 
 }  // namespace darkroom

@@ -29,7 +29,7 @@ namespace darkroom {
 struct GrainAnalysisSettings {
     int channels = 0;            // channels to analyse (the first ones); 0 = all
     std::vector<std::string> channel_names;  // default R, G, B, then C3, C4, ...
-    int block_size_px = 0;       // 0: 64 when that gives at least 200 blocks, else 32
+    int block_size_px = 0;       // 0: from the grain's measured correlation (16 to 64 px)
     int level_bins = 16;         // equal-width bins between the lowest and highest block level
     int min_blocks_per_level = 4;  // fewer grain-only blocks: the level is reported as sparse
     std::string colorspace;
@@ -45,5 +45,19 @@ struct GrainAnalysisError : std::runtime_error {
 
 // Each view is one frame (or the region of it to analyse).
 GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const GrainAnalysisSettings& settings);
+
+// How far a measured profile can be trusted, from its levels' counts and errors:
+// - good: every channel measured at 4 or more levels, over half the levels the plate
+//   shows, each within 10 % (relative standard error of sigma);
+// - usable: every channel at 2 or more levels within 25 %, over a quarter of them;
+// - unreliable: less (the rest of the plate holds picture content or too few flat blocks).
+// A profile without samples (predicted) is good. `reason` names the weakest channel.
+enum class ProfileQuality { good, usable, unreliable };
+struct ProfileAssessment {
+    ProfileQuality quality = ProfileQuality::good;
+    std::string reason;
+};
+const char* quality_name(ProfileQuality quality);
+ProfileAssessment assess_grain_profile(const GrainProfile& profile);
 
 }  // namespace darkroom

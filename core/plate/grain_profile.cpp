@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <numeric>
-#include <sstream>
 
+#include "core/json_file.h"
 #include "core/json_message.h"
 #include "core/plate/noise_spectrum.h"
 
@@ -22,6 +21,18 @@ const char* encoding_name(SignalEncoding e) {
         case SignalEncoding::display: return "display";
     }
     return "linear";
+}
+
+SignalEncoding encoding_of_colorspace(const std::string& colorspace, SignalEncoding fallback) {
+    std::string cs = colorspace;
+    for (char& c : cs) c = char(std::tolower((unsigned char)c));
+    for (const char* log_word : {"log", "cineon", "adx", "acescc", "acescct"})
+        if (cs.find(log_word) != std::string::npos) return SignalEncoding::log;
+    for (const char* display_word : {"srgb", "rec709", "rec.709", "bt.709", "gamma", "display", "output"})
+        if (cs.find(display_word) != std::string::npos) return SignalEncoding::display;
+    for (const char* linear_word : {"linear", "lin_", "scene", "acescg", "aces2065"})
+        if (cs.find(linear_word) != std::string::npos) return SignalEncoding::linear;
+    return fallback;
 }
 
 double GrainChannel::sigma_at(double x) const {
@@ -113,9 +124,21 @@ void validate_grain_profile(const GrainProfile& p, const std::string& origin) {
         if (!ch.samples.empty() && ch.samples.size() != ch.level.size())
             fail(origin, at + ".response.samples",
                  std::to_string(ch.samples.size()) + " values for " + std::to_string(ch.level.size()) + " levels");
+        if (!ch.sigma_error.empty() && ch.sigma_error.size() != ch.level.size())
+            fail(origin, at + ".response.relative_error",
+                 std::to_string(ch.sigma_error.size()) + " values for " + std::to_string(ch.level.size()) + " levels");
+        for (double e : ch.sigma_error)
+            if (!(e >= 0)) fail(origin, at + ".response.relative_error", "must be >= 0");
         for (size_t i = 0; i < ch.level.size(); ++i) {
-            if (!std::isfinite(ch.sigma[i]) || ch.sigma[i] < 0)
-                fail(origin, at + ".response.sigma[" + std::to_string(i) + "]", "must be finite and >= 0");
+            if (!(std::abs(ch.level[i]) <= kMaxGrainLevel))
+                fail(origin, at + ".response.level[" + std::to_string(i) + "]",
+                     "must be within +-" + std::to_string((long long)kMaxGrainLevel));
+            // Grain larger than the signal range (1 in code values, the level itself in a bright
+            // linear highlight) is no grain: such a profile would only blow the image up.
+            const double limit = std::max(1.0, std::abs(ch.level[i]));
+            if (!(ch.sigma[i] >= 0 && ch.sigma[i] <= limit))
+                fail(origin, at + ".response.sigma[" + std::to_string(i) + "]",
+                     "must be from 0 to " + std::to_string(limit) + " (grain no larger than the signal range)");
         }
         const size_t side = 2 * (size_t)ch.acf_radius + 1;
         if (ch.acf_radius < 0 || ch.autocorrelation.size() != side * side)
@@ -178,6 +201,8 @@ GrainProfile parse_grain_profile_json(const std::string& text, const std::string
                 ch.samples.push_back(
                     integer_value(samples[i], 0, LLONG_MAX, origin, field + "[" + std::to_string(i) + "]"));
         }
+        if (response.contains("relative_error"))
+            ch.sigma_error = number_array(response["relative_error"], origin, at + ".response.relative_error");
         const json& acf = member(cj, "autocorrelation", origin, at);
         ch.acf_radius = (int)integer_value(member(acf, "radius", origin, at + ".autocorrelation"), 0, 64, origin,
                                            at + ".autocorrelation.radius");
@@ -221,11 +246,7 @@ GrainProfile parse_grain_profile_json(const std::string& text, const std::string
 }
 
 GrainProfile load_grain_profile_file(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw GrainProfileError(path + ": cannot open grain profile");
-    std::stringstream text;
-    text << in.rdbuf();
-    return parse_grain_profile_json(text.str(), path);
+    return parse_grain_profile_json(read_json_file<GrainProfileError>(path, "grain profile"), path);
 }
 
 std::string grain_profile_to_json(const GrainProfile& p) {
@@ -238,6 +259,7 @@ std::string grain_profile_to_json(const GrainProfile& p) {
     for (const GrainChannel& ch : p.channels) {
         json response = {{"level", ch.level}, {"sigma", ch.sigma}};
         if (!ch.samples.empty()) response["samples"] = ch.samples;
+        if (!ch.sigma_error.empty()) response["relative_error"] = ch.sigma_error;
         channels.push_back({{"name", ch.name},
                             {"response", response},
                             {"autocorrelation", {{"radius", ch.acf_radius}, {"values", ch.autocorrelation}}},

@@ -19,13 +19,18 @@ namespace darkroom {
 
 enum class SignalEncoding { linear, log, display };
 const char* encoding_name(SignalEncoding encoding);
+// The encoding a colour-space name implies ("ACEScct", "Cineon": log; "sRGB": display;
+// "ACEScg": linear); `fallback` when the name says nothing.
+SignalEncoding encoding_of_colorspace(const std::string& colorspace, SignalEncoding fallback);
 
 struct GrainChannel {
     std::string name;
     // Response curve: grain standard deviation at each signal level (sorted ascending).
     std::vector<double> level, sigma;
-    // Pixels behind each level (analysis confidence); empty for a predicted profile.
+    // Pixels behind each level, and the relative standard error of its sigma (the analysis'
+    // confidence); empty for a predicted profile.
     std::vector<long long> samples;
+    std::vector<double> sigma_error;
     // Normalised autocorrelation, (2 radius + 1)^2 values, row-major from (-r, -r).
     int acf_radius = 0;
     std::vector<double> autocorrelation{1.0};
@@ -66,7 +71,11 @@ struct GrainProfileError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
-// Checks the invariants above; throws GrainProfileError naming `origin` and the field.
+// The largest |level| a profile may hold (a linear plate's brightest highlights are far below).
+constexpr double kMaxGrainLevel = 1e6;
+
+// Checks the invariants above and the physical ranges (levels within kMaxGrainLevel, sigma no
+// larger than the signal range); throws GrainProfileError naming `origin` and the field.
 void validate_grain_profile(const GrainProfile& profile, const std::string& origin);
 
 GrainProfile parse_grain_profile_json(const std::string& text, const std::string& origin);

@@ -41,8 +41,36 @@ double ResponseLookup::sigma_at(double x) const {
     return curve_.sigma_in_segment(x, i);
 }
 
-GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile) {
-    validate_grain_profile(profile, "grain profile");
+GrainProfile adjusted_grain_profile(const GrainProfile& profile, const GrainControls& controls) {
+    GrainProfile out = profile;
+    for (size_t c = 0; c < out.channels.size(); ++c) {
+        GrainChannel& ch = out.channels[c];
+        const size_t k = std::min<size_t>(c, 2);
+        const double centre = 0.5 * (ch.level.front() + ch.level.back()), range = ch.level.back() - ch.level.front();
+        for (size_t i = 0; i < ch.level.size(); ++i)
+            ch.sigma[i] *= controls.gain[k] * std::exp2(range > 0 ? controls.tilt * (ch.level[i] - centre) / range : 0.0);
+        const double size = controls.size[k];
+        if (size == 1.0 || ch.acf_radius == 0) continue;
+        // rho'(d) = rho(d / size), bilinear between the original lags.
+        const GrainChannel original = ch;
+        ch.acf_radius = std::max(1, (int)std::ceil(original.acf_radius * size));
+        ch.autocorrelation.clear();
+        for (int dy = -ch.acf_radius; dy <= ch.acf_radius; ++dy)
+            for (int dx = -ch.acf_radius; dx <= ch.acf_radius; ++dx) {
+                const double x = dx / size, y = dy / size;
+                const int x0 = (int)std::floor(x), y0 = (int)std::floor(y);
+                const double tx = x - x0, ty = y - y0;
+                ch.autocorrelation.push_back(
+                    (1 - ty) * ((1 - tx) * original.acf(x0, y0) + tx * original.acf(x0 + 1, y0)) +
+                    ty * ((1 - tx) * original.acf(x0, y0 + 1) + tx * original.acf(x0 + 1, y0 + 1)));
+            }
+    }
+    return out;
+}
+
+GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& measured, const GrainControls& controls) {
+    validate_grain_profile(measured, "grain profile");
+    const GrainProfile profile = adjusted_grain_profile(measured, controls);
     GrainSynthesisPlan plan;
     plan.profile = profile;
     const int n = (int)profile.channels.size();

@@ -8,6 +8,7 @@
 // the pixels of that window of the full frame, whatever the thread count.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -54,7 +55,19 @@ struct GrainSynthesisPlan {
     int halo_px = 0;                   // the largest kernel radius: noise is drawn this far outside
 };
 
-GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile);
+// Adjustments of a profile's grain for matching by eye, per channel (R, G, B; a grey profile
+// takes the first): sigma times `gain`; the grain `size` times larger (the autocorrelation
+// stretched, bilinear between lags; white grain stays white); and the response tilted by
+// 2^(tilt * t), t from -1/2 at the profile's lowest level to 1/2 at its highest (tilt: stops
+// of sigma across the measured range; constant beyond it, as the response is).
+constexpr double kMinGrainSizeScale = 0.25, kMaxGrainSizeScale = 8, kMaxResponseTilt = 8;
+struct GrainControls {
+    std::array<double, 3> gain{1.0, 1.0, 1.0}, size{1.0, 1.0, 1.0};
+    double tilt = 0;
+};
+GrainProfile adjusted_grain_profile(const GrainProfile& profile, const GrainControls& controls);
+
+GrainSynthesisPlan plan_grain_synthesis(const GrainProfile& profile, const GrainControls& controls = {});
 
 // The white noise of a channel's plate grain at pixels x0 ... x0 + n - 1 of row y: standard
 // normal, a pure function of (seed, frame, channel, absolute pixel); Box-Muller's two

@@ -386,7 +386,7 @@ TEST_CASE("grain predict, apply, analyze and compare: a plate's grain carried on
     // A two-frame plate sequence: frames 1 and 2 of the same grain.
     const std::string sequence = (kTmp / "grain-plate.####.exr").string();
     for (const char* frame : {"1", "2"})
-        REQUIRE(darkroom("grain apply " + clean + " --profile " + predicted + " -o " + (kTmp / "grain-plate.000").string() +
+        REQUIRE(darkroom("grain apply --iscolorspace \"Cineon log\" " + clean + " --profile " + predicted + " -o " + (kTmp / "grain-plate.000").string() +
                          frame + ".exr --seed 1 --frame " + frame)
                     .exit_code == 0);
     plate = (kTmp / "grain-plate.0001.exr").string();
@@ -402,7 +402,8 @@ TEST_CASE("grain predict, apply, analyze and compare: a plate's grain carried on
     CHECK(profile["encoding"] == "log");
     CHECK(profile["colorspace"] == "Cineon log");
     CHECK(profile["channel_correlation"][0][1] > 0.95);  // a black-and-white stock: the same grain in R, G, B
-    REQUIRE(darkroom("grain apply " + clean + " --profile " + measured + " -o " + cg + " --seed 2").exit_code == 0);
+    REQUIRE(darkroom("grain apply " + clean + " --profile " + measured + " -o " + cg + " --seed 2 --iscolorspace 'Cineon log'")
+                .exit_code == 0);
     r = darkroom("grain compare " + plate + " " + cg + " --plot " + chart);
     INFO(r.output);
     CHECK(r.exit_code == 0);
@@ -444,7 +445,7 @@ TEST_CASE("grain apply to premultiplied colour grains the light and keeps the co
     const std::string grained_straight = (kTmp / "grain-alpha-straight-out.exr").string(),
                       grained_element = (kTmp / "grain-alpha-element-out.exr").string();
     for (const auto& [in, out] : {std::pair{straight, grained_straight}, std::pair{element, grained_element}}) {
-        Result r = darkroom("grain apply " + in + " --profile " + profile + " -o " + out + " --seed 4");
+        Result r = darkroom("grain apply --iscolorspace \"Cineon log\" " + in + " --profile " + profile + " -o " + out + " --seed 4");
         INFO(r.output);
         REQUIRE(r.exit_code == 0);
     }
@@ -468,7 +469,7 @@ TEST_CASE("grain apply to a grey plate keeps its channel", "[cli][grain][metadat
     const std::string clean = make_patches("grain-grey-clean-rgb.exr"), rgb_profile = (kTmp / "grey-rgb.json").string(),
                       grained_rgb = (kTmp / "grain-grey-grained-rgb.exr").string();
     REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + rgb_profile).exit_code == 0);
-    REQUIRE(darkroom("grain apply " + clean + " --profile " + rgb_profile + " -o " + grained_rgb + " --seed 3")
+    REQUIRE(darkroom("grain apply --iscolorspace \"Cineon log\" " + clean + " --profile " + rgb_profile + " -o " + grained_rgb + " --seed 3")
                 .exit_code == 0);
     auto grey_of = [](const std::string& from, const std::string& name) {
         OIIO::ImageBuf grey = OIIO::ImageBufAlgo::channels(OIIO::ImageBuf(from), 1, {0}, {}, {"Y"});
@@ -496,7 +497,7 @@ TEST_CASE("grain analyze and apply take a plate's colour channels, not its depth
     const std::string clean = make_patches("grain-depth-clean.exr"), rgb_profile = (kTmp / "depth-rgb.json").string(),
                       rgb_plate = (kTmp / "grain-depth-plate.exr").string();
     REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + rgb_profile).exit_code == 0);
-    REQUIRE(darkroom("grain apply " + clean + " --profile " + rgb_profile + " -o " + rgb_plate + " --seed 8").exit_code == 0);
+    REQUIRE(darkroom("grain apply --iscolorspace \"Cineon log\" " + clean + " --profile " + rgb_profile + " -o " + rgb_plate + " --seed 8").exit_code == 0);
     // The plate's channels, with a depth ramp appended as Z.
     auto with_depth = [](const std::string& from, std::vector<int> channels, std::vector<std::string> names,
                          const std::string& name) {
@@ -530,7 +531,7 @@ TEST_CASE("grain analyze and apply take a plate's colour channels, not its depth
     const std::string grey_element = with_depth(clean, {1}, {"Y"}, "grain-depth-grey-element.exr").second,
                       never = (kTmp / "never-grained.exr").string();
     fs::remove(never);
-    Result r = darkroom("grain apply " + grey_element + " --profile " + rgb_profile + " -o " + never);
+    Result r = darkroom("grain apply --iscolorspace 'Cineon log' " + grey_element + " --profile " + rgb_profile + " -o " + never);
     CHECK(r.exit_code == 1);
     CHECK_THAT(r.output, Catch::Contains(rgb_profile) && Catch::Contains("1 colour channel"));
     CHECK_FALSE(fs::exists(never));
@@ -568,7 +569,7 @@ TEST_CASE("grain apply runs a sequence, each frame with its own grain", "[cli][g
     const std::string clean = make_patches("grain-apply-sequence-clean.exr", 96), profile = (dir / "grain.json").string();
     REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + profile).exit_code == 0);
     for (int frame : {1001, 1002, 1003}) fs::copy_file(clean, dir / ("cg." + std::to_string(frame) + ".exr"));
-    const std::string look = " --profile " + profile + " --seed 4";
+    const std::string look = " --profile " + profile + " --seed 4 --iscolorspace 'Cineon log'";
     Result r = darkroom("grain apply " + (dir / "cg.####.exr").string() + " -o " + (dir / "out.####.exr").string() + look +
                         " -n");
     INFO(r.output);
@@ -621,7 +622,7 @@ TEST_CASE("grain analyze takes a plate's encoding from its colour-space tag", "[
     const std::string clean = make_patches("grain-tag-clean.exr"), profile = (kTmp / "tag-profile.json").string(),
                       grained = (kTmp / "grain-tag-plate.exr").string();
     REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + profile).exit_code == 0);
-    REQUIRE(darkroom("grain apply " + clean + " --profile " + profile + " -o " + grained + " --seed 6").exit_code == 0);
+    REQUIRE(darkroom("grain apply --iscolorspace \"Cineon log\" " + clean + " --profile " + profile + " -o " + grained + " --seed 6").exit_code == 0);
     auto analysed_encoding = [&](const std::string& name, const std::string& tag) {
         OIIO::ImageBuf plate(grained);
         REQUIRE(plate.read(0, 0, true, OIIO::TypeDesc::FLOAT));
@@ -648,8 +649,8 @@ TEST_CASE("grain apply to a window of the frame gives that window of the full fr
     cropped.specmod().x = 40;  // keep the crop's place in the frame
     cropped.specmod().y = 30;
     REQUIRE(cropped.write(crop));
-    REQUIRE(darkroom("grain apply " + clean + " --profile " + profile + " -o " + full + " --threads 1").exit_code == 0);
-    REQUIRE(darkroom("grain apply " + crop + " --profile " + profile + " -o " + part + " --threads 3").exit_code == 0);
+    REQUIRE(darkroom("grain apply --iscolorspace \"Cineon log\" " + clean + " --profile " + profile + " -o " + full + " --threads 1").exit_code == 0);
+    REQUIRE(darkroom("grain apply --iscolorspace \"Cineon log\" " + crop + " --profile " + profile + " -o " + part + " --threads 3").exit_code == 0);
     std::vector<float> f = pixels(full), p = pixels(part);
     for (int y = 0; y < 100; ++y)
         for (int x = 0; x < 100; ++x)
@@ -710,6 +711,16 @@ TEST_CASE("develop --grain-profile adds the plate's grain as grain apply does, i
     const std::string clean = make_patches("profile-clean.exr"), profile = (kTmp / "profile-500t.json").string(),
                       applied = (kTmp / "profile-applied.exr").string(), developed = (kTmp / "profile-developed.exr").string();
     REQUIRE(darkroom("grain predict --stock kodak-vision3-500t --width 2048 -o " + profile).exit_code == 0);
+    // A Cineon-log profile on develop's linear output is refused, naming both and the flag.
+    Result refused = darkroom("develop " + clean + " -o " + developed + " --output texture --grain-profile " + profile);
+    CHECK(refused.exit_code == 1);
+    CHECK_THAT(refused.output, Catch::Contains("measured in log (Cineon log), the output is linear") &&
+                                   Catch::Contains("--tocolorspace"));
+    // As if measured on linear plates, as develop's texture output is.
+    nlohmann::json linear = read_json(profile);
+    linear["encoding"] = "linear";
+    linear["colorspace"] = "";
+    std::ofstream(profile) << linear.dump();
     REQUIRE(darkroom("grain apply " + clean + " --profile " + profile + " -o " + applied + " --seed 4 --frame 7").exit_code == 0);
     // Texture output without MTF and halation is the input itself, so only the plate's grain remains.
     Result r = darkroom("develop " + clean + " -o " + developed + " --film kodak-vision3-500t --output texture --no-mtf " +

@@ -244,6 +244,7 @@ TEST_CASE("faults: flags, files and sizes past their limits are refused before t
              {develop + " --frame-width-mm 0.0064", "the halation of film layer", 1},
              {develop + " --look " + (dir / "big.json").string(), "more than the 16 MB a look file may be", 1},
              {develop + " --film " + (dir / "big.json").string(), "more than the 16 MB a stock file may be", 1},
+             {develop + " --grain-profile " + (dir / "big.json").string(), "more than the 16 MB a grain profile may be", 1},
              {develop + " --look " + (dir / "both.json").string(), "both say where the result goes", 1},
              {"develop " + (dir / "corrupt.exr").string() + " -o " + out, "cannot read", 1},
              {develop + " --log " + (dir / "no-folder" / "log.json").string(), "does not exist", 1},

@@ -31,6 +31,7 @@ Look unusual_look() {
     s.print_width_mm = 254, s.seed = 18446744073709551615ull;
     l.colour = {"config.ocio", "ACEScg", "", {"sRGB", "Film"}};
     l.grain_profile = "plate.json";
+    l.grain_profile_gain = {0.8, 1, 1.2}, l.grain_profile_size = {1.5, 1.5, 1.5}, l.grain_profile_tilt = -0.5;
     return l;
 }
 

@@ -696,6 +696,14 @@ TEST_CASE("bad input fails with a message, never a crash", "[plugin][bad-input]"
     CHECK(outstanding_images() == 0);
 }
 
+// A predicted (Cineon log) profile as if measured on linear plates, as the effect's output is.
+void as_linear_profile(const std::string& path) {
+    nlohmann::json profile;
+    std::ifstream(path) >> profile;
+    profile["encoding"] = "linear";
+    std::ofstream(path) << profile.dump();
+}
+
 TEST_CASE("a grain profile replaces the stock's grain as darkroom develop --grain-profile does, in any tiles",
           "[plugin][cli][grain]") {
     const int w = 64, h = 48;
@@ -705,6 +713,7 @@ TEST_CASE("a grain profile replaces the stock's grain as darkroom develop --grai
     REQUIRE(std::system((std::string(DARKROOM_EXE) + " grain predict --stock kodak-tri-x-400 --width 512 -o " + profile +
                          " > /dev/null")
                             .c_str()) == 0);
+    as_linear_profile(profile);
     auto inst = make_instance();
     set_common_look(*inst);
     inst->set_string("grainProfile", profile);
@@ -729,6 +738,7 @@ TEST_CASE("a grain profile replaces the stock's grain as darkroom develop --grai
     REQUIRE(std::system((std::string(DARKROOM_EXE) + " grain predict --stock kodak-vision3-500t --width 512 -o " +
                          profile + " > /dev/null")
                             .c_str()) == 0);
+    as_linear_profile(profile);
     fs::last_write_time(profile, written + std::chrono::seconds(2));
     RenderResult edited = inst->render(9, {0, 0, w, h});
     REQUIRE(edited.status == kOfxStatOK);

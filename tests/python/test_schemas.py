@@ -1,9 +1,12 @@
 """The file formats' JSON Schemas (docs/reference/schemas/) take the files Darkroom ships and
-writes, and refuse broken ones. Run by CTest with Debian's python3-jsonschema."""
+writes, and refuse broken ones. Run by CTest with Debian's python3-jsonschema and DARKROOM_EXE
+naming the program (which measures a grain profile for the test)."""
 import copy
 import glob
 import json
 import os
+import subprocess
+import tempfile
 import unittest
 
 import jsonschema
@@ -51,6 +54,39 @@ class StockSchema(unittest.TestCase):
                 broken = copy.deepcopy(good)
                 breakage(broken)
                 self.assertFalse(self.schema.is_valid(broken))
+
+
+class GrainProfileSchema(unittest.TestCase):
+    def test_profiles_as_darkroom_writes_them_are_valid_and_broken_ones_refused(self):
+        schema = validator("grain-profile")
+        profiles = glob.glob(os.path.join(ROOT, "examples", "grain-profiles", "*.json"))
+        self.assertGreaterEqual(len(profiles), 1)
+        # And one measured from a plate: grain put on a grey ramp, analysed back.
+        darkroom = os.environ["DARKROOM_EXE"]
+        folder = tempfile.mkdtemp(prefix="darkroom-schema-")
+        ramp, grained, measured = (os.path.join(folder, n) for n in ("ramp.exr", "grained.exr", "measured.json"))
+        subprocess.run(["oiiotool", "--pattern", "fill:left=0.15,0.15,0.15:right=0.9,0.9,0.9", "512x256", "3",
+                        "-d", "float", "-o", ramp], check=True)
+        subprocess.run([darkroom, "grain", "apply", ramp, "-o", grained, "--profile", profiles[0],
+                        "--iscolorspace", "Cineon Log"], check=True, capture_output=True)
+        subprocess.run([darkroom, "grain", "analyze", grained, "-o", measured, "--iscolorspace", "Cineon Log"],
+                       check=True, capture_output=True)
+        for path in profiles + [measured]:
+            with self.subTest(profile=os.path.basename(path)):
+                schema.validate(load(path))
+        good = load(profiles[0])
+        breakages = {
+            "another encoding": lambda p: p.update(encoding="gamma"),
+            "no channels": lambda p: p.update(channels=[]),
+            "a negative sigma": lambda p: p["channels"][0]["response"]["sigma"].__setitem__(0, -1),
+            "no autocorrelation": lambda p: p["channels"][1].pop("autocorrelation"),
+            "another version": lambda p: p.update(version=2),
+        }
+        for what, breakage in breakages.items():
+            with self.subTest(what):
+                broken = copy.deepcopy(good)
+                breakage(broken)
+                self.assertFalse(schema.is_valid(broken))
 
 
 class LookSchema(unittest.TestCase):
