@@ -276,3 +276,62 @@ TEST_CASE("faults: a 64-bit seed is kept exactly in the output's metadata", "[cl
     CHECK(look["settings"]["seed"].get<uint64_t>() == 18446744073709551615ull);
     CHECK_THAT(file_bytes(dir / "look.json"), Catch::Contains(seed));
 }
+
+// A full disk: the write fails with a message naming the output, the partial temporary is
+// removed, nothing is left under the output's name, and the input is untouched. Needs a small
+// tmpfs, which a test running as root (CI) mounts itself; elsewhere it says so and passes by.
+TEST_CASE("faults: a full disk fails the frame with a message and leaves no partial output", "[cli][faults][disk]") {
+    const fs::path dir = fresh_dir("disk-full"), small = dir / "small";
+    fs::create_directories(small);
+    if (::mount("tmpfs", small.c_str(), "tmpfs", 0, "size=64k") != 0) {
+        WARN("cannot mount a small tmpfs here (not root?): the full-disk case is not run");
+        return;
+    }
+    struct Unmount {
+        fs::path at;
+        ~Unmount() { ::umount(at.c_str()); }
+    } unmount{small};
+    // 512x512 float RGB without compression: 3 MB, far past the 64 KB the disk holds.
+    const std::string in = make_input("faults-disk-in.exr", 512, 512);
+    const std::string before = file_bytes(in);
+    for (const std::string& out : {(small / "out.exr").string(), (small / "seq.####.exr").string()}) {
+        INFO(out);
+        const std::string frames = out.find('#') != std::string::npos ? " --frames 1-2" : "";
+        const Result r = darkroom("develop " + in + " -o " + out + frames + " -d float --compression none" + kLook);
+        INFO(r.output);
+        CHECK(r.exit_code == 1);
+        CHECK_THAT(r.output, Catch::Contains("cannot write") && Catch::Contains(small.string()));
+        CHECK(fs::is_empty(small));  // no temporary, no partial frame
+    }
+    CHECK(file_bytes(in) == before);
+}
+
+// Two runs writing the same outputs at once (a farm that started a chunk twice): each output
+// is one run's whole frame, never a mix or a torn file, because each run writes its own
+// temporary and renames it over the output.
+TEST_CASE("faults: two runs writing the same frames at once leave whole frames", "[cli][faults][concurrent]") {
+    const fs::path dir = fresh_dir("concurrent");
+    const std::string in = make_input("faults-concurrent-in.exr", 96, 64);
+    const std::string out = (dir / "film.####.exr").string();
+    const std::string command = std::string(DARKROOM_EXE) + " develop " + in + " -o " + out + " --frames 1-8" + kLook;
+    const Result both = shell("(" + command + " --exposure 1 & " + command + " --exposure -1 & wait)");
+    INFO(both.output);
+    // The whole frames of each run, one at a time, to compare with.
+    const fs::path one = dir / "one", two = dir / "two";
+    fs::create_directories(one);
+    fs::create_directories(two);
+    REQUIRE(darkroom("develop " + in + " -o " + (one / "film.####.exr").string() + " --frames 1-8 --exposure 1" + kLook)
+                .exit_code == 0);
+    REQUIRE(darkroom("develop " + in + " -o " + (two / "film.####.exr").string() + " --frames 1-8 --exposure -1" + kLook)
+                .exit_code == 0);
+    for (int frame = 1; frame <= 8; ++frame) {
+        char name[32];
+        std::snprintf(name, sizeof name, "film.%04d.exr", frame);
+        INFO(name);
+        // (Pixels: each file's metadata names its own command line.)
+        const std::vector<float> got = pixels((dir / name).string());
+        CHECK((got == pixels((one / name).string()) || got == pixels((two / name).string())));
+    }
+    for (const auto& entry : fs::directory_iterator(dir))  // no temporaries left behind
+        CHECK(entry.path().filename().string().rfind(".darkroom-tmp", 0) != 0);
+}
