@@ -67,8 +67,7 @@ std::string choice_names(const Parameter& p) {
     return names;
 }
 
-}  // namespace
-
+// The words of one flag as the JSON value its parameter's check takes.
 json flag_value(const Parameter& p, const std::vector<std::string>& words) {
     switch (p.type) {
         case ParameterType::number: return words.size() == 1 ? number_word(words[0]) : json(words);
@@ -83,6 +82,8 @@ json flag_value(const Parameter& p, const std::vector<std::string>& words) {
         default: return words.size() == 1 ? json(words[0]) : json(words);
     }
 }
+
+}  // namespace
 
 Look LookFlags::look() const {
     Look l = look_path.empty() ? Look{} : read_look_file(look_path);

@@ -41,7 +41,4 @@ enum class LookScope { all, per_pixel };
 // -v; --frame where `with_frame`).
 void add_look_flags(CLI::App& command, LookFlags& flags, LookScope scope = LookScope::all, bool with_frame = true);
 
-// Parses the words of one flag into the JSON value its parameter's check takes.
-nlohmann::json flag_value(const Parameter& p, const std::vector<std::string>& words);
-
 }  // namespace darkroom::cli

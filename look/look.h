@@ -51,7 +51,6 @@ struct Look {
     // on it and a setting added to the table is part of it with no list to keep in step.
     std::string id() const { return to_json().dump(); }
     bool operator==(const Look& other) const { return id() == other.id(); }
-    bool operator!=(const Look& other) const { return !(*this == other); }
 };
 
 // Sets the settings a look file's JSON gives over `look`; `source` names the file in

@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 
+#include "core/did_you_mean.h"
 #include "core/json_message.h"
 #include "core/plate/grain_synthesis.h"
 #include "look/user_error.h"
@@ -257,22 +258,6 @@ double checked_number(const Parameter& p, const json& value) {
     return v;
 }
 
-// Levenshtein distance, for "did you mean".
-size_t edit_distance(const std::string& a, const std::string& b) {
-    std::vector<size_t> row(b.size() + 1);
-    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-    for (size_t i = 1; i <= a.size(); ++i) {
-        size_t diagonal = row[0];
-        row[0] = i;
-        for (size_t j = 1; j <= b.size(); ++j) {
-            const size_t up = row[j];
-            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
-            diagonal = up;
-        }
-    }
-    return row[b.size()];
-}
-
 }  // namespace
 
 std::string Parameter::python_keyword() const {
@@ -381,16 +366,15 @@ void validate(const Look& look, const Naming& name) {
 }
 
 std::string closest_key(const std::string& key) {
-    std::string best;
-    size_t best_distance = std::max<size_t>(2, key.size() / 3) + 1;
+    std::vector<std::string> keys;
     for (const Parameter& p : parameters()) {
-        // A key with words added or left off ("halation-strength") is its row's too.
-        const bool prefix = key.size() >= 4 && p.key.size() >= 4 &&
-                            (key.rfind(p.key, 0) == 0 || p.key.rfind(key, 0) == 0);
-        const size_t d = prefix ? 1 : edit_distance(key, p.key);
-        if (d < best_distance) best = p.key, best_distance = d;
+        // A key with words added or left off ("halation-strength") is its row's.
+        if (key.size() >= 4 && p.key.size() >= 4 && (key.rfind(p.key, 0) == 0 || p.key.rfind(key, 0) == 0))
+            return p.key;
+        keys.push_back(p.key);
     }
-    return best;
+    const std::vector<std::string> near = close_names(key, keys);
+    return near.empty() ? "" : near.front();
 }
 
 }  // namespace darkroom

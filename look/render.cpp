@@ -59,6 +59,13 @@ void apply_plate_grain(const GrainSynthesisPlan& grain, const std::string& profi
     }
 }
 
+// The settings the plan compiles with: the plate's grain replaces the stock's.
+DevelopSettings plan_settings(const Look& look) {
+    DevelopSettings settings = look.settings;
+    settings.grain = settings.grain && look.grain_profile.empty();  // the plate's grain replaces the stock's
+    return settings;
+}
+
 template <typename View, typename F>
 void each_pixel(const View& image, const Window& window, F&& f) {
     for (int y = window.y0; y < window.y1; ++y)
@@ -87,11 +94,6 @@ GrainSynthesisPlan read_plate_grain(const std::string& profile_path, const Grain
     }
 }
 
-DevelopSettings plan_settings(const Look& look) {
-    DevelopSettings settings = look.settings;
-    settings.grain = settings.grain && look.grain_profile.empty();  // the plate's grain replaces the stock's
-    return settings;
-}
 
 Renderer::Renderer(Look look, const Naming& name, bool verbose)
     : look_((validate(look, name), std::move(look))),
@@ -117,6 +119,14 @@ Plan Renderer::compile(const FrameGeometry& frame, int threads, const Stock& fil
     }
 }
 
+void Renderer::to_working(const ImageView& image, int premultiplied_alpha, int threads) const {
+    const int colour_channels = colour_channel_count(image);
+    if (premultiplied_alpha >= colour_channels && premultiplied_alpha < image.channels)
+        each_pixel(image, image.window,
+                   [&](float* px, int, int) { unpremultiply(px, colour_channels, px[premultiplied_alpha]); });
+    colour_.input_to_working(image, threads);
+}
+
 ConstImageView Renderer::working_input(const Plan& plan, const ConstImageView& in, const Window& out_window,
                                        int premultiplied_alpha, Image& buffer, int threads) const {
     const int colour_channels = colour_channel_count(in);
@@ -128,11 +138,8 @@ ConstImageView Renderer::working_input(const Plan& plan, const ConstImageView& i
     buffer = Image(needed, in.channels);
     ImageView working = buffer.view();
     working.colour_channels = in.colour_channels;
-    each_pixel(working, needed, [&](float* px, int x, int y) {
-        std::copy_n(in.at(x, y), in.channels, px);
-        if (premultiplied) unpremultiply(px, colour_channels, px[premultiplied_alpha]);
-    });
-    colour_.input_to_working(working, threads);
+    each_pixel(working, needed, [&](float* px, int x, int y) { std::copy_n(in.at(x, y), in.channels, px); });
+    to_working(working, premultiplied_alpha, threads);
     return working;
 }
 

@@ -4,7 +4,7 @@
 //
 //   Renderer r(look, flag_name);                       // checks the look, resolves its colour
 //   Plan plan = r.compile(frame_geometry(in), threads);
-//   Image out = r.develop(plan, in, window, alpha);    // or working_input + render per band
+//   Image out = r.develop(plan, in, window, alpha);    // or to_working + render per band
 #pragma once
 
 #include <map>
@@ -44,13 +44,15 @@ public:
 
     const Look& look() const { return look_; }
     const ColourIO& colour() const { return colour_; }
-    const Naming& naming() const { return name_; }
 
     // The look's plan for a frame (its tables built on `threads` threads, 0: every core),
     // with `stocks` when the caller has read them (a plugin keeps them by file version).
     Plan compile(const FrameGeometry& frame, int threads) const;
     Plan compile(const FrameGeometry& frame, int threads, const Stock& film, const Stock* paper) const;
 
+    // In place: the colour of `image` divided by the alpha in channel `premultiplied_alpha`
+    // (-1: none) and converted to the working space (for a buffer the caller owns).
+    void to_working(const ImageView& image, int premultiplied_alpha, int threads) const;
     // The colour `plan` reads for `out_window`: the input's pixels over input_window, in the
     // working space and straight (divided by the alpha in channel `premultiplied_alpha`,
     // -1: none). The input itself when nothing needs doing; else a copy in `buffer`.
@@ -74,9 +76,6 @@ private:
     ColourIO colour_;
     std::shared_ptr<const GrainSynthesisPlan> plate_grain_;  // null: the stock's grain
 };
-
-// The settings the plan compiles with: the plate's grain replaces the stock's.
-DevelopSettings plan_settings(const Look& look);
 
 // A plate's grain on an element whose colour may be premultiplied by the channel
 // `premultiplied_alpha` (-1: none): grain on the light, not on light times coverage, so that

@@ -312,7 +312,7 @@ struct BandJob {
     OfxImageEffectHandle effect;
     const Renderer* renderer;
     const Plan* plan;
-    ConstImageView input;  // in the working space, straight (Renderer::working_input)
+    ConstImageView input;  // in the working space, straight (Renderer::to_working)
     int premultiplied_alpha;
     int grain_frame;
     const HostImage* output;
@@ -449,8 +449,8 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
         return kOfxStatOK;
     }
 
-    // The input: the window grown by the halo, as the host has it. The host supplies at least
-    // the region of interest asked for; anything it leaves out is black.
+    // The input: the window grown by the halo, as the host has it (converted in place below).
+    // The host supplies at least the region of interest asked for; anything it leaves out is black.
     HostImage source(source_clip, time, "Source");
     const Window in_core = plan.input_window(out_core);
     const int in_channels = source.channels();
@@ -471,11 +471,11 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     job.effect = effect;
     job.renderer = development.renderer.get();
     job.plan = &plan;
-    // Straight colour in the working space, shared by the bands.
+    // Straight colour in the working space, in the buffer the host's pixels were read into,
+    // shared by the bands.
     job.premultiplied_alpha = source.premultiplied() ? 3 : -1;
-    Image working;
-    job.input = development.renderer->working_input(plan, in, out_core, job.premultiplied_alpha, working,
-                                                    int(host_cpus()));
+    development.renderer->to_working(in, job.premultiplied_alpha, int(host_cpus()));
+    job.input = in;
     job.grain_frame = settings.frame;
     job.output = &output;
     job.film = film;
