@@ -275,7 +275,10 @@ void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int thr
     const bool quiet = o.run.quiet || (!sequence && !o.run.dry_run && !verbose);
     Progress progress(jobs.size(), sequence, quiet, isatty(STDERR_FILENO) && sequence && !o.run.dry_run);
     threads = resolve_threads(threads);
-    OIIO::attribute("threads", threads);  // OpenImageIO's own pool (EXR decoding) keeps to --threads too
+    // OpenImageIO's own pool and OpenEXR's (which compresses and decompresses an EXR's blocks,
+    // by default one a core) keep to --threads too, as oiiotool's --threads sets both.
+    OIIO::attribute("threads", threads);
+    OIIO::attribute("exr_threads", threads);
     {
         // Interrupted (Ctrl-C, a farm's kill), the bar's line ends before the interrupt's message
         // and the log still tells which frames were finished.
