@@ -136,12 +136,14 @@ void run_frames(const RunOptions& run, const std::vector<FrameJob>& jobs, int th
             report.frame = job.frame;
             report.input = job.input;
             report.output = job.output;
+            report.start_seconds = progress.elapsed_seconds();
             FrameWrite write = start_frame(run, work, dry_run_check, job, threads_per_frame, i == 0, report, progress);
             if (!write) {
+                report.end_seconds = progress.elapsed_seconds();
                 finish(i, std::move(report), nullptr);
                 continue;
             }
-            auto write_frame = [&finish, i, report = std::move(report), write = std::move(write)]() mutable {
+            auto write_frame = [&finish, &progress, i, report = std::move(report), write = std::move(write)]() mutable {
                 const auto start = std::chrono::steady_clock::now();
                 std::unique_ptr<TempFile> output;
                 try {
@@ -152,6 +154,7 @@ void run_frames(const RunOptions& run, const std::vector<FrameJob>& jobs, int th
                     report.error = e.what();
                 }
                 write = nullptr;  // the frame's pixels, freed before it waits for the frames before it
+                report.end_seconds = progress.elapsed_seconds();
                 finish(i, std::move(report), std::move(output));
             };
             if (writing.joinable()) writing.join();

@@ -153,6 +153,39 @@ TEST_CASE("frames written while the next develops are the frames made one after 
     }
 }
 
+// The most frames of a --log's run in flight at once (reading, developing or being written).
+int most_frames_in_flight(const nlohmann::json& log) {
+    int most = 0;
+    for (const auto& f : log["frames"]) {
+        int at_once = 0;
+        for (const auto& g : log["frames"])
+            at_once += g["start_seconds"] <= f["start_seconds"] && f["start_seconds"] < g["end_seconds"];
+        most = std::max(most, at_once);
+    }
+    return most;
+}
+
+TEST_CASE("a run holds at most two frames per frame at once: one developing, one being written", "[cli][batch][memory]") {
+    fs::path dir = fresh_dir("in-flight");
+    const int frames = 8;
+    make_plates(dir, 1, frames, 256, 256);
+    // Writes slower than the develop (pxr24, the negative alone): an unbounded run would pile them up.
+    const std::string args = "develop " + (dir / "plate.####.exr").string() + " -o " + (dir / "out.####.exr").string() +
+                             " --compression pxr24 --no-grain --no-mtf --paper none --output negative -q --log " +
+                             (dir / "log.json").string();
+    for (const auto& [how, most] : {std::pair{" --threads 1 --frames-at-once 1 --no-overlap", 1},
+                                    std::pair{" --threads 1 --frames-at-once 1", 2},
+                                    std::pair{" --threads 2 --frames-at-once 2", 4}}) {
+        INFO(how);
+        REQUIRE(darkroom(args + how).exit_code == 0);
+        nlohmann::json log = nlohmann::json::parse(file_bytes(dir / "log.json"));
+        REQUIRE(log["frames"].size() == frames);
+        for (const auto& f : log["frames"]) CHECK(f["start_seconds"] < f["end_seconds"]);
+        CHECK(most_frames_in_flight(log) <= most);
+        if (most == 2) CHECK(most_frames_in_flight(log) == 2);  // (each write outlasts the next frame's start)
+    }
+}
+
 TEST_CASE("frame wildcards and ranges follow oiiotool", "[cli][batch]") {
     fs::path dir = fresh_dir("wildcards");
     make_plates(dir, 1, 6, 16, 12);
