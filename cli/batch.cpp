@@ -43,6 +43,14 @@ public:
         }
     }
 
+    // After the run: the frames that still wait for one never started (a failure stopped
+    // the run as another worker took that frame), in frame order too.
+    void finish_waiting() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        for (auto& [index, finished] : waiting_) report_frame(finished);
+        waiting_.clear();
+    }
+
 private:
     struct Finished {
         FrameReport report;
@@ -169,6 +177,7 @@ void run_frames(const RunOptions& run, const std::vector<FrameJob>& jobs, int th
     for (int w = 1; w < workers; ++w) pool.emplace_back(worker);
     worker();
     for (std::thread& t : pool) t.join();
+    in_order.finish_waiting();
 }
 
 int resolve_threads(int requested) {
