@@ -325,7 +325,7 @@ void add_bench_command(CLI::App& app) {
     cmd->add_option("--size", o->size, "Frame size WxH (default 4096x2160)");
     cmd->add_flag("--json", o->json, "Machine-readable output");
     cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
-    cmd->add_option("--runs", o->runs, "Timed whole-frame runs after one warm-up; the fastest is kept")
+    cmd->add_option("--runs", o->runs, "Timed whole-frame runs after one warm-up; the fastest is kept (--io: rounds, the median kept)")
         ->check(CLI::Range(1, 100));
     cmd->add_option("--film", o->film, "Film stock id or .json file (default kodak-vision3-250d)");
     cmd->add_option("--paper", o->paper, "Paper or print film id or .json file (default kodak-2383)");
