@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <thread>
 #include <unistd.h>
 
@@ -22,13 +24,58 @@ namespace fs = std::filesystem;
 // is capped to bound memory on 4K plates.
 constexpr int kDefaultMaxFramesAtOnce = 8;
 
-// One frame, its report added to `progress`; returns its status.
-FrameReport::Status process_frame(const RunOptions& run, const FrameWork& work, const DryRunCheck& dry_run_check,
-                                  const FrameJob& job, int threads, bool first, Progress& progress) {
-    FrameReport report;
-    report.frame = job.frame;
-    report.input = job.input;
-    report.output = job.output;
+// Frames finish in any order (several run at once, each written while the next develops)
+// and are reported, their outputs taking their names, in frame order: the run prints and
+// logs the lines of frames run one after another, an output appears only after those of the
+// frames before it, and an interrupted run's log lists exactly the outputs under their names.
+class InFrameOrder {
+public:
+    explicit InFrameOrder(Progress& progress) : progress_(progress) {}
+
+    // Frame `index` (of the run's jobs) is finished: its report, and its output to name where
+    // it was written.
+    void finish(size_t index, FrameReport report, std::unique_ptr<TempFile> output) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        waiting_.emplace(index, Finished{std::move(report), std::move(output)});
+        for (auto at = waiting_.find(next_); at != waiting_.end(); at = waiting_.find(++next_)) {
+            report_frame(at->second);
+            waiting_.erase(at);
+        }
+    }
+
+    // After the run: the frames that still wait for one never started (a failure stopped
+    // the run as another worker took that frame), in frame order too.
+    void finish_waiting() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        for (auto& [index, finished] : waiting_) report_frame(finished);
+        waiting_.clear();
+    }
+
+private:
+    struct Finished {
+        FrameReport report;
+        std::unique_ptr<TempFile> output;
+    };
+    void report_frame(Finished& f) {
+        try {
+            if (f.output) return f.output->commit([&] { progress_.add(f.report); });
+        } catch (const UserError& e) {  // (the rename failed)
+            f.report.status = FrameReport::Status::failed;
+            f.report.error = e.what();
+        }
+        progress_.add(f.report);
+    }
+
+    Progress& progress_;
+    std::mutex mutex_;
+    size_t next_ = 0;
+    std::map<size_t, Finished> waiting_;
+};
+
+// A frame's read and develop, with the write that is left to do; no write for a frame that
+// failed, is skipped or is a dry run (its report then says so).
+FrameWrite start_frame(const RunOptions& run, const FrameWork& work, const DryRunCheck& dry_run_check,
+                       const FrameJob& job, int threads, bool first, FrameReport& report, Progress& progress) {
     if (run.no_clobber && fs::exists(job.output)) {
         report.status = FrameReport::Status::skipped_existing;
     } else if (run.dry_run) {
@@ -42,32 +89,35 @@ FrameReport::Status process_frame(const RunOptions& run, const FrameWork& work, 
         }
     } else {
         try {
-            work(job, threads, first, report, progress);
-            return report.status;  // added as its output took its name
+            return work(job, threads, first, report, progress);
         } catch (const std::exception& e) {
             report.status = FrameReport::Status::failed;
             report.error = e.what();
         }
     }
-    progress.add(report);
-    return report.status;
+    return {};
 }
 
 // Frames run in parallel, each with its share of the threads: whole frames scale better
-// than one frame's rows (reading and writing overlap with the work). Without
-// --skip-bad-frames the first failure stops new frames from starting.
+// than one frame's rows. Each worker writes a frame on a thread of its own while it reads
+// and develops the next, so a worker holds at most two frames. Without --skip-bad-frames
+// the first failure stops new frames from starting.
 void run_frames(const RunOptions& run, const std::vector<FrameJob>& jobs, int threads, bool verbose,
                 const PrepareFrames& prepare, const DryRunCheck& dry_run_check, Progress& progress) {
     int most = run.frames_at_once > 0 ? run.frames_at_once : std::min(threads, kDefaultMaxFramesAtOnce);
-    // No more frames at once than the memory holds, by the first frame's header.
+    bool overlap = run.overlap;
+    // No more frames in flight than the memory holds, by the first frame's header.
     try {
         const double memory = double(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
         const int fit = int(std::min(1024.0, memory / frame_memory_bytes(read_image_spec(jobs.front().input))));
-        if (!run.dry_run && fit >= 1 && fit < most) {
+        overlap = overlap && fit >= 2;
+        const int frames_per_worker = overlap ? 2 : 1;
+        if (!run.dry_run && fit >= 1 && fit < most * frames_per_worker) {
+            const int workers_fit = std::max(1, fit / frames_per_worker);
             if (run.frames_at_once > 0)
                 std::cerr << "darkroom: warning: --frames-at-once " << run.frames_at_once << ": only " << fit
-                          << " of these frames fit in memory at once; running " << fit << "\n";
-            most = fit;
+                          << " of these frames fit in memory at once; running " << workers_fit << "\n";
+            most = workers_fit;
         }
     } catch (const UserError&) {
         // (a frame that cannot be read fails as it runs)
@@ -76,20 +126,58 @@ void run_frames(const RunOptions& run, const std::vector<FrameJob>& jobs, int th
     const int threads_per_frame = std::max(1, threads / workers);
     if (verbose)
         std::cerr << "threads: " << threads << " (" << workers << " frame" << (workers > 1 ? "s" : "")
-                  << " at once, " << threads_per_frame << " per frame)\n";
+                  << " at once, " << threads_per_frame << " per frame)"
+                  << (overlap ? ", each frame written while the next is read and developed" : "") << "\n";
     const FrameWork work = prepare(threads_per_frame);
+    InFrameOrder in_order(progress);
     std::atomic<size_t> next{0};
     std::atomic<bool> stop{false};
+    auto finish = [&](size_t index, FrameReport report, std::unique_ptr<TempFile> output) {
+        if (report.status == FrameReport::Status::failed && !run.skip_bad_frames) stop = true;
+        in_order.finish(index, std::move(report), std::move(output));
+    };
     auto worker = [&] {
+        std::thread writing;  // the previous frame's write
         for (size_t i = next++; i < jobs.size() && !stop; i = next++) {
-            const FrameReport::Status status = process_frame(run, work, dry_run_check, jobs[i], threads_per_frame, i == 0, progress);
-            if (status == FrameReport::Status::failed && !run.skip_bad_frames) stop = true;
+            const FrameJob& job = jobs[i];
+            FrameReport report;
+            report.frame = job.frame;
+            report.input = job.input;
+            report.output = job.output;
+            report.start_seconds = progress.elapsed_seconds();
+            FrameWrite write = start_frame(run, work, dry_run_check, job, threads_per_frame, i == 0, report, progress);
+            if (!write) {
+                report.end_seconds = progress.elapsed_seconds();
+                finish(i, std::move(report), nullptr);
+                continue;
+            }
+            auto write_frame = [&finish, &progress, i, report = std::move(report), write = std::move(write)]() mutable {
+                const auto start = std::chrono::steady_clock::now();
+                std::unique_ptr<TempFile> output;
+                try {
+                    output = write();
+                    report.write_seconds = seconds_since(start);
+                } catch (const std::exception& e) {
+                    report.status = FrameReport::Status::failed;
+                    report.error = e.what();
+                }
+                write = nullptr;  // the frame's pixels, freed before it waits for the frames before it
+                report.end_seconds = progress.elapsed_seconds();
+                finish(i, std::move(report), std::move(output));
+            };
+            if (writing.joinable()) writing.join();
+            if (overlap)
+                writing = std::thread(std::move(write_frame));
+            else
+                write_frame();
         }
+        if (writing.joinable()) writing.join();
     };
     std::vector<std::thread> pool;
     for (int w = 1; w < workers; ++w) pool.emplace_back(worker);
     worker();
     for (std::thread& t : pool) t.join();
+    in_order.finish_waiting();
 }
 
 int resolve_threads(int requested) {
@@ -151,6 +239,10 @@ void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_he
     run_option(cmd.add_option("--frames-at-once", o.run.frames_at_once,
                               "Frames run in parallel, sharing --threads (0: as many as threads, up to 8)")
                    ->check(CLI::Range(0, 1024)));
+    run_option(cmd.add_flag_callback(
+        "--no-overlap", [&o] { o.run.overlap = false; },
+        "Read, develop and write each frame in turn (by default a frame is written while the next is read and "
+        "developed)"));
     run_option(cmd.add_option("--log", o.run.log_path, "Write per-frame timings, warnings and errors to this JSON file"));
 }
 
@@ -195,7 +287,10 @@ void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int thr
     const bool quiet = o.run.quiet || (!sequence && !o.run.dry_run && !verbose);
     Progress progress(jobs.size(), sequence, quiet, isatty(STDERR_FILENO) && sequence && !o.run.dry_run);
     threads = resolve_threads(threads);
-    OIIO::attribute("threads", threads);  // OpenImageIO's own pool (EXR decoding) keeps to --threads too
+    // OpenImageIO's own pool and OpenEXR's (which compresses and decompresses an EXR's blocks,
+    // by default one a core) keep to --threads too, as oiiotool's --threads sets both.
+    OIIO::attribute("threads", threads);
+    OIIO::attribute("exr_threads", threads);
     {
         // Interrupted (Ctrl-C, a farm's kill), the bar's line ends before the interrupt's message
         // and the log still tells which frames were finished.

@@ -9,8 +9,10 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <functional>
+#include <memory>
 #include <string>
 
+#include "cli/atomic_file.h"
 #include "cli/image_io.h"
 #include "cli/progress.h"
 #include "cli/sequence.h"
@@ -21,6 +23,7 @@ struct RunOptions {
     bool dry_run = false, quiet = false, no_clobber = false, skip_bad_frames = false;
     bool in_place = false;   // -o names the input itself: each frame replaces its input
     int frames_at_once = 0;  // 0: min(threads, frames, kDefaultMaxFramesAtOnce)
+    bool overlap = true;     // each frame written while the next is read and developed
     std::string log_path;
 };
 
@@ -41,10 +44,14 @@ std::string output_flag_hint(const CLI::App& cmd);
 
 double seconds_since(std::chrono::steady_clock::time_point start);
 
-// One frame's work: read job.input, write job.output (through write_image, whose `committed`
-// adds `report` to `progress`: a run interrupted then logs every finished output), with
-// `threads`; `first` for the run's first frame (where -v prints what a run's frames share).
-using FrameWork = std::function<void(const FrameJob& job, int threads, bool first, FrameReport& report, Progress& progress)>;
+// A frame's output, once the frame is developed: written under its temporary name
+// (write_image_to_temp), which the batch commits in frame order.
+using FrameWrite = std::function<std::unique_ptr<TempFile>()>;
+// One frame's work: read job.input and develop it with `threads`; `first` for the run's first
+// frame (where -v prints what a run's frames share). Returns how to write job.output, which
+// the batch runs while the next frame is read and developed.
+using FrameWork =
+    std::function<FrameWrite(const FrameJob& job, int threads, bool first, FrameReport& report, Progress& progress)>;
 // What the frames share, made once the threads each frame gets are known.
 using PrepareFrames = std::function<FrameWork(int threads_per_frame)>;
 // A dry run's look at a frame whose input header (`input`) was read: the warnings the run
@@ -54,8 +61,9 @@ using DryRunCheck =
 
 // Expands o's names into frames (a single image is frame `single_frame`; `frame_flag_given`:
 // --frame was given, which a sequence refuses), checks every output can be written before any
-// frame is read, runs the frames (in parallel, sharing `threads`, 0 = all cores) and throws
-// UserError naming each frame that failed. `verbose` prints how the threads are split. A dry
+// frame is read, runs the frames (in parallel, sharing `threads`, 0 = all cores; each frame's
+// write overlapping the next frame's read and develop) and throws UserError naming each frame
+// that failed. Frames are reported, and their outputs take their names, in frame order. `verbose` prints how the threads are split. A dry
 // run (-n) reads each input's header, warns where it cannot, and gives it to `dry_run_check`.
 void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int threads, bool verbose,
                const PrepareFrames& prepare, const DryRunCheck& dry_run_check = {});

@@ -7,6 +7,7 @@
 
 #include "bench/bench.h"
 #include "cli/commands.h"
+#include "cli/io_bench.h"
 #include "cli/user_error.h"
 
 namespace darkroom::cli {
@@ -21,6 +22,9 @@ struct BenchCliOptions {
     std::string film = "kodak-vision3-250d", paper = "kodak-2383";
     std::string tiers = "reference,high,fast,preview";
     bool print_grain = false;
+    bool io = false;
+    std::string sequence_size = "1920x1080";
+    int sequence_frames = 6;
 };
 
 std::pair<int, int> parse_size(const std::string& text) {
@@ -272,6 +276,20 @@ void print_report(const bench::BenchReport& r) {
 }
 
 void run_bench(const BenchCliOptions& o) {
+    if (o.io) {
+        IoBenchOptions io;
+        std::tie(io.frame_width, io.frame_height) = parse_size(o.size);
+        std::tie(io.sequence_width, io.sequence_height) = parse_size(o.sequence_size);
+        io.sequence_frames = o.sequence_frames;
+        io.rounds = o.runs;
+        io.threads = o.threads;
+        const nlohmann::json report = run_io_bench(io);
+        if (o.json)
+            std::cout << report.dump(2) << "\n";
+        else
+            print_io_bench(report);
+        return;
+    }
     bench::BenchOptions options;
     std::tie(options.width, options.height) = parse_size(o.size);
     options.tiers = parse_tiers(o.tiers);
@@ -307,7 +325,7 @@ void add_bench_command(CLI::App& app) {
     cmd->add_option("--size", o->size, "Frame size WxH (default 4096x2160)");
     cmd->add_flag("--json", o->json, "Machine-readable output");
     cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
-    cmd->add_option("--runs", o->runs, "Timed whole-frame runs after one warm-up; the fastest is kept")
+    cmd->add_option("--runs", o->runs, "Timed whole-frame runs after one warm-up; the fastest is kept (--io: rounds, the median kept)")
         ->check(CLI::Range(1, 100));
     cmd->add_option("--film", o->film, "Film stock id or .json file (default kodak-vision3-250d)");
     cmd->add_option("--paper", o->paper, "Paper or print film id or .json file (default kodak-2383)");
@@ -316,6 +334,12 @@ void add_bench_command(CLI::App& app) {
     cmd->add_flag("--print-grain", o->print_grain,
                   "Also measure the print's grain against the reference's: the grain wedge printed and each channel "
                   "read as a density (the reference's two prints of it take minutes)");
+    cmd->add_flag("--io", o->io,
+                  "Instead: the program timed from outside on files, program start included: a sequence's frames per "
+                  "second with and without overlap, and a --size frame developed against oiiotool copying it");
+    cmd->add_option("--sequence-size", o->sequence_size, "--io: the sequence's frame size WxH (default 1920x1080)");
+    cmd->add_option("--sequence-frames", o->sequence_frames, "--io: the sequence's frames (default 6)")
+        ->check(CLI::Range(1, 1000));
     cmd->callback([o] { run_bench(*o); });
 }
 

@@ -35,9 +35,9 @@ WriteOptions frame_write_options(const DevelopOptions& o, const ColourIO& colour
     return write;
 }
 
-// Develops and writes one frame; its report goes to `progress` as its output takes its
-// name (so a run interrupted then logs every finished output).
-void develop_frame(const DevelopOptions& o, const Renderer& renderer, PlanCache& plans,
+// Develops one frame; returns how to write it (the output and the input's header: the
+// input's pixels are freed as the frame is developed).
+FrameWrite develop_frame(const DevelopOptions& o, const Renderer& renderer, PlanCache& plans,
                    const FrameJob& job, int threads, FrameReport& report, Progress& progress) {
     const ColourIO& colour = renderer.colour();
     auto start = std::chrono::steady_clock::now();
@@ -74,11 +74,10 @@ void develop_frame(const DevelopOptions& o, const Renderer& renderer, PlanCache&
 
     const WriteOptions write =
         frame_write_options(o, colour, renderer.look().settings.output, in.spec, job, report, progress);
-    start = std::chrono::steady_clock::now();
-    write_image(job.output, out, in.spec, o.batch.run.in_place ? "" : job.input, write, [&] {
-        report.write_seconds = seconds_since(start);
-        progress.add(report);
-    });
+    return [out = std::move(out), spec = std::move(in.spec), output = job.output,
+            protected_input = o.batch.run.in_place ? "" : job.input, write] {
+        return write_image_to_temp(output, out, spec, protected_input, write);
+    };
 }
 
 // Densities run past 1 D: a file of integers (PNG whatever -d says, -d uint16) clips them.
@@ -112,7 +111,7 @@ void run_develop(DevelopOptions& o) {
                   auto plans = std::make_shared<PlanCache>(renderer, threads_per_frame);
                   return [&o, &renderer, plans](const FrameJob& job, int threads, bool, FrameReport& report,
                                                 Progress& progress) {
-                      develop_frame(o, renderer, *plans, job, threads, report, progress);
+                      return develop_frame(o, renderer, *plans, job, threads, report, progress);
                   };
               },
               [&](const FrameJob& job, const OIIO::ImageSpec& input, FrameReport& report, Progress& progress) {

@@ -260,8 +260,9 @@ struct ApplyOptions {
     int frame = 0, threads = 0;
 };
 
-void apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const FrameJob& job, int threads,
-                 FrameReport& report, Progress& progress) {
+// Puts the grain on one frame; returns how to write it.
+FrameWrite apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const FrameJob& job, int threads,
+                       FrameReport& report, Progress& progress) {
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_plate(job.input);
     report.read_seconds = seconds_since(start);
@@ -285,12 +286,10 @@ void apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const F
     view.colour_channels = colour_channel_count(in.spec);
     apply_plate_grain_to_element(grain, o.profile, view, premultiplied_alpha_channel(in.spec), o.seed, job.frame, threads);
     report.develop_seconds = seconds_since(start);
-    start = std::chrono::steady_clock::now();
-    write_image(job.output, in.pixels, in.spec, o.batch.run.in_place ? "" : job.input,
-                with_input_data_type(o.batch.write, in.spec, job.output), [&] {
-        report.write_seconds = seconds_since(start);
-        progress.add(report);
-    });
+    const WriteOptions write = with_input_data_type(o.batch.write, in.spec, job.output);
+    return [in = std::move(in), output = job.output, protected_input = o.batch.run.in_place ? "" : job.input, write] {
+        return write_image_to_temp(output, in.pixels, in.spec, protected_input, write);
+    };
 }
 
 void run_apply(ApplyOptions& o, const CLI::App& cmd) {
@@ -305,7 +304,7 @@ void run_apply(ApplyOptions& o, const CLI::App& cmd) {
                         ": convert the input to " + measured_in + " first (grain levels are in its encoding)");
     run_batch(o.batch, o.frame, cmd.get_option("--frame")->count() > 0, o.threads, false, [&](int) -> FrameWork {
         return [&](const FrameJob& job, int threads, bool, FrameReport& report, Progress& progress) {
-            apply_frame(o, grain, job, threads, report, progress);
+            return apply_frame(o, grain, job, threads, report, progress);
         };
     });
 }

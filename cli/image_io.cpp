@@ -421,9 +421,8 @@ bool writes_integers(const std::string& path, const WriteOptions& options) {
     return !is_float_format(path) || !output_type(path, options).is_floating_point();
 }
 
-void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
-                 const std::string& protected_input, const WriteOptions& options,
-                 const std::function<void()>& committed) {
+std::unique_ptr<TempFile> write_image_to_temp(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
+                                              const std::string& protected_input, const WriteOptions& options) {
     if (!protected_input.empty() && same_file(path, protected_input))
         throw UserError("refusing to overwrite the input '" + path + "' with the output");
     require_format_holds(path, "", image.channels);
@@ -431,11 +430,17 @@ void write_image(const std::string& path, const Image& image, const OIIO::ImageS
     auto out = OIIO::ImageOutput::create(path);
     if (!out) throw UserError("cannot write '" + path + "': " + OIIO::geterror());
     if (!out->supports("origin")) spec.x = spec.y = 0;
-    TempFile temp{fs::path(path)};
-    if (!temp.create([&] { return out->open(temp.path().string(), spec); }) ||
+    auto temp = std::make_unique<TempFile>(fs::path(path));
+    if (!temp->create([&] { return out->open(temp->path().string(), spec); }) ||
         !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
         throw UserError("cannot write '" + path + "': " + out->geterror());
-    temp.commit(committed);
+    return temp;
+}
+
+void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
+                 const std::string& protected_input, const WriteOptions& options,
+                 const std::function<void()>& committed) {
+    write_image_to_temp(path, image, like, protected_input, options)->commit(committed);
 }
 
 }  // namespace darkroom::cli

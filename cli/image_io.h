@@ -3,11 +3,13 @@
 
 #include <OpenImageIO/imageio.h>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "cli/atomic_file.h"
 #include "cli/user_error.h"
 #include "core/image.h"
 
@@ -111,5 +113,9 @@ WriteOptions with_input_data_type(WriteOptions options, const OIIO::ImageSpec& i
 void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
                  const std::string& protected_input = "", const WriteOptions& options = {},
                  const std::function<void()>& committed = {});
+// The same, the finished file left under its temporary name until the caller commits it (a
+// batch names its frames' outputs in frame order, whichever is written first).
+std::unique_ptr<TempFile> write_image_to_temp(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
+                                              const std::string& protected_input, const WriteOptions& options);
 
 }  // namespace darkroom::cli

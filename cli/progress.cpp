@@ -109,6 +109,8 @@ void write_run_log(const std::string& path, const std::vector<FrameReport>& repo
                             {"read_seconds", r.read_seconds},
                             {"develop_seconds", r.develop_seconds},
                             {"write_seconds", r.write_seconds},
+                            {"start_seconds", r.start_seconds},
+                            {"end_seconds", r.end_seconds},
                             {"warnings", r.warnings}};
         if (!r.error.empty()) f["error"] = r.error;
         frames.push_back(f);

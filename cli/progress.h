@@ -17,6 +17,8 @@ struct FrameReport {
     std::string input, output;
     Status status = Status::developed;
     double read_seconds = 0, develop_seconds = 0, write_seconds = 0;
+    // In flight (its pixels held) from `start_seconds` to `end_seconds` after the run began.
+    double start_seconds = 0, end_seconds = 0;
     std::vector<std::string> warnings;
     std::string error;  // when failed
 };

@@ -1,4 +1,5 @@
 // Batch work the oiiotool way: sequences, look files, metadata, safe writes, resuming.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -55,6 +56,30 @@ size_t count(const std::string& text, const std::string& what) {
     return n;
 }
 
+// "<dir>/plate.%04d.exr" for frames 1..`frames`, each its own picture (the gradient at
+// another exposure) and frame 1 the largest, so that overlapped frames finish out of order.
+void make_distinct_plates(const fs::path& dir, int frames) {
+    for (int f = 1; f <= frames; ++f) {
+        const int w = f == 1 ? 160 : 48, h = f == 1 ? 120 : 36;
+        OIIO::ImageBuf plate(OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::HALF));
+        const float k = 0.25f * f, top[3] = {0.02f * k, 0.05f * k, 0.1f * k}, bottom[3] = {1.5f * k, 0.9f * k, 0.3f * k};
+        OIIO::ImageBufAlgo::fill(plate, top, bottom);
+        plate.specmod().attribute("compression", "piz");
+        REQUIRE(plate.write(frame_name(dir, "plate", f)));
+    }
+}
+
+// Where the line of each frame of 1..`frames` ("frame N: ..." or, failed, "... frame N (...")
+// is in `output`.
+std::vector<size_t> frame_line_positions(const std::string& output, int frames) {
+    std::vector<size_t> at;
+    for (int f = 1; f <= frames; ++f) {
+        const std::string frame = "frame " + std::to_string(f);
+        at.push_back(std::min(output.find(frame + ":"), output.find(frame + " (")));
+    }
+    return at;
+}
+
 }  // namespace
 
 TEST_CASE("a sequence gives each frame its own grain, the same as a single image of that frame, reproducibly",
@@ -85,6 +110,80 @@ TEST_CASE("a sequence gives each frame its own grain, the same as a single image
                      kLook + " --threads 2")
                 .exit_code == 0);
     CHECK(file_bytes(frame_name(dir, "out", 3)) == first_bytes);
+}
+
+TEST_CASE("frames written while the next develops are the frames made one after another, reported in frame order",
+          "[cli][batch][determinism]") {
+    fs::path dir = fresh_dir("overlap");
+    const int frames = 6;
+    make_distinct_plates(dir, frames);
+    fs::remove(frame_name(dir, "plate", 4));  // a failed frame among them
+    const std::string in = (dir / "plate.####.exr").string();
+    auto run = [&](const std::string& out, const std::string& how) {
+        return darkroom("develop " + in + " -o " + (dir / (out + ".####.exr")).string() + " --frames 1-6" + kLook +
+                        " --skip-bad-frames --log " + (dir / (out + ".json")).string() + how);
+    };
+    const Result in_turn = run("in-turn", " --no-overlap --threads 1");
+    const Result overlapped = run("overlapped", " --threads 3 --frames-at-once 3");
+    INFO(in_turn.output << overlapped.output);
+    REQUIRE(in_turn.exit_code == 1);
+    REQUIRE(overlapped.exit_code == 1);
+    for (const Result* r : {&in_turn, &overlapped}) {
+        CHECK_THAT(r->output, Catch::Contains("frame 4 (") && Catch::Contains("1 of 6 frames failed"));
+        const std::vector<size_t> at = frame_line_positions(r->output, frames);
+        CHECK(std::find(at.begin(), at.end(), std::string::npos) == at.end());
+        CHECK(std::is_sorted(at.begin(), at.end()));
+    }
+    for (const std::string out : {"in-turn", "overlapped"}) {
+        nlohmann::json log = nlohmann::json::parse(file_bytes(dir / (out + ".json")));
+        REQUIRE(log["frames"].size() == frames);
+        for (int f = 1; f <= frames; ++f) CHECK(log["frames"][f - 1]["frame"] == f);
+    }
+    CHECK(temp_files_in(dir) == 0);
+    CHECK_FALSE(fs::exists(frame_name(dir, "overlapped", 4)));
+    // Each frame's own pixels, in the input's type and compression: none taken from another frame.
+    for (int f : {1, 2, 3, 5, 6}) {
+        INFO("frame " << f);
+        const std::vector<float> got = pixels(frame_name(dir, "overlapped", f));
+        CHECK(got == pixels(frame_name(dir, "in-turn", f)));
+        const OIIO::ImageSpec spec = OIIO::ImageInput::open(frame_name(dir, "overlapped", f))->spec();
+        CHECK(spec.format == OIIO::TypeDesc::HALF);
+        CHECK(spec.get_string_attribute("compression") == "piz");
+        if (f > 1) CHECK(got != pixels(frame_name(dir, "overlapped", f == 2 ? 3 : 2)));
+    }
+}
+
+// The most frames of a --log's run in flight at once (reading, developing or being written).
+int most_frames_in_flight(const nlohmann::json& log) {
+    int most = 0;
+    for (const auto& f : log["frames"]) {
+        int at_once = 0;
+        for (const auto& g : log["frames"])
+            at_once += g["start_seconds"] <= f["start_seconds"] && f["start_seconds"] < g["end_seconds"];
+        most = std::max(most, at_once);
+    }
+    return most;
+}
+
+TEST_CASE("a run holds at most two frames per frame at once: one developing, one being written", "[cli][batch][memory]") {
+    fs::path dir = fresh_dir("in-flight");
+    const int frames = 8;
+    make_plates(dir, 1, frames, 256, 256);
+    // Writes slower than the develop (pxr24, the negative alone): an unbounded run would pile them up.
+    const std::string args = "develop " + (dir / "plate.####.exr").string() + " -o " + (dir / "out.####.exr").string() +
+                             " --compression pxr24 --no-grain --no-mtf --paper none --output negative -q --log " +
+                             (dir / "log.json").string();
+    for (const auto& [how, most] : {std::pair{" --threads 1 --frames-at-once 1 --no-overlap", 1},
+                                    std::pair{" --threads 1 --frames-at-once 1", 2},
+                                    std::pair{" --threads 2 --frames-at-once 2", 4}}) {
+        INFO(how);
+        REQUIRE(darkroom(args + how).exit_code == 0);
+        nlohmann::json log = nlohmann::json::parse(file_bytes(dir / "log.json"));
+        REQUIRE(log["frames"].size() == frames);
+        for (const auto& f : log["frames"]) CHECK(f["start_seconds"] < f["end_seconds"]);
+        CHECK(most_frames_in_flight(log) <= most);
+        if (most == 2) CHECK(most_frames_in_flight(log) == 2);  // (each write outlasts the next frame's start)
+    }
 }
 
 TEST_CASE("frame wildcards and ranges follow oiiotool", "[cli][batch]") {

@@ -80,3 +80,26 @@ TEST_CASE("darkroom bench refuses a bad size or tier") {
     CHECK(tier.exit_code == 1);
     CHECK_THAT(tier.output, Catch::Contains("unknown tier 'turbo'"));
 }
+
+TEST_CASE("darkroom bench --io times a sequence three ways and the whole process against oiiotool") {
+    Result r = shell("(" + std::string(DARKROOM_EXE) +
+                     " bench --io --json --size 64x36 --sequence-size 48x32 --sequence-frames 3 --runs 1 --threads 2"
+                     " 2>/dev/null)");
+    REQUIRE(r.exit_code == 0);
+    nlohmann::json doc = nlohmann::json::parse(r.output);
+    CHECK(doc["threads"] == 2);
+    const nlohmann::json& seq = doc["sequence"];
+    CHECK(seq["frames"] == 3);
+    REQUIRE(seq["ways"].size() == 3);
+    CHECK(seq["ways"][0]["flags"] == " --frames-at-once 1 --no-overlap");
+    CHECK(seq["ways"][2]["flags"] == "");
+    for (const auto& way : seq["ways"])
+        CHECK(way["frames_per_second"].get<double>() == Approx(3 / way["median_seconds"].get<double>()));
+    const nlohmann::json& whole = doc["whole_process"];
+    CHECK(whole["width"] == 64);
+    CHECK(whole["oiiotool_on_path"] == (std::system("command -v oiiotool > /dev/null 2>&1") == 0));
+    // One pair: its ratio is the ratio of its two times.
+    if (whole["oiiotool_on_path"])
+        CHECK(whole["ratio_median_of_pairs"].get<double>() ==
+              Approx(whole["develop_median_seconds"].get<double>() / whole["oiiotool_median_seconds"].get<double>()));
+}
