@@ -169,7 +169,7 @@ Curve checked_density_curve(const FieldReader& r, Curve c, bool falls) {
     const auto [lowest, highest] = std::minmax_element(c.y.begin(), c.y.end());
     if (!(*highest - *lowest >= kMinDensityRise)) {
         std::ostringstream problem;
-        problem << "the curve spans " << *highest - *lowest << " D over its exposures: a "
+        problem << "the curve " << (falls ? "falls " : "rises ") << *highest - *lowest << " D over its exposures: a "
                 << (falls ? "reversal film's" : "film's") << " density must " << direction
                 << " with exposure, by at least " << kMinDensityRise << " D";
         r.fail(problem.str());

@@ -74,7 +74,7 @@ TEST_CASE("a reversal film's curve must fall with exposure, and only a falling f
     CHECK_THAT(error_of(with_curve(test::test_film_json(), falling)),
                Catch::Contains("field 'layers[0].density_curve': the curve falls at log H -2"));
     CHECK_THAT(error_of(with_curve(reversal, R"({"log_h": [-3, 0], "density": [1.0, 0.95]})")),
-               Catch::Contains("spans 0.05 D") && Catch::Contains("a reversal film's density must fall"));
+               Catch::Contains("the curve falls 0.05 D over its exposures") && Catch::Contains("a reversal film's density must fall"));
     CHECK_THAT(error_of(reversal), Catch::Contains("field 'layers[0].density_curve.parametric': the parametric form "
                                                    "rises with exposure"));
 
