@@ -13,7 +13,7 @@ namespace darkroom::cli {
 namespace {
 
 std::vector<Chart> stock_charts(const Stock& stock) {
-    const bool paper = stock.kind != StockKind::negative;
+    const bool paper = stock.kind != StockKind::negative;  // (and slides: read in Status A, as viewed)
     Chart curves{stock.name + ": characteristic curves",
                  {"log10 exposure (lux-seconds)"},
                  {paper ? "diffuse density (Status A)" : "diffuse density (Status M)"},
@@ -26,11 +26,15 @@ std::vector<Chart> stock_charts(const Stock& stock) {
         std::array<float, 3> colour = stock.is_colour() ? channel_colour(l.name, int(i)) : chart_colour(0);
         ChartSeries curve{l.name, {}, {}, colour}, sens{l.name, {}, {}, colour}, dye{l.name, {}, {}, colour},
             response{l.name, {}, {}, colour};
-        // The curve over its rising part, with half a log unit of margin either side.
+        // The curve over its rising (a reversal film's falling) part, with half a log unit of
+        // margin either side.
         double rise_start, rise_end;
         const Curve& c = l.density_curve;
-        if (!c.first_x_at(c.y_min() + 0.01, &rise_start)) rise_start = c.x_min();
-        if (!c.first_x_at(c.y_max() - 0.01, &rise_end)) rise_end = c.x_max();
+        const bool falls = density_falls_with_exposure(stock.kind);
+        if (!(falls ? c.first_x_down_to(c.y_max() - 0.01, &rise_start) : c.first_x_at(c.y_min() + 0.01, &rise_start)))
+            rise_start = c.x_min();
+        if (!(falls ? c.first_x_down_to(c.y_min() + 0.01, &rise_end) : c.first_x_at(c.y_max() - 0.01, &rise_end)))
+            rise_end = c.x_max();
         for (double x = rise_start - 0.5; x <= rise_end + 0.5; x += 0.02) curve.x.push_back(x), curve.y.push_back(c(x));
         for (int k = 0; k < kSpectralSamples; ++k) {
             sens.x.push_back(wavelength_nm(k));

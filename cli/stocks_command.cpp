@@ -12,14 +12,17 @@ void add_stocks_command(CLI::App& app) {
     cmd->add_flag("--json", *json_output, "Machine-readable output");
     cmd->callback([json_output] {
         nlohmann::json list = nlohmann::json::array();
-        for (const Stock& s : builtin_stocks()) {
-            std::string kind = stock_kind_name(s.kind);
-            if (*json_output)
-                list.push_back({{"id", s.id}, {"name", s.name}, {"kind", kind}, {"iso_speed", s.iso_speed},
-                                {"layers", s.layers.size()}, {"sources", s.sources}});
-            else
-                std::cout << s.id << "  " << kind << "  ISO " << s.iso_speed << "  " << s.name << "\n";
-        }
+        // By role: the camera films (negative, reversal), then what negatives print on.
+        for (StockKind role : {StockKind::negative, StockKind::reversal, StockKind::print_film, StockKind::paper})
+            for (const Stock& s : builtin_stocks()) {
+                if (s.kind != role) continue;
+                std::string kind = stock_kind_name(s.kind);
+                if (*json_output)
+                    list.push_back({{"id", s.id}, {"name", s.name}, {"kind", kind}, {"iso_speed", s.iso_speed},
+                                    {"layers", s.layers.size()}, {"sources", s.sources}});
+                else
+                    std::cout << s.id << "  " << kind << "  ISO " << s.iso_speed << "  " << s.name << "\n";
+            }
         if (*json_output) std::cout << list.dump(2) << "\n";
     });
 }

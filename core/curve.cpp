@@ -34,6 +34,12 @@ bool Curve::first_x_at(double target, double* at) const {
     return false;
 }
 
+bool Curve::first_x_down_to(double target, double* at) const {
+    Curve mirrored{x, y};
+    for (double& v : mirrored.y) v = -v;
+    return mirrored.first_x_at(-target, at);
+}
+
 Curve make_curve(std::vector<double> x, std::vector<double> y, const std::string& what) {
     if (x.size() != y.size())
         throw std::invalid_argument(what + ": " + std::to_string(x.size()) + " x values but " +

@@ -22,6 +22,8 @@ struct Curve {
     // Smallest x at which the curve reaches `target`, searching left to right; the curve
     // need not be monotonic. Returns false if it never does.
     bool first_x_at(double target, double* at) const;
+    // Smallest x at which the curve falls to `target` (a reversal film's curve).
+    bool first_x_down_to(double target, double* at) const;
 };
 
 // Sorts and validates samples; throws std::invalid_argument naming `what` on bad data.

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -314,58 +315,93 @@ void develop_paper(const Stock& paper, const double* paper_exposure_lux_s, doubl
 }
 
 
+// The fast tiers' tables, kept: a plan compiled again for another exposure, grain, MTF or
+// halation (a slider dragged in a host) prints the same, and its table, about a tenth of a
+// second of spectral sums on two cores, is taken from the last few built, found by `key`:
+// the bytes of everything the table reads.
+std::shared_ptr<const Table3D> cached_table(const std::string& key,
+                                            const std::function<std::shared_ptr<const Table3D>()>& build) {
+    static std::mutex mutex;
+    static std::vector<std::pair<std::string, std::shared_ptr<const Table3D>>> recent;  // the last used last
+    constexpr size_t kKept = 4;
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        auto it = std::find_if(recent.begin(), recent.end(), [&](const auto& e) { return e.first == key; });
+        if (it != recent.end()) {
+            std::rotate(it, it + 1, recent.end());
+            return recent.back().second;
+        }
+    }
+    std::shared_ptr<const Table3D> table = build();
+    std::lock_guard<std::mutex> lock(mutex);  // (another compile may have built it meanwhile: either serves)
+    if (recent.size() == kKept) recent.erase(recent.begin());
+    recent.emplace_back(key, table);
+    return table;
+}
+
+// Appends the bytes of `count` values to a table's key.
+template <typename T>
+void append_key(std::string& key, const T* v, size_t count) {
+    key.append(reinterpret_cast<const char*>(v), sizeof *v * count);
+}
+
+// Appends what viewing a material reads (stages/print.h, PrintView): its base, dyes and
+// curves (their minima are the dyes' zero).
+void append_view_key(std::string& key, const Stock& material) {
+    const size_t layers = material.layers.size();
+    append_key(key, &layers, 1), append_key(key, material.base_density.data(), material.base_density.size());
+    for (const Layer& l : material.layers) {
+        append_key(key, l.dye_density.data(), l.dye_density.size());
+        for (const std::vector<double>* v : {&l.density_curve.x, &l.density_curve.y}) {
+            const size_t n = v->size();
+            append_key(key, &n, 1), append_key(key, v->data(), n);
+        }
+    }
+}
+
 // The one print table of a colour negative on colour paper: the negative's densities -> the
 // print's linear Rec.709, the high tier's print at each node, held as cube roots (tables.h).
-// A plan compiled again for another exposure, grain, MTF or halation (a slider dragged in a
-// host) prints the same: its table, about a tenth of a second of spectral sums on two cores,
-// is taken from the last few built, found by the bytes of everything it reads.
 std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock& paper, const PrintExposure& enlarger,
                                                   int nodes, int threads) {
     std::array<double, 3> lo, hi;
     table_density_range(film, lo, hi);
-    std::string key = enlarger.fingerprint();
-    auto append = [&](const auto* v, size_t count) { key.append(reinterpret_cast<const char*>(v), sizeof *v * count); };
-    append(lo.data(), 3), append(hi.data(), 3), append(&nodes, 1);
-    const size_t layers = paper.layers.size();  // (then what the paper's curves and view read)
-    append(&layers, 1), append(paper.base_density.data(), paper.base_density.size());
-    for (const Layer& l : paper.layers) {
-        append(l.dye_density.data(), l.dye_density.size());
-        for (const std::vector<double>* v : {&l.density_curve.x, &l.density_curve.y}) {
-            const size_t n = v->size();
-            append(&n, 1), append(v->data(), n);
-        }
-    }
-    static std::mutex mutex;
-    static std::vector<std::pair<std::string, std::shared_ptr<const Table3D>>> recent;  // the last used last
-    constexpr size_t kKept = 4;
-    auto find = [&]() -> std::shared_ptr<const Table3D> {
-        std::lock_guard<std::mutex> lock(mutex);
-        auto it = std::find_if(recent.begin(), recent.end(), [&](const auto& e) { return e.first == key; });
-        if (it == recent.end()) return nullptr;
-        std::rotate(it, it + 1, recent.end());
-        return recent.back().second;
-    };
-    if (auto table = find()) return table;
-    // Each axis node's factor of the negative's transmittance, computed once.
-    std::array<std::vector<Spectrum>, 3> transmittance;
-    for (int a = 0; a < 3 && enlarger.spectral(); ++a)
-        for (int i = 0; i < nodes; ++i)
-            transmittance[a].push_back(
-                enlarger.layer_transmittance(a, Table3D::node_coordinate(lo[a], hi[a], nodes, i)));
-    const PrintView view(paper);
-    auto table = std::make_shared<const Table3D>(lo, hi, nodes, threads, [&](const int* node, const double* d, double* rgb) {
-        double h[3], paper_density[3];
-        if (enlarger.spectral())
-            enlarger.expose({&transmittance[0][node[0]], &transmittance[1][node[1]], &transmittance[2][node[2]]}, h);
-        else
-            enlarger.expose(d, h);
-        develop_paper(paper, h, paper_density);
-        view.rgb(paper_density, rgb);
-    }, Table3D::Encoding::cube_root);
-    std::lock_guard<std::mutex> lock(mutex);  // (another compile may have built it meanwhile: either serves)
-    if (recent.size() == kKept) recent.erase(recent.begin());
-    recent.emplace_back(std::move(key), table);
-    return table;
+    std::string key = "print " + enlarger.fingerprint();
+    append_key(key, lo.data(), 3), append_key(key, hi.data(), 3), append_key(key, &nodes, 1);
+    append_view_key(key, paper);  // (what the paper's curves and view read)
+    return cached_table(key, [&] {
+        // Each axis node's factor of the negative's transmittance, computed once.
+        std::array<std::vector<Spectrum>, 3> transmittance;
+        for (int a = 0; a < 3 && enlarger.spectral(); ++a)
+            for (int i = 0; i < nodes; ++i)
+                transmittance[a].push_back(
+                    enlarger.layer_transmittance(a, Table3D::node_coordinate(lo[a], hi[a], nodes, i)));
+        const PrintView view(paper);
+        return std::make_shared<const Table3D>(lo, hi, nodes, threads, [&](const int* node, const double* d, double* rgb) {
+            double h[3], paper_density[3];
+            if (enlarger.spectral())
+                enlarger.expose({&transmittance[0][node[0]], &transmittance[1][node[1]], &transmittance[2][node[2]]}, h);
+            else
+                enlarger.expose(d, h);
+            develop_paper(paper, h, paper_density);
+            view.rgb(paper_density, rgb);
+        }, Table3D::Encoding::cube_root);
+    });
+}
+
+// The fast tiers' view of a colour reversal film (the print output): its densities -> the
+// projected slide's linear Rec.709, PrintView at each node, held as cube roots.
+std::shared_ptr<const Table3D> shared_view_table(const Stock& film, int nodes, int threads) {
+    std::array<double, 3> lo, hi;
+    table_density_range(film, lo, hi);
+    std::string key = "view ";
+    append_key(key, lo.data(), 3), append_key(key, hi.data(), 3), append_key(key, &nodes, 1);
+    append_view_key(key, film);
+    return cached_table(key, [&] {
+        const PrintView view(film);
+        return std::make_shared<const Table3D>(
+            lo, hi, nodes, threads, [&](const int*, const double* d, double* rgb) { view.rgb(d, rgb); },
+            Table3D::Encoding::cube_root);
+    });
 }
 
 }  // namespace
@@ -409,10 +445,13 @@ Window image_window(const FrameGeometry& frame) {
 Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
                    const FrameGeometry& frame, int threads, const PlanStructure& structure) {
     const Window image = image_window(frame);
-    if (film.kind != StockKind::negative) throw std::invalid_argument("'" + film.id + "' is not a film stock (it is a paper or print film)");
-    if (paper && paper->kind == StockKind::negative)
+    if (!is_camera_film(film.kind))
+        throw std::invalid_argument("'" + film.id + "' is not a film stock (it is a paper or print film)");
+    if (paper && is_camera_film(paper->kind))
         throw std::invalid_argument("'" + paper->id + "' is a camera film, not a paper or print film");
-    if (settings.output == OutputMode::print && !paper)
+    // A reversal film's print is the film itself, projected: no paper.
+    const bool views_film = settings.output == OutputMode::print && film.kind == StockKind::reversal;
+    if (settings.output == OutputMode::print && !paper && !views_film)
         throw std::invalid_argument("print output needs a paper (or choose the negative, density, scan or texture output)");
     validate(settings);
 
@@ -423,7 +462,8 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
     p.film_width_px_ = frame.film_width_px();
     p.monochrome_ = frame.monochrome;
     const QualityTier& tier = quality_tier(settings.quality);
-    const bool printing = settings.output == OutputMode::print;
+    const bool printing = settings.output == OutputMode::print && !views_film;
+    p.views_film_ = views_film;
     const bool one_print_table =
         printing && tier.print_table_nodes > 0 && film.is_colour() && paper->is_colour();
     const double film_width_mm = settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm;
@@ -451,6 +491,10 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
             leave_out_paper_grain(*paper_stages, *film_stages, p.skipped_);
             p.print_table_ = shared_print_table(film, *paper, *p.print_, tier.print_table_nodes, threads);
         }
+    } else if (views_film) {
+        if (tier.print_table_nodes > 0 && film.is_colour())
+            p.print_table_ = shared_view_table(film, tier.print_table_nodes, threads);
+        if (paper) p.skipped_.push_back("print (" + paper->id + "): a reversal film is its own picture, projected");
     } else if (paper) {
         p.skipped_.push_back("print: the output stops at the negative");
     }
@@ -550,6 +594,21 @@ double developed_density(const MaterialStages& m, size_t layer, double exposure_
 
 }  // namespace
 
+void Plan::view_film_row(const float* const* density, float* const* rgb, int width) const {
+    if (print_table_) {
+        print_table_->apply_row(density, rgb, width);
+        return;
+    }
+    const Stock& film = film_stages_->stock;
+    const PrintView view(film);
+    double d[3], out[3];
+    for (int x = 0; x < width; ++x) {
+        for (size_t l = 0; l < film.layers.size(); ++l) d[l] = density[l][x];
+        view.rgb(d, out);
+        for (int c = 0; c < 3; ++c) rgb[c][x] = float(out[c]);
+    }
+}
+
 const Stock& Plan::film() const { return film_stages_->stock; }
 
 std::array<double, 3> Plan::film_exposure_weights(size_t layer) const {
@@ -570,6 +629,10 @@ void Plan::result_of_negative(const double* density, double* result) const {
         float rgb[3];
         (*print_table_)(d, rgb);
         std::copy_n(rgb, 3, result);
+        return;
+    }
+    if (views_film_) {
+        PrintView(film_stages_->stock).rgb(density, result);
         return;
     }
     if (print_) {
@@ -619,7 +682,8 @@ std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, in
         const auto& grain = m.grain[layer];
         if (grain && !fields[layer]) fields[layer] = grain_field(*grain, out, threads);
         const Curve& curve = m.stock.layers[layer].density_curve;
-        double gamma = std::max(0.05, curve(mid_grey_log_h + 0.5) - curve(mid_grey_log_h - 0.5));
+        // (Its magnitude: a reversal film's curve falls, and the grain's sign is random.)
+        double gamma = std::max(0.05, std::abs(curve(mid_grey_log_h + 0.5) - curve(mid_grey_log_h - 0.5)));
         double k = kLn10 / gamma;
         // grain_field's standard deviation per pixel (sum of the 2D kernel's squares).
         double field_sigma = grain ? grain->field_sigma() : 1.0;
@@ -669,6 +733,11 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
     } else if (print_) {
         const Window film_out = out_window.grown(paper_stages_->halo_px()).intersected(frame_);
         result = print(develop_film(in, film_out, threads, times), out_window, threads, times);
+    } else if (views_film_) {
+        const std::vector<Plane> density = develop_film(in, out_window, threads, times);
+        StageTimer timer(times, "view");
+        result = per_row(density, out_window, 3, threads,
+                         [&](const float* const* d, float* const* rgb, int width) { view_film_row(d, rgb, width); });
     } else {
         result = develop_film(in, out_window, threads, times);
         StageTimer timer(times, "convert");
@@ -759,6 +828,14 @@ std::vector<std::string> Plan::describe() const {
     material(*film_stages_, "film", settings_.output != OutputMode::texture);
     switch (settings_.output) {
         case OutputMode::print: {
+            if (views_film_) {
+                if (print_table_)
+                    lines.push_back("print: one table of " + std::to_string(print_table_->nodes()) +
+                                    " nodes per axis from the film's densities to the projected slide's colour");
+                lines.push_back("convert: the reversal film's spectral transmittance -> linear Rec.709 under D65 "
+                                "(the film is the picture; no paper)");
+                break;
+            }
             const PrintExposure& e = *print_;
             std::string lights;
             for (int j = 0; j < e.paper_layers(); ++j)

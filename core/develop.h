@@ -38,7 +38,8 @@
 namespace darkroom {
 
 // What a develop run writes (channels 0-2):
-//  print     the print's colour, linear Rec.709 (D65), as viewed under the paper's illuminant
+//  print     the print's colour, linear Rec.709 (D65), as viewed under the paper's illuminant;
+//            for a reversal film, the film itself (the slide) viewed the same way, no paper
 //  negative  the negative's transmittance per channel (10^-density)
 //  density   the developed diffuse density per layer, as the data sheet's curves give it
 //  scan      the negative as a film scanner writes it: Cineon-style log code values / 1023
@@ -168,7 +169,8 @@ public:
 
     // The stages in order and those left out, one line each, for -v.
     std::vector<std::string> describe() const;
-    // The fast tiers' print table (null where the plan prints otherwise or not at all).
+    // The fast tiers' print table (null where the plan prints otherwise or not at all); for a
+    // reversal film, its view table (the film's densities -> the slide's colour).
     const Table3D* print_table() const { return print_table_.get(); }
 
     // The per-pixel stages one at a time, as run() composes them without grain, MTF and
@@ -210,6 +212,10 @@ private:
     double film_exposure_scale_ = 1.0;       // lux-seconds per unit of input
     bool monochrome_input_ = false;          // the spectral stage is one scale per layer
     std::vector<std::string> skipped_;
+    // The print of a reversal film: the film's own densities viewed (through print_table_ in
+    // the fast tiers, else spectrally per pixel); no paper.
+    bool views_film_ = false;
+    void view_film_row(const float* const* density, float* const* rgb, int width) const;
 };
 
 // The reference tier's time grows with the film's area a pixel covers, not the pixel count

@@ -184,8 +184,16 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
             return density;
         };
         if (!print_) {
+            Rows viewed(views_film_ ? 3 : 0, film_window.width());  // a reversal film's print
             for (int y = band_begin; y < band_end; ++y) {
                 float* const* density = film_density_row(y, nullptr);
+                if (views_film_) {
+                    view_film_row(density, viewed.data(), film_window.width());
+                    clock.mark("view");
+                    write_row(viewed.data(), 3, in, out, y, out_window.x0, out_window.width());
+                    clock.mark("write");
+                    continue;
+                }
                 for (size_t l = 0; l < layers; ++l)
                     convert_row(settings_.output, film.stock.layers[l].density_curve.y_min(), density[l],
                                 film_window.width());

@@ -14,7 +14,7 @@ namespace {
 // density-output plan (its curve is already anchored to its own speed definition).
 Stock as_measured_material(const Stock& stock, size_t layer) {
     Stock s = stock;
-    s.kind = StockKind::negative;
+    s.kind = stock.kind == StockKind::reversal ? StockKind::reversal : StockKind::negative;
     s.layers = {stock.layers[layer]};
     return s;
 }
@@ -36,9 +36,12 @@ Image develop_density(const Stock& material, const Image& exposure, double pitch
     return out;
 }
 
-double log_h_at_density(const Curve& curve, double density) {
+// Where the curve reaches a density (a reversal film's falls to it).
+double log_h_at_density(const Curve& curve, double density, StockKind kind) {
     double at;
-    return curve.first_x_at(density, &at) ? at : curve.x_max();
+    const bool found = density_falls_with_exposure(kind) ? curve.first_x_down_to(density, &at)
+                                                        : curve.first_x_at(density, &at);
+    return found ? at : curve.x_max();
 }
 
 }  // namespace
@@ -57,7 +60,7 @@ double curve_gamma(const std::vector<double>& x, const std::vector<double>& y) {
             sx += x[j], sy += y[j], sxx += x[j] * x[j], sxy += x[j] * y[j];
         }
         if (n < 3 || x[i + n - 1] - x[i] < 0.99) continue;
-        best = std::max(best, (n * sxy - sx * sy) / (n * sxx - sx * sx));
+        best = std::max(best, std::abs((n * sxy - sx * sy) / (n * sxx - sx * sx)));  // (a reversal film falls)
     }
     return best;
 }
@@ -101,9 +104,13 @@ SensitometryReport measure_stock(const Stock& stock, const SensitometryOptions& 
             density.push_back(wedge_d.at(p * patch_px + patch_px / 2, patch_px / 2)[0]);
         }
         const Curve measured = make_curve(log_h, density, "measured wedge");
-        const double fog = density.front();
-        const double hm_log = log_h_at_density(measured, fog + speed.density_over_fog);
-        const double hm_declared = log_h_at_density(layer.density_curve, layer.density_curve.y_min() + speed.density_over_fog);
+        // (A reversal film's D-min is at the wedge's bright end, its D-max at the dark end.)
+        const double fog = measured.y_min(), d_max = measured.y_max();
+        auto speed_point = [&](const Curve& c) {
+            double at;
+            return curve_speed_point_log_h(c, stock.kind, &at) ? at : c.x_max();
+        };
+        const double hm_log = speed_point(measured), hm_declared = speed_point(layer.density_curve);
         auto add = [&](std::string name, std::string unit, double declared, double value, double tol, bool rel) {
             report.measurements.push_back({prefix + name, unit, declared, value, tol, rel});
         };
@@ -112,14 +119,15 @@ SensitometryReport measure_stock(const Stock& stock, const SensitometryOptions& 
         add("contrast (gamma)", "", curve_gamma(layer.density_curve.x, layer.density_curve.y),
             curve_gamma(log_h, density), 0.05, true);
         add("Dmin", "D", layer.density_curve.y_min(), fog, 0.02, false);
-        add("Dmax", "D", layer.density_curve.y_max(), density.back(), 0.02, false);
+        add("Dmax", "D", layer.density_curve.y_max(), d_max, 0.02, false);
 
         // RMS granularity: a uniform patch at net density 1.0, 2 um pixels, read through
         // non-overlapping 48 um apertures in transmittance (as a microdensitometer does).
         const double pitch_um = 2.0, net = 1.0;
         if (layer.grain.rms_granularity > 0 && layer.density_curve.y_max() > fog + net) {
             const int side = 1536, aperture_px = int(48.0 / pitch_um);
-            const double h = std::pow(10.0, log_h_at_density(layer.density_curve, layer.density_curve.y_min() + net));
+            const double h = std::pow(10.0, log_h_at_density(layer.density_curve, layer.density_curve.y_min() + net,
+                                                             stock.kind));
             Image patch(side, side, 3, float(h));
             Image d = develop_density(material, patch, pitch_um, true, false, o);
             const double radius = 24.0 / pitch_um;
@@ -142,7 +150,7 @@ SensitometryReport measure_stock(const Stock& stock, const SensitometryOptions& 
         // MTF: sine-modulated exposure around mid-scale, read back through the inverse
         // H&D curve (effective exposure); the response is the modulation ratio. Pixels are
         // fine enough that Nyquist is four times the declared MTF50, so aliasing is negligible.
-        const double mid_log_h = log_h_at_density(layer.density_curve, 0.5 * (fog + density.back()));
+        const double mid_log_h = log_h_at_density(layer.density_curve, 0.5 * (fog + d_max), stock.kind);
         const int width = 2048, rows = 1;
         const double declared_mtf50 = mtf50_cycles_per_mm(layer.mtf);
         const double sine_pitch_um = 1000.0 / (8.0 * declared_mtf50);
@@ -160,9 +168,9 @@ SensitometryReport measure_stock(const Stock& stock, const SensitometryOptions& 
             int x0 = width / 4;
             std::complex<double> acc = 0;
             double mean = 0;
-            for (int x = x0; x < x0 + n; ++x) mean += std::pow(10.0, log_h_at_density(layer.density_curve, d.at(x, 0)[0])) / n;
+            for (int x = x0; x < x0 + n; ++x) mean += std::pow(10.0, log_h_at_density(layer.density_curve, d.at(x, 0)[0], stock.kind)) / n;
             for (int x = x0; x < x0 + n; ++x) {
-                double e = std::pow(10.0, log_h_at_density(layer.density_curve, d.at(x, 0)[0])) - mean;
+                double e = std::pow(10.0, log_h_at_density(layer.density_curve, d.at(x, 0)[0], stock.kind)) - mean;
                 acc += e * std::polar(1.0, -2 * M_PI * f * (x + 0.5) * sine_pitch_um / 1000.0);
             }
             return 2.0 * std::abs(acc) / n / (modulation * mean);

@@ -17,7 +17,26 @@ using nlohmann::json;
 using stock_json::FieldReader;
 
 SpeedDefinition speed_definition(StockKind kind) {
-    return kind != StockKind::negative ? SpeedDefinition{1000.0, 0.6} : SpeedDefinition{0.8, 0.1};
+    switch (kind) {
+        case StockKind::negative: return {0.8, 0.1};
+        case StockKind::reversal: return {10.0, 0.2, 2.0};
+        case StockKind::paper:
+        case StockKind::print_film: break;
+    }
+    return {1000.0, 0.6};
+}
+
+bool curve_speed_point_log_h(const Curve& curve, StockKind kind, double* log_hm) {
+    const SpeedDefinition sd = speed_definition(kind);
+    const double d_min = curve.y_min();
+    if (!density_falls_with_exposure(kind)) return curve.first_x_at(d_min + sd.density_over_fog, log_hm);
+    // The highlight point (little density, much exposure) and the shadow point.
+    double highlight, shadow;
+    if (!curve.first_x_down_to(d_min + sd.density_over_fog, &highlight) ||
+        !curve.first_x_down_to(d_min + sd.shadow_density_over_fog, &shadow))
+        return false;
+    *log_hm = 0.5 * (highlight + shadow);
+    return true;
 }
 
 double mid_grey_exposure_lux_s(double iso_speed) { return 0.65 * 12.5 / iso_speed; }
@@ -139,21 +158,28 @@ Spectrum peak_normalised(const FieldReader& r, Spectrum s) {
 // Every density curve, tabulated or sampled from a formula, is checked the same way so that
 // stock_to_json writes what reads back: its densities lie within [0, kMaxDensity] (rounding
 // errors of up to 1e-9 are clamped), and they never fall as exposure grows (development never
-// removes density; a parametric curve with a sharp toe and a broad shoulder would).
-Curve checked_density_curve(const FieldReader& r, Curve c) {
-    // A curve must rise: a flat one (or one exposure) prints every pixel the same and has no speed.
+// removes density; a parametric curve with a sharp toe and a broad shoulder would), or for a
+// reversal film (`falls`) never rise: its first development uses up the silver halide that
+// exposure made developable, so more exposure leaves less to form dye.
+Curve checked_density_curve(const FieldReader& r, Curve c, bool falls) {
+    // A curve must change: a flat one (or one exposure) prints every pixel the same and has no speed.
     if (c.x.size() < 2 || !(c.x.back() > c.x.front()))
         r.fail("the curve needs densities at two or more exposures (log H)");
+    const char* direction = falls ? "fall" : "rise";
     const auto [lowest, highest] = std::minmax_element(c.y.begin(), c.y.end());
     if (!(*highest - *lowest >= kMinDensityRise)) {
         std::ostringstream problem;
-        problem << "the curve rises " << *highest - *lowest << " D over its exposures: a film's density must rise "
-                << "with exposure, by at least " << kMinDensityRise << " D";
+        problem << "the curve " << (falls ? "falls " : "rises ") << *highest - *lowest << " D over its exposures: a "
+                << (falls ? "reversal film's" : "film's") << " density must " << direction
+                << " with exposure, by at least " << kMinDensityRise << " D";
         r.fail(problem.str());
     }
     for (size_t i = 0; i < c.y.size(); ++i) {
-        if (i > 0 && c.y[i] < c.y[i - 1] - kFallTolerance)
-            r.fail("the curve falls at log H " + std::to_string(c.x[i]) + ": density must not decrease with exposure");
+        const double step = i > 0 ? c.y[i] - c.y[i - 1] : 0.0;
+        if (falls ? step > kFallTolerance : step < -kFallTolerance)
+            r.fail("the curve " + std::string(falls ? "rises" : "falls") + " at log H " + std::to_string(c.x[i]) +
+                   (falls ? ": a reversal film's density must not increase with exposure"
+                          : ": density must not decrease with exposure"));
         if (c.y[i] < -1e-9 || c.y[i] > kMaxDensity + 1e-9) {
             std::ostringstream problem;
             problem << "the curve reaches density " << c.y[i] << " at log H " << c.x[i] << ", outside [0, "
@@ -168,9 +194,16 @@ Curve checked_density_curve(const FieldReader& r, Curve c) {
 // D(x) = d_min + sum_k slope_k width_k ln(1 + exp((x - log_h_k) / width_k)), sampled every
 // 0.01 log H from 12 widths before the first knot (where the softplus is within 6e-6 of its
 // asymptote) to 12 widths, and at least 3 log H (10 stops), past the last: a curve that
-// still rises at the end of its data keeps its final slope that far, then is held.
-Curve read_softplus_curve(const FieldReader& r, const json& v) {
-    double d_min = r.at("d_min").number(r.field(v, "d_min"), 0.0, kMaxDensity);
+// still rises at the end of its data keeps its final slope that far, then is held. A
+// reversal film's curve (`falls`) starts from its D-max instead:
+// D(x) = d_max - sum_k slope_k width_k ln(1 + exp((x - log_h_k) / width_k)).
+Curve read_softplus_curve(const FieldReader& r, const json& v, bool falls) {
+    const char* start_key = falls ? "d_max" : "d_min";
+    if (falls && v.is_object() && v.contains("d_min") && !v.contains("d_max"))
+        r.at("d_min").fail("a reversal film's curve falls from its D-max: give 'd_max', and D(x) = d_max - sum of "
+                           "the knots' terms");
+    const double d_start = r.at(start_key).number(r.field(v, start_key), 0.0, kMaxDensity);
+    const double sign = falls ? -1.0 : 1.0;
     FieldReader rk = r.at("knots");
     const json& list = r.field(v, "knots");
     if (!list.is_array() || list.empty()) rk.fail("expected a non-empty array of {log_h, slope, width}");
@@ -188,23 +221,25 @@ Curve read_softplus_curve(const FieldReader& r, const json& v) {
     std::vector<double> xs, ys;
     int n = (int)std::ceil((hi - lo) / 0.01);
     for (int i = 0; i <= n; ++i) {
-        double x = lo + (hi - lo) * i / n, d = d_min;
+        double x = lo + (hi - lo) * i / n, d = d_start;
         for (const auto& [at, slope, width] : knots) {
             double u = (x - at) / width;
-            d += slope * width * (u > 30 ? u : std::log1p(std::exp(u)));
+            d += sign * slope * width * (u > 30 ? u : std::log1p(std::exp(u)));
         }
         xs.push_back(x);
         ys.push_back(d);
     }
-    return checked_density_curve(r, make_curve(xs, ys, r.path()));
+    return checked_density_curve(r, make_curve(xs, ys, r.path()), falls);
 }
 
 Curve read_density_curve(const FieldReader& rc, const json& dc, const Stock& stock) {
-    if (dc.contains("softplus")) return read_softplus_curve(rc.at("softplus"), dc["softplus"]);
+    const bool falls = density_falls_with_exposure(stock.kind);
+    if (dc.contains("softplus")) return read_softplus_curve(rc.at("softplus"), dc["softplus"], falls);
     if (!dc.contains("parametric")) {
-        return checked_density_curve(rc, read_curve(rc, dc, "log_h", "density", 0.0, kMaxDensity));
+        return checked_density_curve(rc, read_curve(rc, dc, "log_h", "density", 0.0, kMaxDensity), falls);
     }
     FieldReader rp = rc.at("parametric");
+    if (falls) rp.fail("the parametric form rises with exposure: give a reversal film's curve as a table or softplus");
     const json& p = dc["parametric"];
     ParametricCurve pc;
     pc.gamma = rp.at("gamma").number(rp.field(p, "gamma"), 0.01, 20.0);
@@ -217,7 +252,8 @@ Curve read_density_curve(const FieldReader& rc, const json& dc, const Stock& sto
         rp.at("d_max").fail("must exceed d_min + " + std::to_string(sd.density_over_fog));
     double hm = speed_point_log_h(stock);
     return checked_density_curve(
-        rp, sample_parametric_curve(pc, hm, sd.density_over_fog, hm - 4.0, hm + (pc.d_max - pc.d_min) / pc.gamma + 4.0));
+        rp, sample_parametric_curve(pc, hm, sd.density_over_fog, hm - 4.0, hm + (pc.d_max - pc.d_min) / pc.gamma + 4.0),
+        false);
 }
 
 Layer read_layer(const FieldReader& r, const json& v, const Stock& stock) {
@@ -255,7 +291,10 @@ Layer read_layer(const FieldReader& r, const json& v, const Stock& stock) {
 }
 
 const std::map<std::string, StockKind> kKindNames{
-    {"negative", StockKind::negative}, {"paper", StockKind::paper}, {"print-film", StockKind::print_film}};
+    {"negative", StockKind::negative},
+    {"reversal", StockKind::reversal},
+    {"paper", StockKind::paper},
+    {"print-film", StockKind::print_film}};
 
 // Colour stocks are three layers that all name their dye; black-and-white ones one layer.
 void check_layers(const FieldReader& r, const json& doc, const Stock& s) {
@@ -305,7 +344,7 @@ Stock parse_stock_json(const std::string& text, const std::string& origin) {
     s.name = r.at("name").text(r.field(doc, "name"));
     std::string kind = r.at("kind").text(r.field(doc, "kind"));
     auto known_kind = kKindNames.find(kind);
-    if (known_kind == kKindNames.end()) r.at("kind").fail("unknown kind '" + kind + "' (known: negative, paper, print-film)");
+    if (known_kind == kKindNames.end()) r.at("kind").fail("unknown kind '" + kind + "' (known: negative, reversal, paper, print-film)");
     s.kind = known_kind->second;
     if (doc.contains("sources")) {
         const json& src = doc["sources"];

@@ -22,7 +22,13 @@ enum class StockKind {
     negative,    // camera negative film, read by transmission
     paper,       // photographic paper, read by reflection
     print_film,  // print film (e.g. Kodak 2383), printed like paper, projected
+    reversal,    // camera reversal (slide) film: a positive on the film itself, projected or scanned
 };
+
+// Films a camera exposes (negative or reversal), as opposed to the materials they print on.
+inline bool is_camera_film(StockKind kind) { return kind == StockKind::negative || kind == StockKind::reversal; }
+// A reversal film's density falls as exposure rises; every other kind's rises.
+inline bool density_falls_with_exposure(StockKind kind) { return kind == StockKind::reversal; }
 
 struct GrainSpec {
     // Diffuse RMS granularity: the standard deviation of density read through a 48 um
@@ -60,8 +66,10 @@ struct Stock {
     std::string id, name;
     StockKind kind = StockKind::negative;
     std::vector<std::string> sources;  // data sheets the numbers come from
-    // ISO speed as the standards define it: films 0.8/Hm with Hm the exposure for 0.1
-    // over base+fog (ISO 6); papers 1000/Hm at 0.6 over base+fog (ISO 6846).
+    // ISO speed as the standards define it: negative films 0.8/Hm with Hm the exposure for
+    // 0.1 over base+fog (ISO 6); reversal films 10/Hm with Hm the geometric mean of the
+    // exposures at 0.2 and 2.0 over D-min (ISO 2240); papers 1000/Hm at 0.6 over base+fog
+    // (ISO 6846).
     double iso_speed = 100.0;
     double frame_width_mm = 36.0;  // the format the stock is usually shot or printed on
     // The light the stock is balanced for: the scene light for films, the printer lamp for
@@ -88,15 +96,22 @@ struct Stock {
 // minimum densities cached by the caller (else each curve's is found again).
 Spectrum spectral_density(const Stock& stock, const double* layer_density, const double* layer_d_min = nullptr);
 
-// "negative", "paper" or "print-film", as stock files spell the kind.
+// "negative", "reversal", "paper" or "print-film", as stock files spell the kind.
 std::string stock_kind_name(StockKind kind);
 
 // The constants of the speed definition for a kind of material (seed paper, eq. 5).
 struct SpeedDefinition {
     double k;                       // speed = k / Hm
     double density_over_fog;        // Hm is the exposure for this density above base+fog
+    // Reversal films (ISO 2240): Hm is the geometric mean of the exposure at
+    // density_over_fog above D-min (the highlight point) and the exposure at this density
+    // above D-min (the shadow point); 0 for the other kinds.
+    double shadow_density_over_fog = 0;
 };
 SpeedDefinition speed_definition(StockKind kind);
+// log10 Hm of a characteristic curve by its kind's speed definition (D-min the curve's
+// least density); false where the curve never reaches the speed point's densities.
+bool curve_speed_point_log_h(const Curve& curve, StockKind kind, double* log_hm);
 // Exposure (lux-seconds) a scene mid grey (reflectance 0.18) receives at the stock's speed:
 // ISO 2720's reflected-light meter equation, H = q K / S with K = 12.5 and q = 0.65.
 double mid_grey_exposure_lux_s(double iso_speed);

@@ -81,8 +81,16 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
     std::string type = ri.at("type").text(ri.field(info, "type"));
     std::string support = ri.at("support").text(ri.field(info, "support"));
     std::string stage = info.contains("stage") && info["stage"].is_string() ? info["stage"].get<std::string>() : "";
-    if (type != "negative") ri.at("type").fail("'" + type + "' stocks are not supported (only negative-working ones)");
-    s.kind = support == "paper" ? StockKind::paper : stage == "printing" ? StockKind::print_film : StockKind::negative;
+    // A positive camera film is a reversal (slide) film; positive papers (direct-positive
+    // prints) are not modelled.
+    const bool reversal = type == "positive" && support == "film" && stage != "printing";
+    if (type != "negative" && !reversal)
+        ri.at("type").fail("'" + type + "' " + support + " stocks are not supported (negative-working ones and " +
+                           "positive camera films are)");
+    s.kind = reversal                ? StockKind::reversal
+             : support == "paper"    ? StockKind::paper
+             : stage == "printing"   ? StockKind::print_film
+                                     : StockKind::negative;
     s.frame_width_mm = s.kind == StockKind::paper ? 254.0 : 24.89;
     std::string illuminant = info.contains("reference_illuminant") && info["reference_illuminant"].is_string()
                                  ? info["reference_illuminant"].get<std::string>()
@@ -128,15 +136,22 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
             throw StockError(e.what());
         }
         // Digitised curves dip where the trace is flat (by at most 1e-3 D in the published
-        // profiles); darkroom-stock files may not fall, so the import smooths dips up to
-        // kMaxDigitisingDip away and refuses a curve that falls further.
+        // profiles); darkroom-stock files may not fall (a reversal film's not rise), so the
+        // import smooths dips up to kMaxDigitisingDip away and refuses a curve that turns further.
         Curve& dc = layer.density_curve;
-        const std::vector<double> rising = nearest_non_decreasing(dc.y);
-        for (size_t i = 0; i < dc.y.size(); ++i)
-            if (std::abs(rising[i] - dc.y[i]) > kMaxDigitisingDip)
-                rd.at("density_curves").fail(std::string("the ") + names[c] + " curve falls at log H " +
-                                             std::to_string(dc.x[i]) + ": density must not decrease with exposure");
-        dc.y = rising;
+        const double sign = reversal ? -1.0 : 1.0;  // a falling curve is a rising one mirrored
+        std::vector<double> mirrored = dc.y;
+        for (double& v : mirrored) v *= sign;
+        std::vector<double> monotone = nearest_non_decreasing(mirrored);
+        for (size_t i = 0; i < dc.y.size(); ++i) {
+            monotone[i] *= sign;
+            if (std::abs(monotone[i] - dc.y[i]) > kMaxDigitisingDip)
+                rd.at("density_curves").fail(std::string("the ") + names[c] + " curve " +
+                                             (reversal ? "rises" : "falls") + " at log H " + std::to_string(dc.x[i]) +
+                                             (reversal ? ": a reversal film's density must not increase with exposure"
+                                                       : ": density must not decrease with exposure"));
+        }
+        dc.y = monotone;
         layer.mtf = make_curve({0.0, 1000.0}, {1.0, 1.0}, "flat MTF");
         s.layers.push_back(layer);
     }
@@ -144,10 +159,10 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
     s.base_density = spectral_column(rd, data, "base_density", -1, 0.0, stock_json::kHuge);
 
     SpeedDefinition sd = speed_definition(s.kind);
-    const Curve& green = s.layers[1].density_curve;
     double hm_log;
-    if (!green.first_x_at(green.y_min() + sd.density_over_fog, &hm_log))
-        rd.at("density_curves").fail("the green curve never rises " + std::to_string(sd.density_over_fog) +
+    if (!curve_speed_point_log_h(s.layers[1].density_curve, s.kind, &hm_log))
+        rd.at("density_curves").fail("the green curve never reaches " +
+                                     std::to_string(std::max(sd.density_over_fog, sd.shadow_density_over_fog)) +
                                      " above its minimum, so the stock has no speed");
     s.iso_speed = sd.k / std::pow(10.0, hm_log);
     if (!(s.iso_speed >= stock_json::kMinIsoSpeed && s.iso_speed <= stock_json::kMaxIsoSpeed)) {

@@ -102,15 +102,16 @@ std::vector<Parameter> make_table() {
 
     // Stocks and what to write.
     Parameter film = row<std::string>("film", ParameterType::stock, [](Look& l) -> auto& { return l.film; });
-    film.stock_kinds = {StockKind::negative};
+    film.stock_kinds = {StockKind::negative, StockKind::reversal};
     add(film, kStocks, "Film", "film", "",
-        "The camera film: a built-in stock id (see 'darkroom stocks') or a stock file (.json)")
+        "The camera film, negative or reversal: a built-in stock id (see 'darkroom stocks') or a stock file (.json)")
         .per_pixel = true;
     Parameter paper = row<std::string>("paper", ParameterType::stock, [](Look& l) -> auto& { return l.paper; });
     paper.stock_kinds = {StockKind::print_film, StockKind::paper};
     add(paper, kStocks, "Paper", "paper", "",
         "What the negative is printed on: a print film or paper id, a stock file, or 'none' to stop at the "
-        "negative (the negative, density, scan and texture outputs need none)")
+        "negative (the negative, density, scan and texture outputs need none; a reversal film is its own print and "
+        "uses none)")
         .per_pixel = true;
     add(choice<OutputMode>("output", [](Look& l) -> auto& { return l.settings.output; },
                            {{{"print", "Print"}, OutputMode::print},
@@ -348,14 +349,28 @@ std::string ofx_label(const Parameter& p) { return p.label; }
 std::string python_name(const Parameter& p) { return p.python_keyword() + "="; }
 std::string look_file_key(const Parameter& p) { return "'" + p.key + "'"; }
 
+namespace {
+
+// A reversal film is its own print (no paper); a film that cannot be found is left to the
+// render to name.
+bool is_reversal_film(const std::string& id_or_path) {
+    try {
+        return find_stock(id_or_path).kind == StockKind::reversal;
+    } catch (const StockError&) {
+        return false;
+    }
+}
+
+}  // namespace
+
 void validate(const Look& look, const Naming& name) {
     const DevelopSettings& s = look.settings;
     const Parameter &paper = parameter("paper"), &output = parameter("output");
     if (look.film.empty()) throw UserError(name(parameter("film")) + " is empty: name a film stock");
-    if (s.output == OutputMode::print && (look.paper == "none" || look.paper.empty()))
+    if (s.output == OutputMode::print && (look.paper == "none" || look.paper.empty()) && !is_reversal_film(look.film))
         throw UserError(name(output) + " print needs a paper, and " + name(paper) +
-                        " is none (stop at the negative): choose a paper or print film, or the negative, density, "
-                        "scan or texture output");
+                        " is none (stop at the negative): choose a paper or print film, a reversal film (its own "
+                        "print), or the negative, density, scan or texture output");
     const bool to_display = !look.colour.display_view.empty();
     if (to_display && !look.colour.output_space.empty())
         throw UserError(name(parameter("ociodisplay")) + " and " + name(parameter("tocolorspace")) +

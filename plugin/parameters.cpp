@@ -59,6 +59,7 @@ constexpr const char* kNoPaperId = "none";
 const char* role_label(StockKind kind) {
     switch (kind) {
         case StockKind::negative: return "Negative";
+        case StockKind::reversal: return "Reversal";
         case StockKind::print_film: return "Print film";
         case StockKind::paper: return "Paper";
     }

@@ -28,12 +28,15 @@ from scipy.optimize import least_squares
 
 
 def softplus_curve(curve, log_h):
-    """D(x) = d_min + sum slope*width*ln(1 + exp((x - log_h)/width))."""
+    """D(x) = d_min + sum slope*width*ln(1 + exp((x - log_h)/width)); a reversal film's
+    D(x) = d_max - sum slope*width*ln(1 + exp((x - log_h)/width))."""
     x = np.asarray(log_h, dtype=float)
-    density = np.full_like(x, curve["d_min"])
+    falls = "d_max" in curve
+    density = np.full_like(x, curve["d_max"] if falls else curve["d_min"])
     for knot in curve["knots"]:
         # logaddexp(0, z) == ln(1 + exp(z)) without overflow.
-        density += knot["slope"] * knot["width"] * np.logaddexp(0.0, (x - knot["log_h"]) / knot["width"])
+        term = knot["slope"] * knot["width"] * np.logaddexp(0.0, (x - knot["log_h"]) / knot["width"])
+        density += -term if falls else term
     return density
 
 
@@ -328,7 +331,7 @@ def rounded(value, digits):
 MONOTONE_CHECK_LOG_H = np.linspace(-8.0, 6.0, 2801)  # where the script checks the curves non-decreasing
 
 
-def round_curve(curve):
+def round_curve(curve, falls=False):
     knots = [{"log_h": round(k["log_h"], 4), "slope": rounded(k["slope"], 5), "width": rounded(k["width"], 4)}
              for k in curve["knots"]]
     # Where a narrow shoulder knot overtakes a wider one the slope can dip a little below 0
@@ -341,6 +344,8 @@ def round_curve(curve):
         last = softplus_slope_terms({"knots": [dict(knots[-1], slope=1.0)]}, MONOTONE_CHECK_LOG_H)[0]
         lift = float(np.max(-slope / last)) * 1.05 + 1e-6
         knots[-1]["slope"] = math.ceil((knots[-1]["slope"] + lift) * 1e6) / 1e6
+    if falls:  # fitted as D-max minus a rising curve (d_min = 0 then): D = d_max - sum
+        return {"softplus": {"d_max": round(curve["d_max"], 4), "knots": knots}}
     return {"softplus": rounded_curve}
 
 
@@ -557,6 +562,78 @@ PRINT_STOCKS = [
 ]
 
 
+ISO_2240 = "ISO 2240 (10 / Hm, Hm the geometric mean of the exposures at 0.2 and 2.0 over D-min)"
+
+
+def reversal(stock_id, name, data, sources, rms_note, log_h_shift=None):
+    """A daylight ISO 100 slide film on 135; data: where its curves, sensitivities, dyes and base are."""
+    stock = {
+        "id": stock_id, "name": name, "kind": "reversal", "iso_speed": 100, "frame_width_mm": 36.0,
+        "exposure_illuminant": "D55", **data,
+        "sources": [
+            *sources, rms_note, GRAIN_NOTE, MTF_NOTE,
+            "estimate: halation (antihalation undercoat): red 0.03, green a third, blue an eighth, Gaussian std "
+            "120 um (on the order of the base thickness); not published"],
+        "mtf": mtf(NEGATIVE_MTF, (1, 1, 1, 0.95, 0.72, 0.52, 0.38), (1, 1, 1, 0.98, 0.82, 0.66, 0.52),
+                   (1, 1, 1, 0.98, 0.82, 0.68, 0.56)),
+        "grain": grain(0.008, 0.8), "halation": halation(0.03, 120),
+    }
+    if log_h_shift:
+        stock["log_h_shift"] = log_h_shift
+    return stock
+
+
+PROVIA = "datasheets/film/positive/fujifilm_provia_100f"
+EKTACHROME = "spektrafilm-profiles/kodak_ektachrome_100.json"
+
+REVERSAL_STOCKS = [
+    reversal(
+        "fujifilm-provia-100f", "Fujifilm Fujichrome Provia 100F Professional [RDP III]",
+        {"curves": ("datasheet", PROVIA), "sensitivity": ("datasheet", PROVIA), "dyes": ("datasheet", PROVIA),
+         "base": None},
+        ["Fujifilm data sheet FUJICHROME PROVIA 100F Professional [RDP III] (process E-6): characteristic curves "
+         "(diffuse density against log10 lux-seconds), spectral sensitivity curves, spectral dye density curves "
+         "(c/m/y), as digitised by the agx-emulsion project (datasheets/film/positive/fujifilm_provia_100f); fitted "
+         "by tools/fit_stocks.py (a reversal film's curve as d_max minus rising terms)",
+         f"ISO 100, daylight balanced; 135 frame 36 mm. The sheet's own green curve rates ISO 101 by {ISO_2240}: "
+         "its log H axis is lux-seconds",
+         "the digitised folder has no minimum (base+fog) spectral density: base_density is left to the loader, "
+         "each layer's D-min (about 0.09, the sheet's highlight density) times its dye"],
+        "estimate: RMS granularity 0.008: Fujifilm quotes RMS granularity 8 (x1000, 48 um aperture, diffuse "
+        "density 1.0) for Provia 100F; quoted from the published sheet's figure as remembered, not read from the "
+        "digitised data"),
+    reversal(
+        "kodak-ektachrome-100", "Kodak Professional Ektachrome E100",
+        {"curves": ("profile-curves", EKTACHROME), "sensitivity": ("profile", EKTACHROME),
+         "dyes": ("profile", EKTACHROME), "base": ("profile-base", EKTACHROME)},
+        ["spektrafilm v0.3.2 profile kodak_ektachrome_100.json (unmixed from Kodak's data sheet E-4000, KODAK "
+         "PROFESSIONAL EKTACHROME Film E100, process E-6): characteristic curves (Status A, density above base), "
+         "log spectral sensitivity, channel (dye) densities and base density; fitted by tools/fit_stocks.py (the "
+         "curves as d_max minus rising terms, plus the Status A density of the base as D-min)",
+         "ISO 100 (E-4000), daylight balanced; 135 frame 36 mm. The profile's log exposure axis is relative: it "
+         f"is shifted so that the green curve rates the published 100 by {ISO_2240}"],
+        "estimate: RMS granularity 0.008: Kodak rates E100's diffuse RMS granularity 8 (x1000, 48 um aperture, "
+        "density 1.0) as remembered from E-4000, not read from any digitised data",
+        log_h_shift="to-rated-speed"),
+]
+
+
+def iso_2240_log_hm(log_h, density):
+    """log10 Hm of ISO 2240 (reversal films): the mean of the log exposures at 0.2 and 2.0 over D-min."""
+    d_min = density.min()
+    # The falling curve as a function of density (np.interp needs rising x: read it reversed).
+    at = [float(np.interp(d_min + over, density[::-1], log_h[::-1])) for over in (0.2, 2.0)]
+    return 0.5 * (at[0] + at[1])
+
+
+def log_h_shift_to_rated_speed(ref, stock):
+    """A profile's log exposure axis is relative: the shift that makes its green curve rate the stock's speed."""
+    profile = read_profile(ref / stock["curves"][1])
+    log_e = np.array(profile["log_exposure"], dtype=float)
+    green = np.array([row[1] for row in profile["density_curves"]], dtype=float)
+    return round(math.log10(10.0 / stock["iso_speed"]) - iso_2240_log_hm(log_e, green), 4)
+
+
 # ---------------------------------------------------------------------------------------
 # Gathering the data of one stock.
 
@@ -567,7 +644,7 @@ def layer_curve_data(ref, stock, index, status):
     if source == "datasheet":
         return read_csv_curve(ref / where / f"density_curve_{channel}.csv")
     profile = read_profile(ref / where)
-    log_e = np.array(profile["log_exposure"], dtype=float)
+    log_e = np.array(profile["log_exposure"], dtype=float) + stock.get("log_h_shift", 0.0)
     above_base = np.array([row[index] for row in profile["density_curves"]], dtype=float)
     base_nm, base = profile_column(profile, "base_density")
     d_base = status_density(base_nm, base, status[channel])
@@ -575,7 +652,9 @@ def layer_curve_data(ref, stock, index, status):
 
 
 def layer_sensitivity_data(ref, stock, index):
-    where = stock["sensitivity"][1]
+    source, where = stock["sensitivity"]
+    if source == "profile":
+        return profile_column(read_profile(ref / where), "log_sensitivity", index)
     return read_csv_curve(ref / where / f"log_sensitivity_{'rgb'[index]}.csv")
 
 
@@ -621,18 +700,30 @@ def to_json(value, indent=0):
 FITTED = ("base_density", "spectral_sensitivity", "density_curve", "dye_density")
 
 
+def rising_density(d, falls):
+    """The data as a rising curve: a reversal film's density below its D-max."""
+    return d.max() - d if falls else d
+
+
 def fit_spectra_and_curves(ref, stock, status):
     """The fitted parts of a preset: base density, and per layer sensitivity, curve and dye."""
-    nm, base = base_data(ref, stock)
-    fitted = {"base_density": round_spectral(fit_density_spectrum(nm, base, with_constant=True)), "layers": []}
+    fitted = {"layers": []}
+    if stock["base"]:
+        nm, base = base_data(ref, stock)
+        fitted["base_density"] = round_spectral(fit_density_spectrum(nm, base, with_constant=True))
     for i in range(len(LAYERS)):
         x, d = layer_curve_data(ref, stock, i, status)
-        curve, _ = fit_curve(x, d, saturates=stock["kind"] != "negative")
+        falls = stock["kind"] == "reversal"
+        # A reversal film's falling curve is fitted as its drop below D-max, a rising curve
+        # that saturates at D-min: D = d_max - (rising curve from 0).
+        curve, _ = fit_curve(x, rising_density(d, falls), saturates=stock["kind"] != "negative")
+        if falls:
+            curve["d_max"] = float(d.max()) - curve["d_min"]
         s_nm, log_s = layer_sensitivity_data(ref, stock, i)
         dye_nm, dye = layer_dye_data(ref, stock, i)
         fitted["layers"].append({
             "spectral_sensitivity": round_spectral(fit_log_sensitivity(s_nm, log_s)),
-            "density_curve": round_curve(curve),
+            "density_curve": round_curve(curve, falls),
             "dye_density": round_spectral(fit_density_spectrum(dye_nm, dye, with_constant=False))})
     return fitted
 
@@ -644,7 +735,8 @@ def assemble_stock(stock, fitted):
                 "frame_width_mm": stock["frame_width_mm"], "exposure_illuminant": stock["exposure_illuminant"]}
     if "mid_grey_aim_density" in stock:
         document["mid_grey_aim_density"] = stock["mid_grey_aim_density"]
-    document["base_density"] = fitted["base_density"]
+    if "base_density" in fitted:  # (else the loader's: the layers' D-min times their dyes)
+        document["base_density"] = fitted["base_density"]
     layers = []
     for i, name in enumerate(LAYERS):
         layer = {"name": name, **{k: fitted["layers"][i][k] for k in FITTED[1:]},
@@ -659,16 +751,21 @@ def assemble_stock(stock, fitted):
 def check_stock(ref, stock, document, status, problems):
     """Errors of the file's formulas against the data; a decreasing curve is added to problems."""
     rows = []
-    nm, base = base_data(ref, stock)
-    base_rms = float(np.sqrt(np.mean((gaussians_spectrum(document["base_density"], nm) - base) ** 2)))
+    base_rms = float("nan")
+    if stock["base"]:
+        nm, base = base_data(ref, stock)
+        base_rms = float(np.sqrt(np.mean((gaussians_spectrum(document["base_density"], nm) - base) ** 2)))
+    falls = stock["kind"] == "reversal"
     for i, layer in enumerate(document["layers"]):
         x, d = layer_curve_data(ref, stock, i, status)
-        start, end, _ = useful_range(x, d)
+        start, end, _ = useful_range(x, rising_density(d, falls))
         useful = (x >= start) & (x <= end)
         curve = layer["density_curve"]["softplus"]
         error = np.abs(softplus_curve(curve, x[useful]) - d[useful])
-        if np.any(np.diff(softplus_curve(curve, MONOTONE_CHECK_LOG_H)) < -1e-12):
-            problems.append(f"{document['id']} {layer['name']}: the fitted curve decreases")
+        step = np.diff(softplus_curve(curve, MONOTONE_CHECK_LOG_H))
+        if np.any((step > 1e-12) if falls else (step < -1e-12)):
+            problems.append(f"{document['id']} {layer['name']}: the fitted curve "
+                            f"{'increases' if falls else 'decreases'}")
         s_nm, log_s = layer_sensitivity_data(ref, stock, i)
         rel = log_s - log_s.max()
         mask = rel >= -2.0
@@ -718,9 +815,11 @@ def main():
     ref = args.reference_data
     if not (ref / "datasheets").is_dir():
         sys.exit(f"{ref}: no datasheets/ folder here; pass --reference-data")
-    stocks = [s for s in STOCKS + PRINT_STOCKS if args.only is None or s["id"] in args.only]
+    stocks = [s for s in STOCKS + REVERSAL_STOCKS + PRINT_STOCKS if args.only is None or s["id"] in args.only]
     rows, problems = [], []
     for stock in stocks:
+        if stock.get("log_h_shift") == "to-rated-speed":
+            stock["log_h_shift"] = log_h_shift_to_rated_speed(ref, stock)
         status = read_status(ref, "M" if stock["kind"] == "negative" else "A")
         path = args.out / f"{stock['id']}.json"
         if not args.check_only:

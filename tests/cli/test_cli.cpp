@@ -18,6 +18,48 @@ TEST_CASE("develop writes an output image", "[cli]") {
     CHECK(pixels(out).size() == 64 * 48 * 3);
 }
 
+TEST_CASE("a reversal film develops to a slide: print with no paper, scan, and the stocks listed by role",
+          "[cli][reversal]") {
+    const std::string in = make_input("slide-in.exr"), print = (kTmp / "slide-print.exr").string(),
+                      scan = (kTmp / "slide-scan.exr").string();
+    const std::string slide = " --film fujifilm-provia-100f --no-grain";
+    // The look's default paper is not used; 'none' is accepted for the print output too.
+    for (const char* paper : {"", " --paper none"}) {
+        fs::remove(print);
+        Result r = darkroom("develop " + in + " -o " + print + slide + paper + " -v");
+        INFO(r.output);
+        REQUIRE(r.exit_code == 0);
+        CHECK_THAT(r.output, Catch::Contains("the reversal film's spectral transmittance") &&
+                                 !Catch::Contains("enlarger"));
+    }
+    REQUIRE(darkroom("develop " + in + " -o " + scan + slide + " --output scan").exit_code == 0);
+    const std::vector<float> p = pixels(print), s = pixels(scan);
+    REQUIRE(p.size() == 64 * 48 * 3);
+    REQUIRE(s.size() == p.size());
+    // A positive: where the slide is brighter it holds less density, so a lower scan code.
+    size_t brightest = 0, darkest = 0;
+    for (size_t i = 0; i < p.size(); i += 3) {
+        if (p[i + 1] > p[brightest + 1]) brightest = i;
+        if (p[i + 1] < p[darkest + 1]) darkest = i;
+    }
+    REQUIRE(p[brightest + 1] > p[darkest + 1]);
+    CHECK(s[brightest + 1] < s[darkest + 1]);
+    // A negative film still needs a paper for its print.
+    Result r = darkroom("develop " + in + " -o " + print + " --film kodak-portra-400 --paper none");
+    CHECK(r.exit_code != 0);
+    CHECK_THAT(r.output, Catch::Contains("print needs a paper"));
+
+    r = darkroom("stocks");
+    REQUIRE(r.exit_code == 0);
+    // By role: negatives, then reversal films, then print film, then papers.
+    const size_t negative = r.output.find("  negative  "), reversal = r.output.find("fujifilm-provia-100f  reversal"),
+                 print_film = r.output.find("  print-film  "), paper = r.output.find("  paper  ");
+    CHECK(negative < reversal);
+    CHECK(reversal < print_film);
+    CHECK(print_film < paper);
+    CHECK(paper != std::string::npos);
+}
+
 TEST_CASE("a window renders the same pixels as that window of the full frame", "[cli][determinism]") {
     std::string in = make_input("window-in.exr", 80, 60), full = (kTmp / "full.exr").string(),
                 part = (kTmp / "part.exr").string();

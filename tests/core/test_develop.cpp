@@ -36,6 +36,48 @@ TEST_CASE("at 0 EV scene-linear 0.18 receives the ISO mid-grey exposure", "[deve
     CHECK(d1.at(4, 4)[0] == Approx(film.layers[0].density_curve(std::log10(2 * expected_h))).margin(1e-5));
 }
 
+TEST_CASE("a reversal film's print is the film itself, viewed: more light gives a brighter slide, no paper",
+          "[develop][reversal]") {
+    const Stock slide = find_stock("fujifilm-provia-100f"), print_film = find_stock("kodak-2383");
+    REQUIRE(slide.kind == StockKind::reversal);
+    DevelopSettings s;
+    s.quality = Quality::high;
+    s.grain = s.mtf = false;
+    s.halation = 0;
+    Image ramp(13, 1, 3);  // greys from -3 to +3 EV around mid grey, half a stop apart
+    for (int i = 0; i < 13; ++i)
+        for (int c = 0; c < 3; ++c) ramp.at(i, 0)[c] = float(0.18 * std::exp2(-3.0 + 0.5 * i));
+    const Image slide_print = render(slide, nullptr, s, ramp);
+    // A paper given (the look's default) is not used: the slide is the picture.
+    CHECK(render(slide, &print_film, s, ramp).pixels == slide_print.pixels);
+    DevelopSettings density = s;
+    density.output = OutputMode::density;
+    const Image d = render(slide, nullptr, density, ramp);
+    const PrintView view(slide);
+    for (int i = 0; i < 13; ++i) {
+        INFO("step " << i);
+        const double layer_density[3] = {d.at(i, 0)[0], d.at(i, 0)[1], d.at(i, 0)[2]};
+        double rgb[3];
+        view.rgb(layer_density, rgb);
+        for (int c = 0; c < 3; ++c) CHECK(slide_print.at(i, 0)[c] == Approx(rgb[c]).epsilon(1e-5));
+        if (i == 0) continue;
+        for (int c = 0; c < 3; ++c) {
+            CHECK(d.at(i, 0)[c] < d.at(i - 1, 0)[c]);  // a positive: density falls as light rises
+            CHECK(slide_print.at(i, 0)[c] > slide_print.at(i - 1, 0)[c]);
+        }
+    }
+    // The fast tier views the densities through a table: within 1 % of the spectral view
+    // (its curves are tables too), wherever the slide is not near black.
+    s.quality = Quality::fast;
+    const Image fast = render(slide, nullptr, s, ramp);
+    for (int i = 0; i < 13; ++i)
+        for (int c = 0; c < 3; ++c)
+            if (slide_print.at(i, 0)[c] > 0.01) CHECK(fast.at(i, 0)[c] == Approx(slide_print.at(i, 0)[c]).epsilon(0.01));
+    // A reversal film is a camera film: it exposes in the camera, it is not printed on.
+    CHECK_THROWS_WITH(Plan::compile(find_stock("kodak-vision3-250d"), &slide, s, {4, 4}),
+                      Catch::Contains("'fujifilm-provia-100f' is a camera film, not a paper or print film"));
+}
+
 TEST_CASE("lux-seconds input is the exposure itself", "[develop]") {
     Stock film = test::test_film();
     DevelopSettings s = density_settings();
@@ -322,7 +364,7 @@ TEST_CASE("the fast tiers' run a row at a time gives the pixels of the stage-by-
     // narrower than the halation's halo and odd in size, RGB, RGBA and grey input, outputs,
     // settings that leave stages out, windows and thread counts: one pass must change nothing.
     const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
-    const Stock bw = test::test_film(), bw_paper = test::test_paper();
+    const Stock bw = test::test_film(), bw_paper = test::test_paper(), slide = find_stock("fujifilm-provia-100f");
     const int width = 203, height = 77;
     const Image rgb = demo_scene(width, height);
     Image rgba(width, height, 4), grey(width, height, 1);
@@ -366,6 +408,7 @@ TEST_CASE("the fast tiers' run a row at a time gives the pixels of the stage-by-
                 compare(film, &paper, s, rgb, 3, w);
             compare(film, &paper, s, rgb, 1, whole);
             compare(bw, &bw_paper, s, grey, 2, whole);
+            compare(slide, nullptr, s, rgb, 2, whole);  // a reversal film's print: its view table
             DevelopSettings off = s;
             off.halation = 0;
             compare(film, &paper, off, rgb, 2, whole);

@@ -30,6 +30,8 @@ const std::vector<Published> kColourPresets = {
     {"kodak-portra-400", "film/negative/kodak_portra_400", ""},
     {"kodak-ektar-100", "film/negative/kodak_ektar_100", ""},
     {"fujifilm-c200", "film/negative/fujifilm_c200", ""},
+    {"fujifilm-provia-100f", "film/positive/fujifilm_provia_100f", ""},
+    {"kodak-ektachrome-100", "", "kodak_ektachrome_100.json"},
     {"kodak-portra-endura", "paper/kodak_portra_endura", ""},
     {"kodak-2383", "paper/kodak_2383", ""},
     {"fujifilm-crystal-archive-typeii", "paper/fujifilm_crystal_archive_typeii", "fujifilm_crystal_archive_typeii.json"},
@@ -72,13 +74,27 @@ Samples profile_column(const Published& p, const char* x_key, const char* y_key,
     return s;
 }
 
+Curve curve_of(const Samples& samples) {
+    std::vector<double> x, y;
+    for (const auto& [log_h, d] : samples) x.push_back(log_h), y.push_back(d);
+    return make_curve(x, y, "published curve");
+}
+
 // The published characteristic curve of a layer.
 Samples published_curve(const Published& p, int layer) {
     Samples s = datasheet_csv(p, "density_curve", layer);
     if (!s.empty()) return s;
     // spektrafilm's curves are net of the base: the preset adds its base's density.
-    const double d_min = find_stock(p.stock_id).layers[layer].density_curve.y_min();
-    return profile_column(p, "log_exposure", "density_curves", layer, d_min);
+    const Stock stock = find_stock(p.stock_id);
+    s = profile_column(p, "log_exposure", "density_curves", layer, stock.layers[layer].density_curve.y_min());
+    if (stock.kind != StockKind::reversal) return s;
+    // A reversal profile's log exposure axis is relative: the preset's is placed so that the
+    // green curve rates the stock's ISO speed (ISO 2240).
+    double profile_log_hm;
+    REQUIRE(curve_speed_point_log_h(curve_of(profile_column(p, "log_exposure", "density_curves", 1, 0.0)),
+                                    StockKind::reversal, &profile_log_hm));
+    for (auto& sample : s) sample.first += speed_point_log_h(stock) - profile_log_hm;
+    return s;
 }
 
 Samples published_log_sensitivity(const Published& p, int layer) {
@@ -95,7 +111,7 @@ bool have_reference_data() {
 // The pipeline's developed density (no grain, MTF or halation) for neutral exposures.
 std::vector<std::array<double, 3>> develop_wedge(const Stock& stock, const std::vector<double>& lux_seconds) {
     Stock material = stock;
-    material.kind = StockKind::negative;  // papers are measured as the one material of a plan
+    if (!is_camera_film(material.kind)) material.kind = StockKind::negative;  // papers are measured as a plan's film
     DevelopSettings s;
     s.output = OutputMode::density;
     s.input_units = InputUnits::lux_seconds;
@@ -147,6 +163,47 @@ TEST_CASE("a simulated step wedge reproduces each colour preset's published curv
     }
 }
 
+TEST_CASE("Provia 100F's sheet rates ISO 100 by ISO 2240, and a normally exposed mid grey lands at its mid density",
+          "[presets][reference-data][reversal]") {
+    if (!have_reference_data()) return;
+    const Published provia{"fujifilm-provia-100f", "film/positive/fujifilm_provia_100f", ""};
+    const Stock stock = find_stock(provia.stock_id);
+    REQUIRE(stock.kind == StockKind::reversal);
+    // ISO 2240 on the published green curve: S = 10 / Hm, Hm the geometric mean of the
+    // exposures at 0.2 and 2.0 over D-min. Speeds are rated in third stops: within one
+    // sixth of a stop of the rating, and the preset's fitted curve gives the same.
+    double sheet_log_hm = 0, preset_log_hm = 0;
+    REQUIRE(curve_speed_point_log_h(curve_of(published_curve(provia, 1)), StockKind::reversal, &sheet_log_hm));
+    REQUIRE(curve_speed_point_log_h(stock.layers[1].density_curve, stock.kind, &preset_log_hm));
+    const double sheet_speed = 10.0 / std::pow(10.0, sheet_log_hm);
+    INFO("ISO 2240 speed of the sheet's green curve: " << sheet_speed);
+    CHECK(std::abs(std::log2(sheet_speed / stock.iso_speed)) <= 1.0 / 6.0);
+    CHECK(preset_log_hm == Approx(sheet_log_hm).margin(0.02));
+    CHECK(speed_point_log_h(stock) == Approx(std::log10(10.0 / stock.iso_speed)));
+
+    // A scene mid grey (scene-linear 0.18) at 0 EV through the whole pipeline: exposed at
+    // ISO 2720's qK/S = 0.081 lux-s, it develops to the sheet's density at that exposure in
+    // every layer (about 1.1 D, 1.0 over D-min: the sheet's mid-scale).
+    DevelopSettings s;
+    s.output = OutputMode::density;
+    s.grain = s.mtf = false;
+    s.halation = 0;
+    Image grey(4, 4, 3, 0.18f);
+    Image out(grey.window, 3);
+    Plan::compile(stock, nullptr, s, {4, 4}).run(grey.view(), out.view(), 1);
+    const double mid_grey_log_h = std::log10(mid_grey_exposure_lux_s(stock.iso_speed));
+    for (int layer = 0; layer < 3; ++layer) {
+        const Curve published = curve_of(published_curve(provia, layer));
+        const double simulated = out.at(2, 2)[layer], expected = published(mid_grey_log_h);
+        INFO("layer " << stock.layers[layer].name << ": mid grey at D " << simulated << ", the sheet " << expected
+                      << " at log H " << mid_grey_log_h << " (D-min " << published.y_min() << ")");
+        CHECK(std::abs(simulated - expected) <= 0.05);
+        // Between the speed definition's highlight and shadow points: mid-scale.
+        CHECK(expected > published.y_min() + 0.2);
+        CHECK(expected < published.y_min() + 2.0);
+    }
+}
+
 TEST_CASE("narrow-band light at each wavelength gives the published relative sensitivity", "[presets][reference-data]") {
     if (!have_reference_data()) return;
     for (const Published& p : kColourPresets) {
@@ -188,30 +245,35 @@ TEST_CASE("narrow-band light at each wavelength gives the published relative sen
     }
 }
 
-TEST_CASE("every negative-working spektrafilm profile imports within its tracing noise and round-trips",
-          "[presets][reference-data]") {
+TEST_CASE("every spektrafilm profile imports within its tracing noise and round-trips", "[presets][reference-data]") {
     if (!have_reference_data()) return;
-    int imported = 0;
+    int imported = 0, reversal = 0;
     for (const auto& entry : std::filesystem::directory_iterator(kReference + "/spektrafilm-profiles")) {
         const std::string name = entry.path().filename().string();
         if (entry.path().extension() != ".json") continue;
         nlohmann::json profile = read_profile(name);
-        if (profile["info"]["type"] != "negative") continue;
         INFO(name);
         const Stock stock = import_spektrafilm_profile(profile.dump(), name);
         ++imported;
+        // A positive camera film (Ektachrome) is a reversal film: its curves fall.
+        const bool positive = profile["info"]["type"] == "positive";
+        CHECK((stock.kind == StockKind::reversal) == positive);
+        reversal += positive;
         const Stock written = parse_stock_json(stock_to_json(stock), name + ", written");
         for (int layer = 0; layer < 3; ++layer) {
             const Curve& curve = stock.layers[layer].density_curve;
             CHECK(written.layers[layer].density_curve.y == curve.y);
-            CHECK(std::is_sorted(curve.y.begin(), curve.y.end()));
+            const bool monotone = positive ? std::is_sorted(curve.y.rbegin(), curve.y.rend())
+                                           : std::is_sorted(curve.y.begin(), curve.y.end());
+            CHECK(monotone);
             // The import removes the trace's dips (up to 1e-3 D) and nothing else: within 2e-3 D
             // of each sample.
             for (const auto& [log_h, density] : profile_column({"", "", name}, "log_exposure", "density_curves", layer, 0.0))
                 CHECK(std::abs(curve(log_h) - std::max(0.0, density)) <= 2e-3);
         }
     }
-    CHECK(imported >= 9);
+    CHECK(imported >= 10);
+    CHECK(reversal >= 1);
 }
 
 // What the importer accepts must be a valid stock, so that stock_to_json writes what reads back

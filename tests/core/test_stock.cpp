@@ -53,6 +53,45 @@ TEST_CASE("bad stock files name the file, the field and the problem", "[stock]")
                Catch::Contains("field 'kind'") && Catch::Contains("unknown kind"));
 }
 
+TEST_CASE("a reversal film's curve must fall with exposure, and only a falling form describes it", "[stock]") {
+    auto error_of = [](const std::string& json) { return test::stock_error_of(json, "slide.json"); };
+    const std::string parametric = R"({"parametric": {"gamma": 0.65, "d_min": 0.25, "d_max": 2.6, "toe": 0.12, "shoulder": 0.2}})";
+    const std::string reversal = test::replaced(test::test_film_json(), "\"kind\": \"negative\"", "\"kind\": \"reversal\"");
+    auto with_curve = [&](const std::string& stock, const std::string& curve) { return test::replaced(stock, parametric, curve); };
+    const std::string falling = R"({"log_h": [-3, -2, -1, 0], "density": [3.0, 2.5, 0.8, 0.1]})";
+    const std::string rising = R"({"log_h": [-3, -2, -1, 0], "density": [0.1, 0.8, 2.5, 3.0]})";
+
+    const Stock slide = parse_stock_json(with_curve(reversal, falling), "slide.json");
+    CHECK(slide.kind == StockKind::reversal);
+    CHECK(slide.layers[0].density_curve(-3.5) == 3.0);  // D-max at low exposure, D-min at high
+    CHECK(slide.layers[0].density_curve(0.5) == 0.1);
+    CHECK(parse_stock_json(stock_to_json(slide), "written").layers[0].density_curve.y == slide.layers[0].density_curve.y);
+
+    CHECK_THAT(error_of(with_curve(reversal, rising)),
+               Catch::Contains("slide.json: field 'layers[0].density_curve': the curve rises at log H -2") &&
+                   Catch::Contains("a reversal film's density must not increase with exposure"));
+    // The same falling curve on a negative is refused the other way round.
+    CHECK_THAT(error_of(with_curve(test::test_film_json(), falling)),
+               Catch::Contains("field 'layers[0].density_curve': the curve falls at log H -2"));
+    CHECK_THAT(error_of(with_curve(reversal, R"({"log_h": [-3, 0], "density": [1.0, 0.95]})")),
+               Catch::Contains("the curve falls 0.05 D over its exposures") && Catch::Contains("a reversal film's density must fall"));
+    CHECK_THAT(error_of(reversal), Catch::Contains("field 'layers[0].density_curve.parametric': the parametric form "
+                                                   "rises with exposure"));
+
+    // softplus: a reversal film's starts from its D-max and subtracts the knots' terms.
+    const std::string knots = R"("knots": [{"log_h": -2, "slope": 1.5, "width": 0.2}, {"log_h": 0, "slope": -1.5, "width": 0.2}])";
+    const Stock soft = parse_stock_json(with_curve(reversal, R"({"softplus": {"d_max": 3.2, )" + knots + "}}"), "s");
+    const Curve& c = soft.layers[0].density_curve;
+    CHECK(c(-5) == Approx(3.2).margin(1e-6));
+    CHECK(c(-1) == Approx(3.2 - 1.5).margin(1e-3));  // 1 log H past the first knot at slope 1.5
+    CHECK(c(3) == Approx(3.2 - 3.0).margin(1e-3));   // held at D-min past the second
+    CHECK_THAT(error_of(with_curve(reversal, R"({"softplus": {"d_min": 0.2, )" + knots + "}}")),
+               Catch::Contains("field 'layers[0].density_curve.softplus.d_min': a reversal film's curve falls from "
+                               "its D-max: give 'd_max'"));
+    CHECK_THAT(error_of(with_curve(reversal, R"({"softplus": {"d_max": 0.5, "knots": [{"log_h": -2, "slope": -1.5, "width": 0.2}]}})")),
+               Catch::Contains("the curve rises at log H"));
+}
+
 TEST_CASE("sampled curves and spectral tables are accepted unsorted", "[stock]") {
     std::string s = test::test_film_json();
     s.replace(s.find("{\"parametric\""), s.find("}}", s.find("{\"parametric\"")) + 2 - s.find("{\"parametric\""),

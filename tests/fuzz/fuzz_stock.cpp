@@ -1,6 +1,6 @@
 // Stock files (core/stock.h): darkroom-stock versions 1 and 2 and spektrafilm profiles, all
 // through parse_stock_json. Rejection is a StockError; an accepted stock must be usable by
-// the model: one or three layers, curves that are functions, finite spectra with
+// the model: one or three layers, curves that are monotone functions, finite spectra with
 // sensitivities and dyes of peak 1, a positive speed; and stock_to_json must write it so
 // that it reads back.
 #include <algorithm>
@@ -25,6 +25,14 @@ bool is_function(const Curve& c) {
     return true;
 }
 
+// Density never falls with exposure, or for a reversal film never rises.
+bool is_monotone(const Curve& c, StockKind kind) {
+    const double sign = density_falls_with_exposure(kind) ? -1.0 : 1.0;
+    for (size_t i = 1; i < c.y.size(); ++i)
+        if (sign * (c.y[i] - c.y[i - 1]) < -1e-9) return false;  // (the reader's rounding tolerance)
+    return true;
+}
+
 bool is_finite(const Spectrum& s) {
     return std::all_of(s.begin(), s.end(), [](double v) { return std::isfinite(v); });
 }
@@ -40,7 +48,7 @@ void check_usable(const Stock& stock) {
     fuzz_require(std::isfinite(speed_point_log_h(stock)));
     fuzz_require(is_finite(stock.base_density) && is_finite(stock.exposure_illuminant));
     for (const Layer& layer : stock.layers) {
-        fuzz_require(is_function(layer.density_curve));
+        fuzz_require(is_function(layer.density_curve) && is_monotone(layer.density_curve, stock.kind));
         fuzz_require(is_function(layer.mtf));
         fuzz_require(has_peak_one(layer.sensitivity));
         fuzz_require(has_peak_one(layer.dye_density));

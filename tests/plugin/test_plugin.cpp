@@ -812,6 +812,13 @@ TEST_CASE("every setting of the look's table is a node parameter with its defaul
     const auto& papers = ctx.params.find("paper")->props.props.at(kOfxParamPropChoiceOption).s;
     CHECK(std::count_if(papers.begin(), papers.end(), [](const std::string& o) { return o.rfind("Print film: ", 0) == 0; }) >= 1);
     CHECK(std::count_if(papers.begin(), papers.end(), [](const std::string& o) { return o.rfind("Paper: ", 0) == 0; }) >= 1);
+    // The film lists negatives, then reversal (slide) films, by role.
+    const auto& films = ctx.params.find("film")->props.props.at(kOfxParamPropChoiceOption).s;
+    const auto role_of = [&](const char* role) {
+        return std::find_if(films.begin(), films.end(), [&](const std::string& o) { return o.rfind(role, 0) == 0; });
+    };
+    CHECK(role_of("Negative: ") < role_of("Reversal: "));
+    CHECK(role_of("Reversal: ") != films.end());
 }
 
 TEST_CASE("a look file renders the program's pixels in the node, every output mode", "[plugin][look][cli]") {

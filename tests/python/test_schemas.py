@@ -48,6 +48,10 @@ class StockSchema(unittest.TestCase):
             "a layer without its curve": lambda s: s["layers"][1].pop("density_curve"),
             "a Gaussian without its width": lambda s: s["layers"][0]["spectral_sensitivity"]["gaussians"][0].pop("sigma_nm"),
             "another format": lambda s: s.update(format="darkroom-look"),
+            # A softplus curve starts from d_min (rising) or, for a reversal film, d_max: one of them.
+            "a softplus curve with no start": lambda s: s["layers"][0]["density_curve"]["softplus"].pop("d_min"),
+            "a softplus curve with two starts":
+                lambda s: s["layers"][0]["density_curve"]["softplus"].update(d_max=2.5),
         }
         for what, breakage in breakages.items():
             with self.subTest(what):
