@@ -7,12 +7,13 @@
 // of the same float RGB buffer on the same threads is timed in the same run, so every
 // time is also a multiple of the copy (its fastest of 20 runs, timed in turn with the fast
 // tier's frame runs where that tier is benchmarked: in the same moments as the target's
-// frame, on a machine whose speed drifts). The reference tier is too slow for a whole frame:
-// it renders only the sample windows (a window equals that window of the full frame) and
-// its frame time is extrapolated from them by pixel count, between bounds (each window
-// also computes its halo).
+// frame, on a machine whose speed drifts). By default the reference tier renders only the
+// sample windows (a window equals that window of the full frame) and its frame time is
+// extrapolated from them by pixel count, between bounds (each window also computes its
+// halo); with whole_frame it renders the frame (minutes at 1024x683).
 //
-// Errors against the reference tier, on the sample windows of the same frame:
+// Errors against the reference tier, on the sample windows of the same frame (or the whole
+// frame):
 // - print colour: mean and max CIEDE2000, grain off in both (grain realisations differ
 //   between tiers, so per-pixel colour is compared without it);
 // - negative: max |density difference| of the density output, grain off;
@@ -48,6 +49,9 @@ struct BenchOptions {
     int runs = 3;                     // timed whole-frame runs after one warm-up; the fastest is kept
     int sample_windows = 4;           // along the frame's diagonal, one per band of the demo scene
     int sample_window_px = 128;
+    // The reference on the whole frame instead (timed, not extrapolated), and every tier's
+    // errors measured on it: one window, the frame.
+    bool whole_frame = false;
     // Also the print's grain (measure_wedge_grain with the paper): the reference's paper grain
     // makes its two prints of the wedge take minutes, so only when asked.
     bool print_grain = false;
@@ -164,6 +168,10 @@ std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality 
 // pitch for a 4096 px wide frame).
 GrainProfile measure_wedge_grain(const Stock& film, const Stock* paper, Quality quality, uint64_t seed,
                                  double pitch_um, int threads);
+
+// Where the reference renders and every tier's colour and density errors are measured: the
+// sample windows (clipped to the frame), or the whole frame.
+std::vector<Window> reference_windows(const BenchOptions& options);
 
 // Throws std::invalid_argument for unusable options or stocks.
 BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOptions& options);

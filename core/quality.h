@@ -2,7 +2,8 @@
 // command line, the plugin, the Python module and the benchmark.
 //
 //   reference  each stage from its definition: per-pixel spectral printing in double
-//              precision, the MTF's full point spread function as a direct 2D sum,
+//              precision, the MTF's full point spread function as a direct 2D sum (summed
+//              by FFT in double, the same up to rounding: stages/scatter.h),
 //              halation as its exact Gaussian, grain as silver disks (a Boolean model,
 //              Newson et al. 2017) rendered at the film's scale
 //   high       the same spectral printing; the PSF as a sum of separable terms (every tap

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "core/fft.h"
 #include "core/parallel.h"
 #include "core/stages/filters.h"
 
@@ -333,13 +334,10 @@ std::vector<double> ScatterKernel::applied_taps() const {
     return applied;
 }
 
-void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads) {
+void scatter_direct(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads,
+                    const Window& region) {
     const int r = kernel.radius, side = 2 * r + 1;
-    const Window& w = dst.window;
-    if (!kernel.separable.empty()) {
-        convolve_separable(src, dst, kernel.separable_filter(), frame, threads);
-        return;
-    }
+    const Window& w = region.empty() ? dst.window : region;
     parallel_for(w.y0, w.y1, threads, [&](int y_begin, int y_end) {
         for (int y = y_begin; y < y_end; ++y) {
             float* out = dst.row(y);
@@ -351,10 +349,92 @@ void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Wi
                     for (int dx = -r; dx <= r; ++dx)
                         acc += double(k[dx]) * in[std::clamp(x + dx, frame.x0, frame.x1 - 1) - src.window.x0];
                 }
-                out[x - w.x0] = float(acc);
+                out[x - dst.window.x0] = float(acc);
             }
         }
     });
+}
+
+namespace {
+
+int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// The FFT's side for a kernel: at least four kernel widths, so that a tile's outputs are
+// most of its grid.
+int fft_side(int radius) {
+    int n = 64;
+    while (n < 4 * (2 * radius + 1)) n *= 2;
+    return n;
+}
+
+// The direct sum by FFT: the plane in square tiles of side n - 2r on a grid of absolute
+// coordinates, each with the r pixels around it on an n x n grid, multiplied there by the
+// kernel's spectrum. The r pixels around a tile's outputs cover every tap, so the circular
+// convolution wraps nothing into them: each output is the direct sum's up to the FFT's
+// rounding, about log2(n) roundings of the largest value in its tile's grid. A tile's grid
+// holds the same values in any window that holds the whole tile (its pixels beyond the
+// window are read only if the window needs them), so its outputs are the same bits; a tile
+// the window cuts has zeros for what the window does not need, which moves its outputs
+// within that rounding. A grid with a value that is not finite (which the FFT would spread
+// over the whole tile) is summed directly.
+void scatter_by_fft(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads) {
+    const int r = kernel.radius, side = 2 * r + 1, n = fft_side(r), tile = n - 2 * r;
+    const Fft fft(n);
+    // out(p) = sum over d of k(d) in(p + d): a convolution with k(-d), at (-d) mod n, scaled
+    // by the inverse transform's 1/n^2.
+    std::vector<std::complex<double>> spectrum(size_t(n) * n), grid;
+    for (int dy = -r; dy <= r; ++dy)
+        for (int dx = -r; dx <= r; ++dx)
+            spectrum[size_t((n - dy) % n) * n + (n - dx) % n] = double(kernel.taps[size_t(dy + r) * side + (dx + r)]) / (double(n) * n);
+    fft_2d(fft, spectrum, false, threads);
+    const Window& w = dst.window;
+    for (int ty = floor_div(w.y0, tile); ty * tile < w.y1; ++ty)
+        for (int tx = floor_div(w.x0, tile); tx * tile < w.x1; ++tx) {
+            const Window outputs = Window{tx * tile, ty * tile, (tx + 1) * tile, (ty + 1) * tile}.intersected(w);
+            const int gx0 = tx * tile - r, gy0 = ty * tile - r;  // the grid's first pixel
+            grid.assign(size_t(n) * n, 0.0);
+            bool finite = true;
+            for (int j = 0; j < n; ++j) {
+                const int y = std::clamp(gy0 + j, frame.y0, frame.y1 - 1);
+                if (y < src.window.y0 || y >= src.window.y1) continue;
+                const float* in = src.row(y);
+                for (int i = 0; i < n; ++i) {
+                    const int x = std::clamp(gx0 + i, frame.x0, frame.x1 - 1);
+                    if (x < src.window.x0 || x >= src.window.x1) continue;
+                    const float v = in[x - src.window.x0];
+                    finite = finite && std::isfinite(v);
+                    grid[size_t(j) * n + i] = v;
+                }
+            }
+            if (!finite) {
+                scatter_direct(src, dst, kernel, frame, threads, outputs);
+                continue;
+            }
+            fft_2d(fft, grid, false, threads);
+            for (size_t i = 0; i < grid.size(); ++i) {
+                const std::complex<double> a = grid[i], b = spectrum[i];
+                grid[i] = {a.real() * b.real() - a.imag() * b.imag(), a.real() * b.imag() + a.imag() * b.real()};
+            }
+            fft_2d(fft, grid, true, threads);
+            for (int y = outputs.y0; y < outputs.y1; ++y) {
+                float* out = dst.row(y);
+                for (int x = outputs.x0; x < outputs.x1; ++x)
+                    out[x - w.x0] = float(grid[size_t(y - gy0) * n + (x - gx0)].real());
+            }
+        }
+}
+
+}  // namespace
+
+void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads) {
+    if (!kernel.separable.empty()) {
+        convolve_separable(src, dst, kernel.separable_filter(), frame, threads);
+        return;
+    }
+    if (kernel.radius >= kMinFftRadius)
+        scatter_by_fft(src, dst, kernel, frame, threads);
+    else
+        scatter_direct(src, dst, kernel, frame, threads);
 }
 
 }  // namespace darkroom

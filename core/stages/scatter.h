@@ -77,6 +77,13 @@ ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, con
 // dst = src convolved with the kernel (through its separable terms when it has them), for
 // dst.window. Reads src with coordinates clamped
 // to `frame`; src.window must cover (dst.window grown by the radius) intersected with frame.
+// A kernel without separable terms is the direct 2D sum: computed by FFT from
+// kMinFftRadius, the same up to rounding (scatter.cpp, scatter_by_fft).
 void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads);
+constexpr int kMinFftRadius = 16;
+// The direct 2D sum itself, in double, on `region` of dst (empty: all of dst.window): the
+// definition the FFT is tested against.
+void scatter_direct(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads,
+                    const Window& region = {});
 
 }  // namespace darkroom

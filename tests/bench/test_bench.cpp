@@ -167,3 +167,25 @@ TEST_CASE("a tier is Pareto-optimal unless another is at least as fast and as ac
     std::vector<bool> optimal = pareto_optimal({{100, 0}, {5, 0.4}, {2, 0.3}, {2, 0.3}, {1, 1.0}});
     CHECK(optimal == std::vector<bool>{true, false, true, true, true});
 }
+
+TEST_CASE("the reference renders four sample windows along the diagonal, or with whole_frame the frame") {
+    BenchOptions o;
+    o.width = 1024, o.height = 683;
+    const std::vector<Window> windows = reference_windows(o);
+    REQUIRE(windows.size() == 4);
+    const Window frame{0, 0, 1024, 683};
+    for (size_t i = 0; i < windows.size(); ++i) {
+        CHECK(windows[i].width() == 128);
+        CHECK(windows[i].height() == 128);
+        CHECK(windows[i].intersected(frame).pixel_count() == windows[i].pixel_count());
+        if (i > 0) CHECK(windows[i].x0 > windows[i - 1].x0);  // down the diagonal
+        if (i > 0) CHECK(windows[i].y0 > windows[i - 1].y0);
+    }
+    o.whole_frame = true;
+    const std::vector<Window> whole = reference_windows(o);
+    REQUIRE(whole.size() == 1);
+    CHECK(whole[0].x0 == 0);
+    CHECK(whole[0].y0 == 0);
+    CHECK(whole[0].x1 == 1024);
+    CHECK(whole[0].y1 == 683);
+}

@@ -1,9 +1,11 @@
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <random>
 #include <vector>
 
+#include "core/fft.h"
 #include "core/stages/filters.h"
 #include "core/stages/scatter.h"
 #include "test_support.h"
@@ -455,4 +457,70 @@ TEST_CASE("a separable stream gives the same rows however many it sums at once, 
             }
     CHECK_THROWS_AS(SeparableStream(width, filters, 0, height, height, [](int, float* const*) {}, 5),
                     std::invalid_argument);
+}
+
+TEST_CASE("the radix-2 FFT is the DFT up to rounding, and its inverse undoes it", "[scatter][fft]") {
+    const int n = 128;
+    std::mt19937 random(3);
+    std::uniform_real_distribution<double> uniform(-1, 1);
+    std::vector<std::complex<double>> x(n), transformed;
+    for (auto& v : x) v = {uniform(random), uniform(random)};
+    transformed = x;
+    Fft fft(n);
+    fft.forward(transformed.data());
+    double worst = 0;
+    for (int k = 0; k < n; ++k) {
+        std::complex<double> sum = 0;
+        for (int j = 0; j < n; ++j) sum += x[size_t(j)] * std::polar(1.0, -2.0 * M_PI * double((long long)j * k % n) / n);
+        worst = std::max(worst, std::abs(sum - transformed[size_t(k)]));
+    }
+    CHECK(worst < 1e-12);  // values up to sqrt(2) x n: about 100 roundings of 1e-16 x 180
+    fft.inverse(transformed.data());
+    worst = 0;
+    for (int j = 0; j < n; ++j) worst = std::max(worst, std::abs(transformed[size_t(j)] / double(n) - x[size_t(j)]));
+    CHECK(worst < 1e-14);
+    CHECK_THROWS_WITH(Fft(96), Catch::Contains("not a power of two"));
+}
+
+TEST_CASE("a kernel summed by FFT gives the direct 2D sum's pixels up to rounding, the same in any window that "
+          "holds a tile",
+          "[scatter][fft]") {
+    // An asymmetric kernel, so that a flipped or shifted tap would show; wide enough for the FFT.
+    const int r = kMinFftRadius + 4, side = 2 * r + 1;
+    ScatterKernel k;
+    k.radius = r;
+    std::mt19937 random(9);
+    std::uniform_real_distribution<float> uniform(0, 1);
+    for (int i = 0; i < side * side; ++i) k.taps.push_back(uniform(random) / float(side * side));
+    // A frame larger than one tile (216 px at this radius: a 256 px grid less 2r), edges clamped.
+    const Window frame{-30, 7, 290, 260};
+    Plane src(frame), fft(frame), direct(frame);
+    for (int y = frame.y0; y < frame.y1; ++y)
+        for (int x = frame.x0; x < frame.x1; ++x) src.at(x, y) = float(std::abs(x / 7 + y / 5) % 3) + 0.1f * float((x + 40) % 11);
+    scatter(src, fft, k, frame, 2);
+    scatter_direct(src, direct, k, frame, 2);
+    double worst = 0;
+    for (size_t i = 0; i < src.pixels.size(); ++i)
+        worst = std::max(worst, double(std::abs(fft.pixels[i] - direct.pixels[i])) / std::abs(direct.pixels[i]));
+    CHECK(worst <= 3e-7);  // two float roundings (the outputs are about 1.5)
+    // A window holding the tile [0, 216)^2 of the frame: its pixels there are the frame's bits.
+    const Window window{-5, 0, 240, 230};
+    Plane part(window);
+    const Plane needed = [&] {
+        Plane p(window.grown(r).intersected(frame));
+        for (int y = p.window.y0; y < p.window.y1; ++y)
+            for (int x = p.window.x0; x < p.window.x1; ++x) p.at(x, y) = src.at(x, y);
+        return p;
+    }();
+    scatter(needed, part, k, frame, 3);
+    for (int y = 7; y < 216; ++y)
+        for (int x = 0; x < 216; ++x) REQUIRE(part.at(x, y) == fft.at(x, y));
+    for (int y = window.y0 + 7; y < window.y1; ++y)
+        for (int x = window.x0; x < window.x1; ++x) REQUIRE(part.at(x, y) == Approx(direct.at(x, y)).epsilon(3e-7));
+    // A value that is not finite stays where the direct sum puts it (the FFT would spread it).
+    src.at(100, 100) = NAN;
+    scatter(src, fft, k, frame, 2);
+    scatter_direct(src, direct, k, frame, 2);
+    CHECK(std::isnan(fft.at(100 + r, 100)));
+    CHECK(fft.at(101 + r, 100) == direct.at(101 + r, 100));
 }
