@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -92,13 +93,15 @@ bool have_reference_data() {
     return bool(probe);
 }
 
-// The pipeline's developed density (no grain, MTF or halation) for neutral exposures.
-std::vector<std::array<double, 3>> develop_wedge(const Stock& stock, const std::vector<double>& lux_seconds) {
+// The pipeline's developed density (no grain, MTF or halation) for neutral exposures, in
+// lux-seconds or (scene_linear) as scene-linear values at the stock's speed.
+std::vector<std::array<double, 3>> develop_wedge(const Stock& stock, const std::vector<double>& lux_seconds,
+                                                 InputUnits units = InputUnits::lux_seconds) {
     Stock material = stock;
     material.kind = StockKind::negative;  // papers are measured as the one material of a plan
     DevelopSettings s;
     s.output = OutputMode::density;
-    s.input_units = InputUnits::lux_seconds;
+    s.input_units = units;
     s.grain = s.mtf = false;
     s.halation = 0;
     Image wedge(int(lux_seconds.size()), 1, 3);
@@ -208,10 +211,46 @@ TEST_CASE("every negative-working spektrafilm profile imports within its tracing
             // The import removes the trace's dips (up to 1e-3 D) and nothing else: within 2e-3 D
             // of each sample.
             for (const auto& [log_h, density] : profile_column({"", "", name}, "log_exposure", "density_curves", layer, 0.0))
-                CHECK(std::abs(curve(log_h) - std::max(0.0, density)) <= 2e-3);
+                CHECK(std::abs(curve(log_h + stock.curve_log_h_offset) - std::max(0.0, density)) <= 2e-3);
         }
     }
     CHECK(imported >= 9);
+}
+
+// spektrafilm's log exposure is relative: 0 is a mid grey's normal exposure, for a stock of any
+// speed. Imported, each negative has its box speed (the data sheet's) and a mid grey exposed at
+// that speed develops to the profile's density at 0; print materials, whose exposure the printer
+// lights set, have the unused speed 100 and the same placement.
+TEST_CASE("every spektrafilm profile imports at its box speed, a mid grey at the profile's normal exposure",
+          "[presets][reference-data]") {
+    if (!have_reference_data()) return;
+    const std::map<std::string, double> box_speed = {
+        {"fujifilm_c200.json", 200},      {"kodak_ektar_100.json", 100},     {"kodak_portra_400.json", 400},
+        {"kodak_vision3_50d.json", 50},   {"kodak_vision3_250d.json", 250},  {"kodak_vision3_500t.json", 500},
+        {"kodak_2383.json", 100},         {"kodak_portra_endura.json", 100}, {"fujifilm_crystal_archive_typeii.json", 100}};
+    int imported = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(kReference + "/spektrafilm-profiles")) {
+        const std::string name = entry.path().filename().string();
+        if (entry.path().extension() != ".json") continue;
+        const nlohmann::json profile = read_profile(name);
+        if (profile["info"]["type"] != "negative") continue;  // reversal films are not imported
+        INFO(name);
+        REQUIRE(box_speed.count(name));
+        const Stock stock = import_spektrafilm_profile(profile.dump(), name);
+        ++imported;
+        CHECK(std::abs(std::log2(stock.iso_speed / box_speed.at(name))) <= 1.0 / 3.0);
+        const auto grey = develop_wedge(stock, {0.18}, InputUnits::scene_linear)[0];
+        for (int layer = 0; layer < 3; ++layer) {
+            Samples curve = profile_column({"", "", name}, "log_exposure", "density_curves", layer, 0.0);
+            size_t k = 0;
+            while (curve[k + 1].first < 0.0) ++k;  // the samples either side of 0
+            const auto [x0, d0] = curve[k];
+            const auto [x1, d1] = curve[k + 1];
+            const double at_zero = std::max(0.0, d0 + (d1 - d0) * (0.0 - x0) / (x1 - x0));
+            CHECK(grey[layer] == Approx(at_zero).margin(5e-3));
+        }
+    }
+    CHECK(imported == int(box_speed.size()));
 }
 
 // What the importer accepts must be a valid stock, so that stock_to_json writes what reads back
@@ -236,9 +275,13 @@ TEST_CASE("a spektrafilm profile that no stock file could hold is refused, namin
     for (double shift : {-16.0, 16.0}) {
         p = vision3;
         for (auto& x : p["data"]["log_exposure"]) x = x.get<double>() + shift;
-        CHECK_THAT(refusal_of(p), Catch::StartsWith("edited.json: field 'data.log_exposure': the speed point") &&
-                                      Catch::EndsWith("outside [1e-06, 1e+09]"));
+        CHECK(refusal_of(p) == "edited.json: field 'data.log_exposure': must span 0, the normal exposure of a mid grey "
+                               "on the profile's relative axis");
     }
+    p = vision3;
+    for (auto& row : p["data"]["density_curves"]) row[0] = 0.05;
+    CHECK(refusal_of(p) == "edited.json: field 'data.density_curves': the red curve rises 0 D: a film's density must "
+                           "rise with exposure, by at least 0.1 D");
     // A dip of 0.05 D is more than tracing noise: refused rather than smoothed away.
     p = vision3;
     auto& curves = p["data"]["density_curves"];
