@@ -1,5 +1,6 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "cli/commands.h"
 #include "core/stock.h"
@@ -12,7 +13,13 @@ void add_stocks_command(CLI::App& app) {
     cmd->add_flag("--json", *json_output, "Machine-readable output");
     cmd->callback([json_output] {
         nlohmann::json list = nlohmann::json::array();
-        for (const Stock& s : builtin_stocks()) {
+        // By role, as the plugin's menus list them: negatives, then print films, then papers.
+        std::vector<const Stock*> by_role;
+        for (StockKind role : {StockKind::negative, StockKind::print_film, StockKind::paper})
+            for (const Stock& s : builtin_stocks())
+                if (s.kind == role) by_role.push_back(&s);
+        for (const Stock* stock : by_role) {
+            const Stock& s = *stock;
             std::string kind = stock_kind_name(s.kind);
             if (*json_output)
                 list.push_back({{"id", s.id}, {"name", s.name}, {"kind", kind}, {"iso_speed", s.iso_speed},
