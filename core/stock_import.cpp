@@ -5,7 +5,19 @@
 // three characteristic curves (net of base, red-, green-, blue-sensitive columns).
 // Missing samples (null) at the ends of a spectral table are held from the nearest
 // measured one; null curve samples are left out.
+//
+// The profiles hold no absolute exposure: their log-exposure axis is relative, 0 being the
+// normal exposure of a mid grey (the profile maker places it 3 stops over the green curve's
+// 0.2-over-base point for negatives, where green prints a mid grey for print materials), and
+// their sensitivities are peak-normalised. In the published profiles the green curve stands
+// 0.69-0.72 D over base at 0 for negatives from ISO 50 to 500 alike, while read as lux-seconds
+// their speed points give ISO 12-30. So the axis is placed like the relative axis of Kodak's
+// motion-picture sheets (density_curve_log_h "relative-to-mid-grey"): 0 at the exposure a mid
+// grey gets at the stock's speed, which therefore cannot come from the curves; it is the box
+// speed the stock's name carries (see box_speed_in_name).
 #include <algorithm>
+#include <array>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -62,6 +74,37 @@ Spectrum spectral_column(const FieldReader& r, const json& data, const std::stri
     return s;
 }
 
+// The ISO arithmetic speeds of the 1/3-stop series that film boxes are marked with (ISO 6).
+constexpr std::array<int, 31> kBoxSpeeds = {6,   8,   10,  12,  16,  20,   25,   32,   40,   50,   64,
+                                            80,  100, 125, 160, 200, 250,  320,  400,  500,  640,  800,
+                                            1000, 1250, 1600, 2000, 2500, 3200, 4000, 5000, 6400};
+
+// The box speed a film's name carries, as film names do ("Portra 400", "Vision3 250D",
+// "C200"): the first word that is a number of the box-speed series, alone or with one letter
+// before or after it; 0 if there is none. Words are split at spaces, '-' and '_'.
+int box_speed_in_name(const std::string& name) {
+    std::string word;
+    auto speed_of = [](const std::string& w) {
+        size_t first = std::isalpha((unsigned char)w.front()) ? 1 : 0;
+        size_t last = std::isalpha((unsigned char)w.back()) ? w.size() - 1 : w.size();
+        if (first >= last || last - first > 4) return 0;
+        for (size_t i = first; i < last; ++i)
+            if (!std::isdigit((unsigned char)w[i])) return 0;
+        const int n = std::stoi(w.substr(first, last - first));
+        return std::find(kBoxSpeeds.begin(), kBoxSpeeds.end(), n) != kBoxSpeeds.end() ? n : 0;
+    };
+    for (size_t i = 0; i <= name.size(); ++i) {
+        if (i < name.size() && name[i] != ' ' && name[i] != '-' && name[i] != '_') {
+            word += name[i];
+            continue;
+        }
+        if (!word.empty())
+            if (int speed = speed_of(word)) return speed;
+        word.clear();
+    }
+    return 0;
+}
+
 }  // namespace
 
 Stock import_spektrafilm_profile(const std::string& text, const std::string& origin) {
@@ -97,10 +140,25 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
                                  : "D55";
     std::tie(s.exposure_illuminant_name, s.exposure_illuminant) = reference_illuminant(illuminant);
     s.sources = {"imported from the spektrafilm profile " + origin +
-                     " (unmixed data-sheet curves; the profile has no MTF and no granularity: flat MTF, no grain)",
-                 "ISO speed derived from the green curve by the speed definition of its kind"};
+                 " (unmixed data-sheet curves; the profile has no MTF and no granularity: flat MTF, no grain)"};
+    // Print materials are exposed by the printer lights, which find their own exposure: their
+    // speed is unused, 100 as the built-in papers and print films declare.
+    const bool camera_film = s.kind == StockKind::negative || s.kind == StockKind::reversal;
+    const int named_speed = camera_film ? box_speed_in_name(s.name) : 0;
+    s.iso_speed = named_speed > 0 ? named_speed : 100;
+    s.sources.push_back(
+        !camera_film ? "iso_speed 100: unused for papers and print films"
+        : named_speed > 0
+            ? "ISO " + std::to_string(named_speed) + ": the box speed in the stock's name (the profile's exposure axis is relative)"
+            : "ISO 100 assumed: the stock's name carries no box speed and the profile's exposure axis is relative; "
+              "the speed only labels the stock, a mid grey lands at the profile's normal exposure whatever it is");
+    s.curve_log_h_offset = std::log10(mid_grey_exposure_lux_s(s.iso_speed));
 
     auto log_h = rd.at("log_exposure").numbers(rd.field(data, "log_exposure"), -20.0, 20.0);
+    // 0 is the normal exposure of a mid grey: an axis that misses it is not a profile's.
+    if (log_h.empty() || *std::min_element(log_h.begin(), log_h.end()) > 0 ||
+        *std::max_element(log_h.begin(), log_h.end()) < 0)
+        rd.at("log_exposure").fail("must span 0, the normal exposure of a mid grey on the profile's relative axis");
     const json& curves = rd.field(data, "density_curves");
     if (!curves.is_array() || curves.size() != log_h.size())
         rd.at("density_curves").fail("expected one row of 3 densities per log_exposure value (" +
@@ -128,7 +186,7 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
                            ? sample_or_nan(rd.at("density_curves").at(i).at(c), row[c], -stock_json::kHuge,
                                            stock_json::kMaxDensity)
                            : NAN;
-            if (std::isfinite(d)) xs.push_back(log_h[i]), ys.push_back(std::max(0.0, d));
+            if (std::isfinite(d)) xs.push_back(log_h[i] + s.curve_log_h_offset), ys.push_back(std::max(0.0, d));
         }
         try {
             layer.density_curve = make_curve(xs, ys, origin + ": data.density_curves");
@@ -147,30 +205,26 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
             monotone[i] *= sign;
             if (std::abs(monotone[i] - dc.y[i]) > kMaxDigitisingDip)
                 rd.at("density_curves").fail(std::string("the ") + names[c] + " curve " +
-                                             (reversal ? "rises" : "falls") + " at log H " + std::to_string(dc.x[i]) +
+                                             (reversal ? "rises" : "falls") + " at log H " +
+                                             std::to_string(dc.x[i] - s.curve_log_h_offset) +
                                              (reversal ? ": a reversal film's density must not increase with exposure"
                                                        : ": density must not decrease with exposure"));
         }
         dc.y = monotone;
+        // As a stock file's curves must (a flat curve has no speed and prints every pixel alike).
+        if (!(dc.y_max() - dc.y_min() >= stock_json::kMinDensityRise)) {
+            std::ostringstream problem;
+            problem << "the " << names[c] << " curve " << (reversal ? "falls " : "rises ") << dc.y_max() - dc.y_min()
+                    << " D: a film's density must " << (reversal ? "fall" : "rise") << " with exposure, by at least "
+                    << stock_json::kMinDensityRise << " D";
+            rd.at("density_curves").fail(problem.str());
+        }
         layer.mtf = make_curve({0.0, 1000.0}, {1.0, 1.0}, "flat MTF");
         s.layers.push_back(layer);
     }
     // A negative density would transmit more light than falls on it.
     s.base_density = spectral_column(rd, data, "base_density", -1, 0.0, stock_json::kHuge);
 
-    SpeedDefinition sd = speed_definition(s.kind);
-    double hm_log;
-    if (!curve_speed_point_log_h(s.layers[1].density_curve, s.kind, &hm_log))
-        rd.at("density_curves").fail("the green curve never reaches " +
-                                     std::to_string(std::max(sd.density_over_fog, sd.shadow_density_over_fog)) +
-                                     " above its minimum, so the stock has no speed");
-    s.iso_speed = sd.k / std::pow(10.0, hm_log);
-    if (!(s.iso_speed >= stock_json::kMinIsoSpeed && s.iso_speed <= stock_json::kMaxIsoSpeed)) {
-        std::ostringstream problem;
-        problem << "the speed point (log H " << hm_log << ") gives ISO " << s.iso_speed << ", outside ["
-                << stock_json::kMinIsoSpeed << ", " << stock_json::kMaxIsoSpeed << "]";
-        rd.at("log_exposure").fail(problem.str());
-    }
     return s;
 }
 

@@ -402,7 +402,7 @@ VISION3_NOTE = ("note: the digitised Vision3 characteristic curves span -2.4..+2
 def vision3(stock_id, folder, name, iso, sheet, illuminant, rms, grain_um, mtf_tables):
     return {
         "id": stock_id, "name": name, "kind": "negative", "iso_speed": iso, "frame_width_mm": 24.89,
-        "exposure_illuminant": illuminant,
+        "density_curve_log_h": "relative-to-mid-grey", "exposure_illuminant": illuminant,
         "curves": ("datasheet", f"datasheets/film/negative/{folder}"),
         "sensitivity": ("datasheet", f"datasheets/film/negative/{folder}"),
         "dyes": ("datasheet", f"datasheets/film/negative/{folder}"),
@@ -424,20 +424,27 @@ def vision3(stock_id, folder, name, iso, sheet, illuminant, rms, grain_um, mtf_t
     }
 
 
-def still_negative(stock_id, folder, profile, name, iso, sheet, rms, grain_um, mtf_tables, rms_note, extra=()):
+def still_negative(stock_id, folder, profile, name, iso, sheet, rms, grain_um, mtf_tables, rms_note, extra=(),
+                   spectra_folder=None, speed_note=None, dye_note=None, anchor_iso5800=False):
+    """A C-41 still negative. spectra_folder: where the sensitivities and minimum density are, when
+    the curves' folder has none (a push process of the same film). anchor_iso5800: the sheet's log H
+    axis is offset; the curves are shifted to give the box speed (curve_log_h_shift)."""
+    spectra_folder = spectra_folder or folder
     return {
+        "anchor_iso5800": anchor_iso5800,
         "id": stock_id, "name": name, "kind": "negative", "iso_speed": iso, "frame_width_mm": 36.0,
         "exposure_illuminant": "D55",
         "curves": ("datasheet", f"datasheets/film/negative/{folder}"),
-        "sensitivity": ("datasheet", f"datasheets/film/negative/{folder}"),
+        "sensitivity": ("datasheet", f"datasheets/film/negative/{spectra_folder}"),
         "dyes": ("profile", f"spektrafilm-profiles/{profile}.json"),
-        "base": ("datasheet-min", f"datasheets/film/negative/{folder}"),
+        "base": ("datasheet-min", f"datasheets/film/negative/{spectra_folder}"),
         "sources": [
             f"{sheet}: characteristic curves (Status M, process C-41), spectral sensitivity curves, "
             "minimum (base+fog) spectral density, as digitised by the agx-emulsion project "
-            f"({folder}); fitted by tools/fit_stocks.py",
-            f"{sheet}: ISO {iso}, daylight balanced; 135 frame 36 mm",
-            "the sheet publishes no separate c/m/y dye curves: dye densities fitted to the unmixed "
+            f"({folder if folder == spectra_folder else folder + '; sensitivities and minimum density: ' + spectra_folder}"
+            "); fitted by tools/fit_stocks.py",
+            speed_note or f"{sheet}: ISO {iso}, daylight balanced; 135 frame 36 mm",
+            dye_note or "the sheet publishes no separate c/m/y dye curves: dye densities fitted to the unmixed "
             f"channel_density of spektrafilm v0.3.2's profile {profile}.json (derived from the same sheet)",
             rms_note, GRAIN_NOTE, MTF_NOTE,
             "estimate: halation (antihalation undercoat): red 0.03, green a third, blue an eighth, "
@@ -484,7 +491,93 @@ STOCKS = [
                    "estimate: RMS granularity 0.0045 (Fujifilm quotes RMS x1000 of 4-5 for its ISO 100-800 negatives, "
                    "measured with a 48 um aperture at density 1.0; not verified for C200)",
                    extra=("chosen over PRO 400H and Superia X-TRA 400: the only Fujifilm negative with both the "
-                          "digitised sheet and a spektrafilm profile (dye densities)",)),
+                          "digitised sheet and a spektrafilm profile (dye densities)",), anchor_iso5800=True),
+]
+
+
+def similar_dyes(profile, family):
+    """The source note of dye densities taken from a similar stock's profile."""
+    return ("the sheet publishes no separate c/m/y dye curves and spektrafilm has no profile of this stock: dye "
+            f"densities fitted to the unmixed channel_density of spektrafilm v0.3.2's profile {profile}.json, "
+            f"a stock of the same maker and process ({family}); an assumption, not this stock's measured dyes")
+
+
+KODAK_C41_DYES = "Kodak C-41 colour negative, the nearest Kodak dye set with a profile"
+FUJI_C41_DYES = "Fujifilm C-41 colour negative, the only Fujifilm negative with a profile"
+PORTRA_800_SHEET = "Kodak E-4040 (2016), KODAK PROFESSIONAL PORTRA 800 Film"
+PORTRA_800_MTF = mtf(NEGATIVE_MTF, (1, 1, 1, 0.88, 0.56, 0.36, 0.25), (1, 1, 1, 0.93, 0.68, 0.48, 0.35),
+                     (1, 1, 1, 0.93, 0.68, 0.5, 0.38))
+PORTRA_800_RMS = ("estimate: E-4040 gives a print grain index, not diffuse RMS granularity; 0.007 is a plausible "
+                  "diffuse RMS for an ISO 800 colour negative (above the 0.006 estimated for Portra 400)")
+
+
+def portra_800_push(stops):
+    """Portra 800 exposed at EI 800 x 2^stops and push-processed: E-4040's push curves, a preset of
+    its own so that a user picks the process as a stock (speed, curves and grain change together)."""
+    ei = 800 * 2 ** stops
+    return still_negative(
+        f"kodak-portra-800-push{stops}", f"kodak_portra_800_push{stops}", "kodak_portra_400",
+        f"Kodak Professional Portra 800 Film, push {stops} (EI {ei})", ei, PORTRA_800_SHEET,
+        round(0.007 * (1.15 if stops == 1 else 1.3), 4), 1.5, PORTRA_800_MTF,
+        PORTRA_800_RMS + f"; push processing coarsens grain: x{1.15 if stops == 1 else 1.3} (estimate)",
+        spectra_folder="kodak_portra_800",
+        speed_note=f"{PORTRA_800_SHEET}: exposed at EI {ei} ({stops} stop{'s' if stops > 1 else ''} over the box "
+                   f"speed 800) and push-processed {stops} stop{'s' if stops > 1 else ''} in C-41, as the sheet's push "
+                   "curves; spectral sensitivity and minimum density are those of the normal process (the sheet "
+                   "gives them once); 135 frame 36 mm",
+        dye_note=similar_dyes("kodak_portra_400", KODAK_C41_DYES))
+
+
+def fujifilm_400(stock_id, folder, name, sheet):
+    """A Fujifilm ISO 400 C-41 negative; its sheet's log H axis is offset, anchored by ISO 5800."""
+    return still_negative(
+        stock_id, folder, "fujifilm_c200", name, 400, f"Fujifilm data sheet {sheet}", 0.005, 1.2,
+        mtf(NEGATIVE_MTF, (1, 1, 1, 0.9, 0.62, 0.42, 0.3), (1, 1, 1, 0.95, 0.74, 0.55, 0.4),
+            (1, 1, 1, 0.95, 0.74, 0.57, 0.44)),
+        "estimate: RMS granularity 0.005 (Fujifilm quotes RMS x1000 of 4-5 for its ISO 100-800 negatives, "
+        f"measured with a 48 um aperture at density 1.0; not read from {sheet.split(',')[0]})",
+        dye_note=similar_dyes("fujifilm_c200", FUJI_C41_DYES), anchor_iso5800=True)
+
+
+def kodak_c41(stock_id, folder, name, iso, sheet, rms, grain_um, mtf_tables, rms_note):
+    """A Kodak C-41 negative whose sheet has no c/m/y dyes and spektrafilm no profile: Portra 400's dyes."""
+    return still_negative(stock_id, folder, "kodak_portra_400", name, iso, sheet, rms, grain_um, mtf_tables, rms_note,
+                          dye_note=similar_dyes("kodak_portra_400", KODAK_C41_DYES))
+
+
+STOCKS += [
+    kodak_c41("kodak-portra-160", "kodak_portra_160",
+              "Kodak Professional Portra 160 Film", 160, "Kodak E-4051 (2016), KODAK PROFESSIONAL PORTRA 160 Film",
+              0.0045, 1.0,
+              mtf(NEGATIVE_MTF, (1, 1, 1, 0.93, 0.68, 0.48, 0.34), (1, 1, 1, 0.97, 0.78, 0.6, 0.46),
+                  (1, 1, 1, 0.97, 0.78, 0.62, 0.5)),
+              "estimate: E-4051 gives a print grain index, not diffuse RMS granularity; 0.0045 is a plausible "
+              "diffuse RMS for an ISO 160 colour negative (between the Ektar 100 and Portra 400 estimates)"),
+    kodak_c41("kodak-portra-800", "kodak_portra_800", "Kodak Professional Portra 800 Film", 800, PORTRA_800_SHEET,
+              0.007, 1.5, PORTRA_800_MTF, PORTRA_800_RMS),
+    portra_800_push(1),
+    portra_800_push(2),
+    kodak_c41("kodak-gold-200", "kodak_gold_200",
+              "Kodak Gold 200 Film", 200, "Kodak E-7022 (2007, as the 2016 edition), KODAK GOLD 200 Film",
+              0.005, 1.1,
+              mtf(NEGATIVE_MTF, (1, 1, 1, 0.92, 0.65, 0.45, 0.32), (1, 1, 1, 0.96, 0.76, 0.58, 0.44),
+                  (1, 1, 1, 0.96, 0.76, 0.6, 0.48)),
+              "estimate: E-7022 gives a print grain index, not diffuse RMS granularity; 0.005 is a plausible "
+              "diffuse RMS for an ISO 200 consumer colour negative"),
+    kodak_c41("kodak-ultramax-400", "kodak_ultramax_400",
+              "Kodak UltraMax 400 Film", 400, "Kodak E-7023 (2016), KODAK ULTRAMAX 400 Film", 0.0065, 1.4,
+              mtf(NEGATIVE_MTF, (1, 1, 1, 0.9, 0.6, 0.4, 0.28), (1, 1, 1, 0.95, 0.72, 0.52, 0.38),
+                  (1, 1, 1, 0.95, 0.72, 0.55, 0.42)),
+              "estimate: E-7023 gives a print grain index, not diffuse RMS granularity; 0.0065 is a plausible "
+              "diffuse RMS for an ISO 400 consumer colour negative (a little above the Portra 400 estimate)"),
+    fujifilm_400("fujifilm-pro-400h", "fujifilm_pro_400h", "Fujifilm Fujicolor PRO 400H Professional",
+                 "AF3-176E, FUJICOLOR PRO 400H Professional"),
+    fujifilm_400("fujifilm-superia-xtra-400", "fujifilm_xtra_400", "Fujifilm Fujicolor Superia X-TRA 400",
+                 "AF3-151E, FUJICOLOR SUPERIA X-TRA 400"),
+    vision3("kodak-vision3-200t", "kodak_vision3_200t", "Kodak Vision3 200T Color Negative Film 5213/7213", 200,
+            "Kodak H-1-5213 (2015), KODAK VISION3 200T Color Negative Film 5213/7213", "3200K", 0.005, 1.0,
+            mtf(NEGATIVE_MTF, (1, 1, 1, 0.92, 0.65, 0.45, 0.32), (1, 1, 1, 0.96, 0.78, 0.6, 0.45),
+                (1, 1, 1, 0.96, 0.78, 0.62, 0.5))),
 ]
 
 
@@ -634,15 +727,91 @@ def log_h_shift_to_rated_speed(ref, stock):
     return round(math.log10(10.0 / stock["iso_speed"]) - iso_2240_log_hm(log_e, green), 4)
 
 
+ENDURA_BASE = ("base density: spektrafilm has no profile of this paper; the base of its profile "
+               "kodak_portra_endura.json (base_density), a Kodak Endura paper on the same base")
+
+
+def kodak_paper(stock_id, folder, name, sheet, spectra=None, notes=()):
+    """A Kodak RA-4 paper from its data sheet folder; spectra: another sheet's folder for the
+    sensitivities and dyes when this one has none."""
+    spectra = spectra or folder
+    return paper(stock_id, name, curves=("datasheet", f"datasheets/paper/{folder}"),
+                 spectra=f"datasheets/paper/{spectra}", profile="kodak_portra_endura",
+                 data_sources=[
+                     f"{sheet}: characteristic curves (Status A reflection density, process RA-4)"
+                     + ("" if spectra != folder else ", spectral sensitivity, spectral dye density curves")
+                     + f", as digitised by the agx-emulsion project (datasheets/paper/{folder}); fitted by "
+                     "tools/fit_stocks.py; x in the sheet's relative log exposure, which for a paper only shifts the "
+                     "automatic printer light",
+                     ENDURA_BASE, *notes])
+
+
+PRINT_STOCKS += [
+    # As 2383 (the same kind, format, aim and estimates) but for its own sheet.
+    dict(PRINT_STOCKS[0], id="kodak-2393", name="Kodak Vision Premier Color Print Film 2393",
+         curves=("datasheet", "datasheets/paper/kodak_2393"), sensitivity=("datasheet", "datasheets/paper/kodak_2393"),
+         dyes=("datasheet", "datasheets/paper/kodak_2393"), sources=[
+             "Kodak H-1-2393t (September 1998), KODAK VISION Premier Color Print Film 2393: characteristic curves "
+             "(Status A, process ECP-2B; x in the sheet's log exposure), spectral sensitivity, spectral dye density "
+             "curves, as digitised by the agx-emulsion project (datasheets/paper/kodak_2393); fitted by "
+             "tools/fit_stocks.py",
+             "base density: spektrafilm has no profile of 2393; the base of its profile kodak_2383.json "
+             "(base_density), Kodak's standard print film on the same clear ESTAR base",
+             *PRINT_STOCKS[0]["sources"][2:]]),
+    kodak_paper("kodak-endura-premier", "kodak_endura_premier", "Kodak Professional Endura Premier Paper",
+                "Kodak E-4070 (2013), KODAK PROFESSIONAL ENDURA PREMIER Paper"),
+    kodak_paper("kodak-ultra-endura", "kodak_ultra_endura", "Kodak Professional Ultra Endura Paper",
+                "Kodak E-4044 (2010), KODAK PROFESSIONAL ULTRA ENDURA Paper"),
+    kodak_paper("kodak-ektacolor-edge", "kodak_ektacolor_edge", "Kodak Ektacolor Edge Paper",
+                "Kodak E-19 (July 2003), KODAK EKTACOLOR EDGE Paper"),
+    kodak_paper("kodak-supra-endura", "kodak_supra_endura", "Kodak Professional Supra Endura Paper",
+                "KODAK PROFESSIONAL SUPRA ENDURA Paper data sheet (edition not named by the digitiser)",
+                spectra="kodak_portra_endura",
+                notes=["the digitised Supra Endura folder holds only the characteristic curves: spectral sensitivity "
+                       "and dye densities fitted to Portra Endura's sheet (Kodak E-4021, datasheets/paper/"
+                       "kodak_portra_endura), its sibling professional Endura paper of the same generation and "
+                       "dye set; an assumption, not Supra's measured spectra"]),
+]
+
+
 # ---------------------------------------------------------------------------------------
 # Gathering the data of one stock.
+
+
+def iso5800_speed(ref, folder):
+    """ISO 5800's speed of a colour negative from its sheet's curves: sqrt(2) / H_M, H_M the
+    geometric mean of the green layer's exposure and the slower of red and blue's, each where
+    the layer first reaches 0.15 over its minimum density."""
+    log_h = {}
+    for c in "rgb":
+        x, d = read_csv_curve(ref / folder / f"density_curve_{c}.csv")
+        i = int(np.argmax(d >= d.min() + 0.15))
+        log_h[c] = float(np.interp(d.min() + 0.15, d[i - 1:i + 1], x[i - 1:i + 1])) if i > 0 else float(x[0])
+    return math.sqrt(2.0) / 10.0 ** ((log_h["g"] + max(log_h["r"], log_h["b"])) / 2.0)
+
+
+def curve_log_h_shift(ref, stock):
+    """log H added to a sheet's x: 0, or for a sheet whose axis is offset (anchor_iso5800) the
+    shift that makes its curves give the box speed by ISO 5800."""
+    if not stock.get("anchor_iso5800"):
+        return 0.0
+    return math.log10(iso5800_speed(ref, stock["curves"][1]) / stock["iso_speed"])
+
+
+def axis_note(ref, stock):
+    speed, shift = iso5800_speed(ref, stock["curves"][1]), curve_log_h_shift(ref, stock)
+    return (f"the digitised sheet's log H axis is offset: by ISO 5800 (sqrt(2)/H_M, 0.15 over minimum density) its "
+            f"curves give ISO {speed:.0f}, not the box speed {stock['iso_speed']} (Kodak's C-41 sheets give theirs "
+            f"within 0.3 stop); the curves are fitted shifted by {shift:+.3f} log H so that they give ISO "
+            f"{stock['iso_speed']}")
 
 
 def layer_curve_data(ref, stock, index, status):
     source, where = stock["curves"]
     channel = "rgb"[index]
     if source == "datasheet":
-        return read_csv_curve(ref / where / f"density_curve_{channel}.csv")
+        x, d = read_csv_curve(ref / where / f"density_curve_{channel}.csv")
+        return x + curve_log_h_shift(ref, stock), d
     profile = read_profile(ref / where)
     log_e = np.array(profile["log_exposure"], dtype=float) + stock.get("log_h_shift", 0.0)
     above_base = np.array([row[index] for row in profile["density_curves"]], dtype=float)
@@ -728,11 +897,15 @@ def fit_spectra_and_curves(ref, stock, status):
     return fitted
 
 
-def assemble_stock(stock, fitted):
+def assemble_stock(stock, fitted, ref):
     """The preset file: the stock table's published numbers and estimates around the fitted parts."""
+    sources = stock["sources"] + ([axis_note(ref, stock)] if stock.get("anchor_iso5800") else [])
     document = {"format": "darkroom-stock", "version": 2, "id": stock["id"], "name": stock["name"],
-                "kind": stock["kind"], "sources": stock["sources"], "iso_speed": stock["iso_speed"],
-                "frame_width_mm": stock["frame_width_mm"], "exposure_illuminant": stock["exposure_illuminant"]}
+                "kind": stock["kind"], "sources": sources, "iso_speed": stock["iso_speed"],
+                "frame_width_mm": stock["frame_width_mm"]}
+    if "density_curve_log_h" in stock:
+        document["density_curve_log_h"] = stock["density_curve_log_h"]
+    document["exposure_illuminant"] = stock["exposure_illuminant"]
     if "mid_grey_aim_density" in stock:
         document["mid_grey_aim_density"] = stock["mid_grey_aim_density"]
     if "base_density" in fitted:  # (else the loader's: the layers' D-min times their dyes)
@@ -825,7 +998,7 @@ def main():
         if not args.check_only:
             fitted = (json.loads(path.read_text()) if args.refresh_metadata
                       else fit_spectra_and_curves(ref, stock, status))
-            document = assemble_stock(stock, fitted)
+            document = assemble_stock(stock, fitted, ref)
             temporary = path.with_suffix(".json.tmp")
             temporary.write_text(to_json(document) + "\n")
             temporary.replace(path)

@@ -373,6 +373,16 @@ TEST_CASE("stocks lists the presets and demo renders without an input", "[cli]")
     Result r = darkroom("stocks --json");
     REQUIRE(r.exit_code == 0);
     CHECK_THAT(r.output, Catch::Contains("kodak-tri-x-400") && Catch::Contains("\"kind\": \"paper\""));
+    // Listed by role: every negative before every print film, every print film before every paper.
+    r = darkroom("stocks");
+    REQUIRE(r.exit_code == 0);
+    const size_t last_negative = r.output.rfind("  negative  "), first_print_film = r.output.find("  print-film  "),
+                 last_print_film = r.output.rfind("  print-film  "), first_paper = r.output.find("  paper  ");
+    REQUIRE(first_print_film != std::string::npos);
+    CHECK(last_negative < first_print_film);
+    CHECK(last_print_film < first_paper);
+    CHECK_THAT(r.output, Catch::Contains("kodak-portra-800-push2  negative  ISO 3200") &&
+                             Catch::Contains("kodak-2393  print-film") && Catch::Contains("kodak-supra-endura  paper"));
     fs::path dir = kTmp / "demo";
     fs::remove_all(dir);
     r = darkroom("demo -o " + dir.string());

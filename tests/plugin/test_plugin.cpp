@@ -428,7 +428,7 @@ TEST_CASE("a saved node keeps its stocks when the plugin's list of stocks change
     const int w = 32, h = 24;
     Frame source = Frame::from_top_down(scene(w, h, 4), w, h, 4);
     auto chosen = make_instance();
-    const int portra = chosen->choice_index("film", "Portra"), trix = chosen->choice_index("film", "Tri-X");
+    const int portra = chosen->choice_index("film", "Portra 400"), trix = chosen->choice_index("film", "Tri-X");
     REQUIRE(portra >= 0);
     REQUIRE(trix >= 0);
     REQUIRE(portra != trix);
