@@ -138,6 +138,28 @@ double ciede2000(const Lab& lab1, const Lab& lab2);
 // construction). This is the exact left inverse of linear_srgb_to_spectrum. Per pixel.
 Rgb reflectance_to_linear_srgb(const Spectrum& reflectance);
 
+// Chromatic adaptation within linear sRGB: the matrix M that takes colours seen under a
+// light whose white is `white` (linear sRGB, luminance > 0) to the corresponding colours
+// seen under D65: a von Kries scaling of the Bradford cone responses (Lam 1985, the
+// transform ICC profiles adapt with), keeping luminance: M white is neutral (Y, Y, Y), Y
+// the white's luminance. Throws std::invalid_argument unless that luminance is > 0.
+Matrix3 adaptation_to_d65(const Rgb& white);
+Rgb multiply(const Matrix3& m, const Rgb& rgb);  // per pixel
+// The luminance Y of linear sRGB (the middle row of kLinearSrgbToXyz). Per pixel.
+double luminance(const Rgb& rgb);
+
+// Gamut compression towards the neutral axis at constant luminance, for colours the
+// working space cannot hold (a negative component). A colour's distance from neutral is
+// d = (Y - min(r, g, b)) / Y: 0 on the neutral axis, 1 where a component reaches 0, above
+// 1 outside the gamut. Up to kGamutCompressionStart the colour is unchanged; beyond, d is
+// compressed smoothly (same value and slope at the start) to
+//   s + (1 - s) tanh((d - s) / (1 - s)),  s = kGamutCompressionStart,
+// which stays below 1, and the colour moves along its line to (Y, Y, Y) to that distance:
+// luminance and the direction from neutral (hue) are kept, and no component is negative.
+// Y <= 0 (no light a print can reflect) gives black. Per pixel.
+constexpr double kGamutCompressionStart = 0.8;
+Rgb compress_to_gamut(const Rgb& rgb);
+
 // ---------------------------------------------------------------------------------------
 // RGB -> spectrum upsampling
 // ---------------------------------------------------------------------------------------
