@@ -444,50 +444,15 @@ std::array<double, 3> multiply(const Matrix3& m, const std::array<double, 3>& v)
             m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2]};
 }
 
-namespace {
-
-Matrix3 product(const Matrix3& a, const Matrix3& b) {
-    Matrix3 m{};
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            for (int k = 0; k < 3; ++k) m[i][j] += a[i][k] * b[k][j];
-    return m;
-}
-
-Matrix3 inverse(const Matrix3& m) {
-    const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                       m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                       m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    Matrix3 r;
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-            // The cofactor of m[j][i] over the determinant.
-            const int a = (j + 1) % 3, b = (j + 2) % 3, c = (i + 1) % 3, d = (i + 2) % 3;
-            r[i][j] = (m[a][c] * m[b][d] - m[a][d] * m[b][c]) / det;
-        }
-    return r;
-}
-
-// The Bradford cone-response matrix (Lam 1985; Hunt, The Reproduction of Colour, 6th ed.,
-// section 34.4), XYZ -> RGB-like cone responses.
-constexpr Matrix3 kBradford{{{0.8951, 0.2664, -0.1614}, {-0.7502, 1.7135, 0.0367}, {0.0389, -0.0685, 1.0296}}};
-
-}  // namespace
-
 double luminance(const Rgb& rgb) {
     return kLinearSrgbToXyz[1][0] * rgb[0] + kLinearSrgbToXyz[1][1] * rgb[1] + kLinearSrgbToXyz[1][2] * rgb[2];
 }
 
 Matrix3 adaptation_to_d65(const Rgb& white) {
-    if (!(luminance(white) > 0)) throw std::invalid_argument("adaptation_to_d65: the white has no luminance");
-    // Cone responses of linear sRGB; the D65 white is (1, 1, 1) there.
-    const Matrix3 cones = product(kBradford, kLinearSrgbToXyz);
-    const Rgb source = multiply(cones, white);
+    if (!(white[0] > 0 && white[1] > 0 && white[2] > 0))
+        throw std::invalid_argument("adaptation_to_d65: the white has a component that is not positive");
     const double y = luminance(white);
-    const Rgb target = multiply(cones, {y, y, y});
-    Matrix3 scale{};
-    for (int k = 0; k < 3; ++k) scale[k][k] = target[k] / source[k];
-    return product(inverse(cones), product(scale, cones));
+    return {{{y / white[0], 0, 0}, {0, y / white[1], 0}, {0, 0, y / white[2]}}};
 }
 
 Rgb compress_to_gamut(const Rgb& rgb) {

@@ -139,10 +139,12 @@ double ciede2000(const Lab& lab1, const Lab& lab2);
 Rgb reflectance_to_linear_srgb(const Spectrum& reflectance);
 
 // Chromatic adaptation within linear sRGB: the matrix M that takes colours seen under a
-// light whose white is `white` (linear sRGB, luminance > 0) to the corresponding colours
-// seen under D65: a von Kries scaling of the Bradford cone responses (Lam 1985, the
-// transform ICC profiles adapt with), keeping luminance: M white is neutral (Y, Y, Y), Y
-// the white's luminance. Throws std::invalid_argument unless that luminance is > 0.
+// light whose white is `white` (linear sRGB, every component > 0) to the corresponding
+// colours seen under D65, keeping luminance: a von Kries scaling of linear Rec.709's own
+// channels, M = diag(Y / white), Y the white's luminance, so M white = (Y, Y, Y). (Scaling in
+// a cone space such as Bradford's mixes the channels: it makes saturated colours negative
+// sooner and a channel's grain carry its neighbours'; for the near-neutral whites of print
+// bases the two agree closely.) Throws std::invalid_argument unless every component is > 0.
 Matrix3 adaptation_to_d65(const Rgb& white);
 Rgb multiply(const Matrix3& m, const Rgb& rgb);  // per pixel
 // The luminance Y of linear sRGB (the middle row of kLinearSrgbToXyz). Per pixel.

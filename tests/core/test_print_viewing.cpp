@@ -47,7 +47,10 @@ TEST_CASE("adapting to a white makes that white neutral at its own luminance, an
     const Matrix3 same = adaptation_to_d65({0.7, 0.7, 0.7});
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) CHECK(same[i][j] == Approx(i == j ? 1.0 : 0.0).margin(1e-12));
-    CHECK_THROWS_WITH(adaptation_to_d65({0, 0, 0}), Catch::Contains("no luminance"));
+    // Each channel on its own (no channel mixes into another: a colour without blue keeps none).
+    const Rgb yellow = multiply(adaptation_to_d65({0.9, 0.8, 0.6}), {0.5, 0.4, 0.0});
+    CHECK(yellow[2] == 0.0);
+    CHECK_THROWS_WITH(adaptation_to_d65({0.5, 0.5, 0}), Catch::Contains("not positive"));
 }
 
 TEST_CASE("gamut compression keeps luminance and hue, leaves no negative component, and leaves the inner gamut "
