@@ -171,11 +171,12 @@ GrainErrors grain_errors(const GrainProfile& reference, const GrainProfile& test
 }  // namespace
 
 GrainProfile measure_wedge_grain(const Stock& film, const Stock* paper, Quality q, uint64_t seed, double pitch_um,
-                                 int threads) {
+                                 int threads, PrintViewing viewing) {
     const int width = kWedgePatches * kWedgePatchPx;
     DevelopSettings s = density_target(q, seed, pitch_um, width);
     s.mtf = false;
     s.halation = 0;
+    s.print_viewing = viewing;
     if (paper) {
         s.output = OutputMode::print;
         s.print_width_mm = paper->frame_width_mm * width / kTargetWidthPx;

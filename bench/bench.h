@@ -165,9 +165,9 @@ std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality 
 // and halation off, so each patch is flat) at `pitch_um` on film, analysed as a plate would be
 // (core/plate/grain_analysis.h): the negative's density or, with a paper, the print's, each
 // channel of its linear Rec.709 read as a density, -log10 (the print at the paper's format's
-// pitch for a 4096 px wide frame).
+// pitch for a 4096 px wide frame), seen as `viewing` says.
 GrainProfile measure_wedge_grain(const Stock& film, const Stock* paper, Quality quality, uint64_t seed,
-                                 double pitch_um, int threads);
+                                 double pitch_um, int threads, PrintViewing viewing = PrintViewing::media_relative);
 
 // Where the reference renders and every tier's colour and density errors are measured: the
 // sample windows (clipped to the frame), or the whole frame.

@@ -1,10 +1,12 @@
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
 #include "cli/image_io.h"
 #include "core/sensitometry.h"
+#include "look/parameters.h"
 
 namespace darkroom::cli {
 
@@ -13,8 +15,58 @@ namespace {
 struct SensitometryCliOptions {
     std::string stock;
     bool json = false;
+    bool print_greys = false;
     int threads = 0;
+    std::string viewing = "media-relative";  // (--print-greys)
+    DevelopSettings look;
 };
+
+// Every film/paper pair (or those with the one stock given) printed with the automatic lights:
+// the grey scale's chroma from -3 to +3 EV, a Markdown table (docs/reference/print-greys.md).
+void run_print_greys(const SensitometryCliOptions& o, bool film_given, bool paper_given) {
+    std::optional<Stock> given;
+    if (film_given || paper_given) try {
+            given = find_stock(o.stock);
+        } catch (const StockError& e) {
+            throw UserError(e.what());
+        }
+    std::vector<Stock> films, papers;
+    for (const Stock& s : builtin_stocks()) (s.kind == StockKind::negative ? films : papers).push_back(s);
+    if (film_given) films = {*given};
+    if (paper_given) papers = {*given};
+    const std::vector<double> evs{-3, -2, -1, 0, 1, 2, 3};
+    nlohmann::json doc = nlohmann::json::array();
+    if (!o.json)
+        std::printf("| film | paper | -3 EV | -2 EV | -1 EV | 0 EV | +1 EV | +2 EV | +3 EV | max -2..+2 |\n"
+                    "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    for (const Stock& film : films)
+        for (const Stock& paper : papers) {
+            std::vector<GreyPatch> patches;
+            try {
+                patches = print_grey_scale(film, paper, o.look, evs);
+            } catch (const std::invalid_argument& e) {
+                throw UserError(film.id + " on " + paper.id + ": " + e.what());
+            }
+            double worst = 0;
+            nlohmann::json chroma = nlohmann::json::array();
+            std::string row = "| " + film.id + " | " + paper.id + " |";
+            for (const GreyPatch& p : patches) {
+                if (std::abs(p.ev) <= 2) worst = std::max(worst, p.chroma);
+                chroma.push_back(p.chroma);
+                char cell[32];
+                std::snprintf(cell, sizeof cell, " %.1f |", p.chroma);
+                row += cell;
+            }
+            char cell[32];
+            std::snprintf(cell, sizeof cell, " %.1f |", worst);
+            if (o.json)
+                doc.push_back({{"film", film.id}, {"paper", paper.id}, {"ev", evs}, {"chroma", chroma},
+                               {"max_chroma_within_2_ev", worst}});
+            else
+                std::printf("%s%s\n", row.c_str(), cell);
+        }
+    if (o.json) std::cout << doc.dump(2) << "\n";
+}
 
 void run_sensitometry(const SensitometryCliOptions& o) {
     Stock stock;
@@ -61,8 +113,23 @@ void add_sensitometry_command(CLI::App& app) {
     auto paper = cmd->add_option("--paper", o->stock, "Paper stock id or .json file");
     film->excludes(paper);
     cmd->add_flag("--json", o->json, "Machine-readable output");
+    cmd->add_flag("--print-greys", o->print_greys,
+                  "Instead: the chroma C*ab of a grey scale (-3 to +3 EV) printed with the automatic lights, for "
+                  "every film/paper pair (or those with the --film or --paper given)");
+    cmd->add_option("--print-viewing", o->viewing, "(--print-greys) " + parameter("print-viewing").help);
     cmd->add_option("--threads", o->threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
     cmd->callback([o, film, paper] {
+        if (o->print_greys) {
+            Look look;
+            try {
+                set_value(look, parameter("print-viewing"), o->viewing);
+            } catch (const UserError& e) {
+                throw UserError("--print-viewing " + std::string(e.what()));
+            }
+            o->look = look.settings;
+            run_print_greys(*o, film->count() > 0, paper->count() > 0);
+            return;
+        }
         if (film->count() + paper->count() == 0) throw UserError("sensitometry needs --film ID or --paper ID");
         run_sensitometry(*o);
     });

@@ -25,6 +25,9 @@ namespace {
 constexpr double kTableDensityMargin = 0.3;
 constexpr double kLn10 = 2.302585092994046;
 
+// How the look says a print (or a projected slide) is seen.
+ViewSettings view_settings(const DevelopSettings& s) { return {s.print_viewing, s.print_gamut_compression}; }
+
 // Adds the time from construction to destruction to a stage (when timing).
 class StageTimer {
 public:
@@ -285,6 +288,7 @@ void validate(const DevelopSettings& s) {
     check_range(s.frame_width_mm, 0, kMaxFormatMm, "frame width", "0-10000 mm");
     check_range(s.print_width_mm, 0, kMaxFormatMm, "print width", "0-10000 mm");
     check_range(s.halation, 0, kMaxHalation, "halation", "0-100");
+    check_range(s.scan_aim_code, 0, kMaxScanCode, "scan aim", "a code value 0-1023");
     for (int c = 0; c < 3; ++c) {
         const std::string channel = std::string(" (") + "RGB"[c] + ")";
         check_range(s.grain_amount[c], 0, kMaxGrainScale, "grain amount" + channel, "0-100");
@@ -375,7 +379,7 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
             for (int i = 0; i < nodes; ++i)
                 transmittance[a].push_back(
                     enlarger.layer_transmittance(a, Table3D::node_coordinate(lo[a], hi[a], nodes, i)));
-        const PrintView view(paper);
+        const PrintView view(paper, enlarger.view());
         return std::make_shared<const Table3D>(lo, hi, nodes, threads, [&](const int* node, const double* d, double* rgb) {
             double h[3], paper_density[3];
             if (enlarger.spectral())
@@ -390,14 +394,15 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
 
 // The fast tiers' view of a colour reversal film (the print output): its densities -> the
 // projected slide's linear Rec.709, PrintView at each node, held as cube roots.
-std::shared_ptr<const Table3D> shared_view_table(const Stock& film, int nodes, int threads) {
+std::shared_ptr<const Table3D> shared_view_table(const Stock& film, const ViewSettings& seen, int nodes, int threads) {
     std::array<double, 3> lo, hi;
     table_density_range(film, lo, hi);
     std::string key = "view ";
+    append_key(key, &seen.viewing, 1), append_key(key, &seen.compress_gamut, 1);
     append_key(key, lo.data(), 3), append_key(key, hi.data(), 3), append_key(key, &nodes, 1);
     append_view_key(key, film);
     return cached_table(key, [&] {
-        const PrintView view(film);
+        const PrintView view(film, seen);
         return std::make_shared<const Table3D>(
             lo, hi, nodes, threads, [&](const int*, const double* d, double* rgb) { view.rgb(d, rgb); },
             Table3D::Encoding::cube_root);
@@ -479,12 +484,18 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
                                  ? 1.0
                                  : mid_grey_exposure_lux_s(film.iso_speed) / 0.18 * std::exp2(settings.exposure_ev);
 
+    for (size_t l = 0; l < film.layers.size(); ++l) {
+        const Curve& curve = film.layers[l].density_curve;
+        p.scan_base_density_[l] = settings.scan_balance ? curve(std::log10(mid_grey_exposure_lux_s(film.iso_speed))) -
+                                                              (settings.scan_aim_code - kScanBaseCode) * kScanDensityPerCode
+                                                        : curve.y_min();
+    }
     if (printing) {
         *paper_stages = build_stages(*paper, print_width_mm, p.film_width_px_, frame.height, settings, structure, 16,
                                      "paper", p.skipped_, threads);
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
-                                          settings.filtration_ymc, settings.print_exposure_ev});
+                                          settings.filtration_ymc, settings.print_exposure_ev, view_settings(settings)});
         if (one_print_table) {
             fold_paper_grain(*film_stages, *paper_stages, *p.print_, p.film_exposure_scale_, tier.curve_table_bits,
                              threads);
@@ -493,7 +504,7 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
         }
     } else if (views_film) {
         if (tier.print_table_nodes > 0 && film.is_colour())
-            p.print_table_ = shared_view_table(film, tier.print_table_nodes, threads);
+            p.print_table_ = shared_view_table(film, view_settings(settings), tier.print_table_nodes, threads);
         if (paper) p.skipped_.push_back("print (" + paper->id + "): a reversal film is its own picture, projected");
     } else if (paper) {
         p.skipped_.push_back("print: the output stops at the negative");
@@ -580,7 +591,7 @@ std::vector<Plane> Plan::print(std::vector<Plane> negative, const Window& out, i
     std::vector<Plane> paper_density =
         develop_material(*paper_stages_, std::move(paper_exposure), out, frame_, threads, times);
     StageTimer view_timer(times, "view");
-    const PrintView view(paper_stages_->stock);
+    const PrintView view(paper_stages_->stock, enlarger.view());
     return per_pixel(paper_density, out, 3, threads, [&](const double* d, double* rgb) { view.rgb(d, rgb); });
 }
 
@@ -600,7 +611,7 @@ void Plan::view_film_row(const float* const* density, float* const* rgb, int wid
         return;
     }
     const Stock& film = film_stages_->stock;
-    const PrintView view(film);
+    const PrintView view(film, view_settings(settings_));
     double d[3], out[3];
     for (int x = 0; x < width; ++x) {
         for (size_t l = 0; l < film.layers.size(); ++l) d[l] = density[l][x];
@@ -632,7 +643,7 @@ void Plan::result_of_negative(const double* density, double* result) const {
         return;
     }
     if (views_film_) {
-        PrintView(film_stages_->stock).rgb(density, result);
+        PrintView(film_stages_->stock, view_settings(settings_)).rgb(density, result);
         return;
     }
     if (print_) {
@@ -640,14 +651,14 @@ void Plan::result_of_negative(const double* density, double* result) const {
         print_->expose(density, h);
         for (int j = 0; j < print_->paper_layers(); ++j)
             paper_density[j] = developed_density(*paper_stages_, size_t(j), std::clamp(h[j], 0.0, kMaxInput));
-        PrintView(paper_stages_->stock).rgb(paper_density, result);
+        PrintView(paper_stages_->stock, print_->view()).rgb(paper_density, result);
         return;
     }
     const size_t layers = film_stages_->stock.layers.size();
     for (size_t c = 0; c < 3; ++c) {
         const size_t l = std::min(c, layers - 1);  // (a single layer serves all three)
         float v = float(density[l]);
-        convert_row(settings_.output, film_stages_->stock.layers[l].density_curve.y_min(), &v, 1);
+        convert_row(settings_.output, scan_base_density_[l], &v, 1);
         result[c] = v;
     }
 }
@@ -742,7 +753,7 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
         result = develop_film(in, out_window, threads, times);
         StageTimer timer(times, "convert");
         for (size_t l = 0; l < result.size(); ++l)
-            convert_row(settings_.output, film_stages_->stock.layers[l].density_curve.y_min(), result[l].pixels.data(),
+            convert_row(settings_.output, scan_base_density_[l], result[l].pixels.data(),
                         int(result[l].pixels.size()));
     }
 
@@ -849,12 +860,20 @@ std::vector<std::string> Plan::describe() const {
                                                      : "neutral (silver) negative") +
                             "; lights through clear base " + lights + " lux-s");
             material(*paper_stages_, "paper", false);
-            lines.push_back("convert: print density -> linear Rec.709 under D65");
+            lines.push_back(std::string("convert: print density -> linear Rec.709 under D65, ") +
+                            (e.view().viewing == PrintViewing::media_relative
+                                 ? "adapted to the print's white, mid grey at 0.18"
+                                 : "absolute") +
+                            (e.view().compress_gamut ? ", gamut compressed" : ""));
             break;
         }
         case OutputMode::negative: lines.push_back("convert: density -> transmittance"); break;
         case OutputMode::density: lines.push_back("convert: none (diffuse density written)"); break;
-        case OutputMode::scan: lines.push_back("convert: density -> Cineon log code values / 1023"); break;
+        case OutputMode::scan:
+            lines.push_back("convert: density -> Cineon log code values / 1023" +
+                            (settings_.scan_balance ? ", mid grey at code " + fmt(settings_.scan_aim_code)
+                                                    : std::string(", base+fog at code 95")));
+            break;
         case OutputMode::texture:
             lines.push_back("convert: texture: grain, MTF and halation applied to the scene-linear input");
             break;

@@ -42,8 +42,10 @@ namespace darkroom {
 //            for a reversal film, the film itself (the slide) viewed the same way, no paper
 //  negative  the negative's transmittance per channel (10^-density)
 //  density   the developed diffuse density per layer, as the data sheet's curves give it
-//  scan      the negative as a film scanner writes it: Cineon-style log code values / 1023
-//            (95 at the layer's base+fog, 0.002 density per code value)
+//  scan      the negative as a film scanner writes it: Cineon-style log code values / 1023,
+//            0.002 density per code value; balanced (DevelopSettings::scan_balance) so that a
+//            normally exposed mid grey is at scan_aim_code in every channel, else 95 at each
+//            layer's base+fog
 //  texture   the input, scene-linear, with the film's grain, MTF and halation applied and
 //            its tone and colour unchanged on average
 enum class OutputMode { print, negative, density, scan, texture };
@@ -59,6 +61,10 @@ inline constexpr double kMaxGrainScale = 100;     // grain amount and size multi
 inline constexpr double kMaxGrainResponse = 4;    // the density exponent of granularity
 inline constexpr double kMaxHalation = 100;       // multiplier of the stock's strength
 inline constexpr double kMaxFormatMm = 1e4;       // frame and print widths
+// The scan output: Cineon-style 10-bit printing-density code values (Kodak Cineon: 0.002
+// density per code value, base+fog at code 95), written as code / 1023.
+inline constexpr double kScanBaseCode = 95, kScanDensityPerCode = 0.002, kMaxScanCode = 1023;
+inline constexpr double kLadAimCode = 445;  // the scan's mid-grey aim (Kodak's LAD)
 
 struct DevelopSettings {
     double exposure_ev = 0.0;        // stops relative to the exposure the ISO speed implies
@@ -81,6 +87,15 @@ struct DevelopSettings {
     // Enlarger colour filtration in CC units (density x 100) of yellow, magenta and cyan
     // filters in the lamp's light, on top of the printer lights.
     std::array<double, 3> filtration_ymc{0.0, 0.0, 0.0};
+    // How the print is seen (stages/print.h, PrintView) and whether colours the working space
+    // cannot hold are compressed into it.
+    PrintViewing print_viewing = PrintViewing::media_relative;
+    bool print_gamut_compression = true;
+    // The scan output balanced to an aim, as a lab balances its scans: a scene mid grey exposed
+    // at the stock's speed (0 EV) lands at scan_aim_code in R, G and B (Kodak's Laboratory Aim
+    // Density puts it at 445); false: each layer's base+fog at code 95.
+    bool scan_balance = true;
+    double scan_aim_code = kLadAimCode;
     // How each stage is computed (core/quality.h).
     Quality quality = kDefaultQuality;
     uint64_t seed = 0;
@@ -207,6 +222,9 @@ private:
     // the copies of a plan (one per frame and image window) and by plans whose print is the
     // same (develop.cpp, shared_print_table).
     std::shared_ptr<const Table3D> print_table_;
+    // Per film layer, the density the scan writes at code 95 (convert_row): its base+fog, or
+    // where the balance to the aim puts it.
+    std::array<double, 3> scan_base_density_{};
     int film_width_px_ = 0;                  // the film frame's width (FrameGeometry)
     bool monochrome_ = false;                // compiled for grey input
     double film_exposure_scale_ = 1.0;       // lux-seconds per unit of input

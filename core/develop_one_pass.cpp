@@ -195,7 +195,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
                     continue;
                 }
                 for (size_t l = 0; l < layers; ++l)
-                    convert_row(settings_.output, film.stock.layers[l].density_curve.y_min(), density[l],
+                    convert_row(settings_.output, scan_base_density_[l], density[l],
                                 film_window.width());
                 clock.mark("convert");
                 write_row(density, layers, in, out, y, out_window.x0, out_window.width());

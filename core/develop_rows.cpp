@@ -19,9 +19,6 @@ namespace darkroom {
 
 namespace {
 
-// The scan output: Cineon-style 10-bit printing-density code values (Kodak Cineon: 0.002
-// density per code value, base+fog at code 95), written as code / 1023.
-constexpr double kScanBaseCode = 95.0, kScanDensityPerCode = 0.002, kScanFullCode = 1023.0;
 
 // The input's sanitising and exposure below work on the lanes of a vector of any width
 // (core/simd.h), one piece of code for the vector blocks and the scalar tails, so every
@@ -266,12 +263,12 @@ void FilmExposure::row(int y, int x0, int width, float* const* exposure) const {
                                 colours_, weights_.data(), grey_scale_.data(), layers_, scale_, width, exposure);
 }
 
-void convert_row(OutputMode output, double d_min, float* row, int width) {
+void convert_row(OutputMode output, double base_density, float* row, int width) {
     for (int x = 0; x < width; ++x) {
         if (output == OutputMode::negative)
             row[x] = float(std::pow(10.0, -double(row[x])));
         else if (output == OutputMode::scan)
-            row[x] = float((kScanBaseCode + (double(row[x]) - d_min) / kScanDensityPerCode) / kScanFullCode);
+            row[x] = float((kScanBaseCode + (double(row[x]) - base_density) / kScanDensityPerCode) / kMaxScanCode);
     }
 }
 

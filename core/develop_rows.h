@@ -41,8 +41,9 @@ private:
 };
 
 // A row of developed densities as `output` writes them: the negative's transmittance 10^-D,
-// the scan's code values (d_min the layer's base + fog), or (density, print) unchanged.
-void convert_row(OutputMode output, double d_min, float* row, int width);
+// the scan's code values / 1023 (code 95 at base_density, kScanDensityPerCode per code), or
+// (density, print) unchanged.
+void convert_row(OutputMode output, double base_density, float* row, int width);
 
 // Row y of the result into channels 0-2 of `out` from x0 on (a single plane serves all
 // three), and the input's alpha (the channel after its colour) where both have one.

@@ -153,7 +153,7 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
         if (levels.empty() || d != levels.back()) levels.push_back(d), level_stops.push_back(stops);
     }
     const NormalQuadrature normal(8);
-    const PrintView view(paper.stock);
+    const PrintView view(paper.stock, enlarger.view());
     auto log_view = [&](const double* paper_density, double* out) {
         double rgb[3];
         view.rgb(paper_density, rgb);

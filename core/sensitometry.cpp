@@ -46,6 +46,34 @@ double log_h_at_density(const Curve& curve, double density, StockKind kind) {
 
 }  // namespace
 
+std::vector<GreyPatch> print_grey_scale(const Stock& film, const Stock& paper, const DevelopSettings& settings,
+                                        const std::vector<double>& evs) {
+    DevelopSettings s = settings;
+    s.quality = Quality::reference;
+    s.output = OutputMode::print;
+    s.input_units = InputUnits::scene_linear;
+    s.grain = s.mtf = false;
+    s.halation = 0;
+    const Plan plan = Plan::compile(film, &paper, s, {1, 1}, 1);
+    const Xyz white = linear_srgb_to_xyz({1.0, 1.0, 1.0});
+    std::vector<GreyPatch> patches;
+    for (double ev : evs) {
+        const double scene = 0.18 * std::exp2(ev);
+        double density[3];
+        for (size_t l = 0; l < film.layers.size(); ++l) {
+            const std::array<double, 3> w = plan.film_exposure_weights(l);
+            density[l] = plan.film_density(l, (w[0] + w[1] + w[2]) * scene);
+        }
+        GreyPatch patch;
+        patch.ev = ev;
+        plan.result_of_negative(density, patch.print.data());
+        const Lab lab = xyz_to_lab(linear_srgb_to_xyz(patch.print), white);
+        patch.chroma = std::hypot(lab[1], lab[2]);
+        patches.push_back(patch);
+    }
+    return patches;
+}
+
 bool Measurement::passes() const {
     double allowed = relative ? tolerance * std::abs(declared) : tolerance;
     return std::abs(measured - declared) <= allowed;

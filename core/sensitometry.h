@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "core/develop.h"
+#include "core/spectral.h"
 #include "core/stock.h"
 
 namespace darkroom {
@@ -30,6 +32,19 @@ struct SensitometryOptions {
 };
 
 SensitometryReport measure_stock(const Stock& stock, const SensitometryOptions& options = {});
+
+// The grey scale of a film printed on a paper with the automatic lights, as `settings`
+// print it (their viewing, gamut and printer lights; grain, MTF and halation left out, which
+// do not move a flat patch's mean): a neutral scene patch 0.18 2^ev for each ev, through the
+// plan's per-pixel path at the reference tier, and how far each print is from neutral: its
+// CIELAB chroma C*ab (D65 white, Y = 1 the white), sqrt(a*^2 + b*^2).
+struct GreyPatch {
+    double ev = 0;
+    Rgb print{};        // linear Rec.709
+    double chroma = 0;  // C*ab
+};
+std::vector<GreyPatch> print_grey_scale(const Stock& film, const Stock& paper, const DevelopSettings& settings,
+                                        const std::vector<double>& evs);
 
 // Definitions shared by the measured and declared columns.
 // Slope of the steepest least-squares line through any 1.0 log-H span of the curve.

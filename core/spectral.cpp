@@ -439,12 +439,34 @@ Spectrum illuminant_d65() { return cie_daylight(6500.0 * 1.4388 / 1.4380); }
 // ---------------------------------------------------------------------------------------
 // Colorimetry
 // ---------------------------------------------------------------------------------------
-namespace {
 std::array<double, 3> multiply(const Matrix3& m, const std::array<double, 3>& v) {
     return {m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2], m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
             m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2]};
 }
-}  // namespace
+
+double luminance(const Rgb& rgb) {
+    return kLinearSrgbToXyz[1][0] * rgb[0] + kLinearSrgbToXyz[1][1] * rgb[1] + kLinearSrgbToXyz[1][2] * rgb[2];
+}
+
+Matrix3 adaptation_to_d65(const Rgb& white) {
+    if (!(white[0] > 0 && white[1] > 0 && white[2] > 0))
+        throw std::invalid_argument("adaptation_to_d65: the white has a component that is not positive");
+    const double y = luminance(white);
+    return {{{y / white[0], 0, 0}, {0, y / white[1], 0}, {0, 0, y / white[2]}}};
+}
+
+Rgb compress_to_gamut(const Rgb& rgb) {
+    const double y = luminance(rgb);
+    if (!(y > 0)) return {0.0, 0.0, 0.0};
+    const double distance = (y - std::min({rgb[0], rgb[1], rgb[2]})) / y;
+    constexpr double s = kGamutCompressionStart;
+    if (distance <= s) return rgb;
+    const double compressed = s + (1 - s) * std::tanh((distance - s) / (1 - s));
+    const double k = compressed / distance;
+    // (Where tanh has reached 1 in doubles a component lands on 0 give or take rounding.)
+    return {std::max(0.0, y + k * (rgb[0] - y)), std::max(0.0, y + k * (rgb[1] - y)),
+            std::max(0.0, y + k * (rgb[2] - y))};
+}
 
 Rgb xyz_to_linear_srgb(const Xyz& xyz) { return multiply(kXyzToLinearSrgb, xyz); }
 Xyz linear_srgb_to_xyz(const Rgb& rgb) { return multiply(kLinearSrgbToXyz, rgb); }

@@ -138,6 +138,30 @@ double ciede2000(const Lab& lab1, const Lab& lab2);
 // construction). This is the exact left inverse of linear_srgb_to_spectrum. Per pixel.
 Rgb reflectance_to_linear_srgb(const Spectrum& reflectance);
 
+// Chromatic adaptation within linear sRGB: the matrix M that takes colours seen under a
+// light whose white is `white` (linear sRGB, every component > 0) to the corresponding
+// colours seen under D65, keeping luminance: a von Kries scaling of linear Rec.709's own
+// channels, M = diag(Y / white), Y the white's luminance, so M white = (Y, Y, Y). (Scaling in
+// a cone space such as Bradford's mixes the channels: it makes saturated colours negative
+// sooner and a channel's grain carry its neighbours'; for the near-neutral whites of print
+// bases the two agree closely.) Throws std::invalid_argument unless every component is > 0.
+Matrix3 adaptation_to_d65(const Rgb& white);
+Rgb multiply(const Matrix3& m, const Rgb& rgb);  // per pixel
+// The luminance Y of linear sRGB (the middle row of kLinearSrgbToXyz). Per pixel.
+double luminance(const Rgb& rgb);
+
+// Gamut compression towards the neutral axis at constant luminance, for colours the
+// working space cannot hold (a negative component). A colour's distance from neutral is
+// d = (Y - min(r, g, b)) / Y: 0 on the neutral axis, 1 where a component reaches 0, above
+// 1 outside the gamut. Up to kGamutCompressionStart the colour is unchanged; beyond, d is
+// compressed smoothly (same value and slope at the start) to
+//   s + (1 - s) tanh((d - s) / (1 - s)),  s = kGamutCompressionStart,
+// which stays below 1, and the colour moves along its line to (Y, Y, Y) to that distance:
+// luminance and the direction from neutral (hue) are kept, and no component is negative.
+// Y <= 0 (no light a print can reflect) gives black. Per pixel.
+constexpr double kGamutCompressionStart = 0.8;
+Rgb compress_to_gamut(const Rgb& rgb);
+
 // ---------------------------------------------------------------------------------------
 // RGB -> spectrum upsampling
 // ---------------------------------------------------------------------------------------

@@ -163,6 +163,31 @@ std::vector<Parameter> make_table() {
     filtration.channel_names = {"Y", "M", "C"};
     filtration.animatable = filtration.per_pixel = true;
 
+    add(choice<PrintViewing>("print-viewing", [](Look& l) -> auto& { return l.settings.print_viewing; },
+                             {{{"media-relative", "Media relative"}, PrintViewing::media_relative},
+                              {{"absolute", "Absolute"}, PrintViewing::absolute}}),
+        kExposure, "Print viewing", "printViewing", "",
+        "How the print is seen: media-relative (adapted to the print's own white, as a viewer's eye is, with the "
+        "automatic print of a scene mid grey at 0.18 on every paper) or absolute (its colorimetry under D65, the "
+        "base's colour included; mid grey at 10^-aim density)")
+        .per_pixel = true;
+    add(choice<bool>("print-gamut", [](Look& l) -> auto& { return l.settings.print_gamut_compression; },
+                     {{{"compress", "Compress"}, true}, {{"keep", "Keep"}, false}}),
+        kExposure, "Print gamut", "printGamut", "",
+        "Print colours outside linear Rec.709: compress (towards neutral at constant luminance, no negative "
+        "component) or keep (as computed, negative components included)")
+        .per_pixel = true;
+    add(choice<bool>("scan-balance", [](Look& l) -> auto& { return l.settings.scan_balance; },
+                     {{{"aim", "Aim"}, true}, {{"none", "None"}, false}}),
+        kExposure, "Scan balance", "scanBalance", "",
+        "The scan output: aim (balanced, a normally exposed mid grey at the scan aim in R, G and B) or none (each "
+        "layer's base+fog at code 95)")
+        .per_pixel = true;
+    add(number("scan-aim", [](Look& l) -> auto& { return l.settings.scan_aim_code; }, 0, kMaxScanCode, 95, 700),
+        kExposure, "Scan aim (code)", "scanAim", "",
+        "The Cineon code value a normally exposed mid grey scans at when balanced (Kodak's LAD aim: 445)")
+        .per_pixel = true;
+
     // Grain.
     add(row<bool>("grain", ParameterType::on_off, [](Look& l) -> auto& { return l.settings.grain; }), kGrain, "Grain",
         "grain", "", "Granularity (off: no grain)");

@@ -11,6 +11,7 @@ namespace {
 
 constexpr double kLn10 = 2.302585092994046;
 constexpr double kLogExposurePerPoint = 0.025;
+constexpr double kMidGrey = 0.18;  // a scene mid grey, scene-linear
 const Spectrum kEnlargerLamp = blackbody(3200.0);
 
 double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
@@ -21,9 +22,9 @@ bool is_flat(const Spectrum& s) {
     return true;
 }
 
-// The paper layer densities whose print is neutral at visual density `aim` under D65:
-// Newton's method on -log10(rgb) = aim with a finite-difference Jacobian.
-std::array<double, 3> neutral_print_densities(const Stock& paper, double aim) {
+// The paper layer densities whose print is neutral at visual density `aim` as `viewing`
+// sees it: Newton's method on log10(rgb) = log10(mid grey) with a finite-difference Jacobian.
+std::array<double, 3> neutral_print_densities(const Stock& paper, double aim, PrintViewing viewing) {
     const int n = int(paper.layers.size());
     std::array<double, 3> d{};
     for (int j = 0; j < n; ++j) d[j] = paper.layers[j].density_curve.y_min() + aim;
@@ -31,12 +32,14 @@ std::array<double, 3> neutral_print_densities(const Stock& paper, double aim) {
         d[0] = aim;  // a neutral silver print: its visual density is its density
         return d;
     }
-    const PrintView view(paper);
+    // (Without gamut compression: it leaves near-neutral colours as they are.)
+    const PrintView view(paper, {viewing, false});
+    const double log_grey = std::log10(view.mid_grey());
     auto residual = [&](const std::array<double, 3>& at) {
         double rgb[3];
         view.rgb(at.data(), rgb);
         std::array<double, 3> f;
-        for (int k = 0; k < 3; ++k) f[k] = -std::log10(std::max(rgb[k], 1e-300)) - aim;
+        for (int k = 0; k < 3; ++k) f[k] = log_grey - std::log10(std::max(rgb[k], 1e-300));
         return f;
     };
     for (int iteration = 0; iteration < 100; ++iteration) {
@@ -65,6 +68,15 @@ std::array<double, 3> neutral_print_densities(const Stock& paper, double aim) {
     }
     throw std::invalid_argument("paper '" + paper.id + "': its dyes cannot make a neutral grey of density " +
                                 std::to_string(aim));
+}
+
+// The luminance of a reversal film's normally exposed mid grey (the exposure its speed
+// implies), viewed absolute.
+double slide_mid_grey_luminance(const Stock& film) {
+    const double log_h = std::log10(mid_grey_exposure_lux_s(film.iso_speed));
+    double density[3] = {0, 0, 0};
+    for (size_t l = 0; l < film.layers.size() && l < 3; ++l) density[l] = film.layers[l].density_curve(log_h);
+    return luminance(reflectance_to_linear_srgb(transmittance_of(spectral_density(film, density))));
 }
 
 }  // namespace
@@ -98,7 +110,8 @@ PrintExposure PrintExposure::design(const Stock& film, const Stock& paper, const
         grey_density[i] = film.layers[i].density_curve(std::log10(settings.mid_grey_film_exposure_lux_s));
     const Spectrum grey_transmittance = transmittance_of(spectral_density(film, grey_density));
 
-    p.aim_density_ = neutral_print_densities(paper, paper.mid_grey_aim_density);
+    p.view_ = settings.view;
+    p.aim_density_ = neutral_print_densities(paper, paper.mid_grey_aim_density, settings.view.viewing);
     const std::array<Spectrum, 3> filters = filtration_densities();
     double mean_points = (settings.printer_lights[0] + settings.printer_lights[1] + settings.printer_lights[2]) / 3.0;
     for (int j = 0; j < p.paper_layers_; ++j) {
@@ -163,12 +176,25 @@ std::string PrintExposure::fingerprint() const {
     auto append = [&](const auto& v) { bytes.append(reinterpret_cast<const char*>(&v), sizeof v); };
     append(film_base_), append(film_dye_), append(film_d_min_), append(film_layers_), append(paper_layers_);
     append(neutral_negative_), append(weighted_light_), append(neutral_light_), append(aim_density_),
-        append(light_lux_s_);
+        append(light_lux_s_), append(view_.viewing), append(view_.compress_gamut);
     return bytes;
 }
 
-PrintView::PrintView(const Stock& paper) : paper_(&paper) {
+PrintView::PrintView(const Stock& paper, const ViewSettings& settings) : paper_(&paper), settings_(settings) {
     for (size_t l = 0; l < paper.layers.size() && l < 3; ++l) d_min_[l] = paper.layers[l].density_curve.y_min();
+    // A slide has no aim density: its mid grey is where a normally exposed one developed.
+    const double absolute_grey =
+        paper.kind == StockKind::reversal ? slide_mid_grey_luminance(paper) : std::pow(10.0, -paper.mid_grey_aim_density);
+    Matrix3 adaptation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+    double gain = 1;
+    if (settings.viewing == PrintViewing::media_relative) {
+        if (paper.is_colour()) adaptation = adaptation_to_d65(reflectance_to_linear_srgb(reflectance(d_min_.data())));
+        gain = kMidGrey / absolute_grey;
+    }
+    for (auto& row : adaptation)
+        for (double& v : row) v *= gain;
+    view_ = adaptation;
+    mid_grey_ = gain * absolute_grey;
 }
 
 Spectrum PrintView::reflectance(const double* paper_density) const {
@@ -176,12 +202,14 @@ Spectrum PrintView::reflectance(const double* paper_density) const {
 }
 
 void PrintView::rgb(const double* paper_density, double* rgb) const {
+    Rgb out;
     if (!paper_->is_colour()) {
-        double r = std::pow(10.0, -paper_density[0]);
-        rgb[0] = rgb[1] = rgb[2] = r;
-        return;
+        const double r = view_[0][0] * std::pow(10.0, -paper_density[0]);
+        out = {r, r, r};
+    } else {
+        out = multiply(view_, reflectance_to_linear_srgb(reflectance(paper_density)));
+        if (settings_.compress_gamut) out = compress_to_gamut(out);
     }
-    Rgb out = reflectance_to_linear_srgb(reflectance(paper_density));
     for (int k = 0; k < 3; ++k) rgb[k] = out[k];
 }
 

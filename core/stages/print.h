@@ -7,11 +7,12 @@
 //   H_j = k_j * sum_l L(l) F(l) 10^-D(l) S_j(l) / sum_l L(l) S_j(l)      (5 nm rectangle rule)
 // with k_j its printer light in lux-seconds through a clear, unfiltered path. The
 // developed print's spectral density gives its reflectance (or a print film's
-// transmittance) R(l) = 10^-Dp(l), viewed under CIE D65 and expressed in linear Rec.709:
-// a perfect white (R = 1) is (1, 1, 1).
+// transmittance) R(l) = 10^-Dp(l), viewed under CIE D65 and expressed in linear Rec.709
+// (PrintView says how: as the eye adapted to the print's own white sees it, or absolute).
 //
 // Automatic printer lights: the dye amounts of a neutral print of visual density
-// `mid_grey_aim_density` (linear Rec.709 (t, t, t), t = 10^-aim) are solved for; each
+// `mid_grey_aim_density` (neutral as the print is viewed, at the luminance 10^-aim) are
+// solved for; each
 // paper layer's light k_j is set so that the negative of a scene mid grey exposed at 0 EV
 // gives that layer exactly its aim density. Printer points then scale k_j by
 // 10^(0.025 (points - 25)); print exposure by 2^EV.
@@ -33,11 +34,27 @@ namespace darkroom {
 // 500 and 590 nm); not any one maker's measured filters.
 std::array<Spectrum, 3> filtration_densities();
 
+// How a developed print is seen (PrintView).
+enum class PrintViewing {
+    // As a viewer sees a print: adapted to its own white (the base of a projected print
+    // film, the paper white under its light), and placed so that the automatic print of a
+    // scene mid grey is 0.18 on every paper, as the scene's was.
+    media_relative,
+    // Its colorimetry under D65 as it is, a perfect white (R = 1) at (1, 1, 1): the base's
+    // colour shows, and mid grey lands at 10^-aim (0.10 on print film, 0.18 on paper).
+    absolute,
+};
+struct ViewSettings {
+    PrintViewing viewing = PrintViewing::media_relative;
+    bool compress_gamut = true;  // compress_to_gamut (spectral.h) on the result
+};
+
 struct PrintSettings {
     double mid_grey_film_exposure_lux_s = 0;   // what a scene mid grey at 0 EV gave the film
     std::array<double, 3> printer_lights{25.0, 25.0, 25.0};
     std::array<double, 3> filtration_ymc{0.0, 0.0, 0.0};
     double print_exposure_ev = 0.0;
+    ViewSettings view;
 };
 
 class PrintExposure {
@@ -59,6 +76,8 @@ public:
     bool spectral() const { return !neutral_negative_; }
     // Paper layer densities of the neutral mid-grey print, and the lights that give it.
     const std::array<double, 3>& aim_density() const { return aim_density_; }
+    // How the print is seen; the neutral aim is neutral as seen so.
+    const ViewSettings& view() const { return view_; }
     const std::array<double, 3>& light_lux_s() const { return light_lux_s_; }
     // The bytes of everything expose() reads (the film's dyes and base, the lights, the
     // filtration): exposures with equal fingerprints expose every negative alike.
@@ -75,20 +94,35 @@ private:
     std::array<Spectrum, 3> weighted_light_{};
     std::array<double, 3> neutral_light_{};
     std::array<double, 3> aim_density_{}, light_lux_s_{};
+    ViewSettings view_;
 };
 
 // Viewing a developed print: its layer densities -> spectral reflectance (or a print
-// film's transmittance) 10^-Dp(l) -> colour under D65.
+// film's transmittance) 10^-Dp(l) -> colour under D65, c = reflectance_to_linear_srgb(R) ->
+//   absolute         c
+//   media-relative   g M c,  M = adaptation_to_d65(w), g = 0.18 10^aim
+// w the colour of the print's white (every layer at its minimum density: the base and fog),
+// M the eye's adaptation from it to D65 keeping its luminance (a black-and-white print is
+// neutral: M = 1), aim the paper's mid_grey_aim_density; a neutral print of visual density
+// aim, which the automatic lights give a scene mid grey, is then 0.18 whatever the paper,
+// and the base is neutral at 0.18 10^(aim - D_base), D_base its visual density: about 1.55
+// on Kodak 2383 (a projected print's highlights, the room dark), 0.8 to 0.9 on paper.
+// Then, when the settings say so, compress_to_gamut.
 class PrintView {
 public:
-    explicit PrintView(const Stock& paper);
-    // Linear Rec.709 (a perfect white is (1, 1, 1)). Per pixel.
+    PrintView(const Stock& paper, const ViewSettings& settings);
+    // Linear Rec.709. Per pixel.
     void rgb(const double* paper_density, double* rgb) const;
+    // Where a neutral print of the paper's aim density lands (each component).
+    double mid_grey() const { return mid_grey_; }
 
 private:
     Spectrum reflectance(const double* paper_density) const;
     const Stock* paper_;
     std::array<double, 3> d_min_{};
+    ViewSettings settings_;
+    Matrix3 view_{};  // g M (the identity when absolute)
+    double mid_grey_ = 0;
 };
 
 }  // namespace darkroom

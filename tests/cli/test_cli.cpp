@@ -1,5 +1,6 @@
 // The darkroom program run as a user runs it: exit codes, messages, outputs.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -829,4 +830,31 @@ TEST_CASE("bake-lut reads a whole look file and offers only the settings a LUT h
     }
     CHECK(help.find("--print-exposure") != std::string::npos);
     CHECK(darkroom("bake-lut --seed 3 -o " + lut).exit_code != 0);
+}
+
+TEST_CASE("sensitometry --print-greys measures each pair's printed grey scale, neutral at mid grey", "[cli][viewing]") {
+    Result r = darkroom("sensitometry --print-greys --film kodak-vision3-250d --json");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    const nlohmann::json pairs = nlohmann::json::parse(r.output);
+    const nlohmann::json stocks = nlohmann::json::parse(darkroom("stocks --json").output);
+    size_t papers = 0;
+    for (const auto& s : stocks) papers += s["kind"] != "negative";
+    REQUIRE(pairs.size() == papers);
+    for (const auto& pair : pairs) {
+        INFO(pair.dump());
+        CHECK(pair["film"] == "kodak-vision3-250d");
+        REQUIRE(pair["ev"] == nlohmann::json({-3, -2, -1, 0, 1, 2, 3}));
+        CHECK(pair["chroma"][3].get<double>() < 1e-4);  // the automatic lights' grey
+        double worst = 0;
+        for (int i = 1; i <= 5; ++i) worst = std::max(worst, pair["chroma"][i].get<double>());
+        CHECK(pair["max_chroma_within_2_ev"].get<double>() == worst);
+    }
+    // The table for the docs: a header, a rule and one row a pair.
+    r = darkroom("sensitometry --print-greys --paper kodak-2383 --print-viewing absolute");
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.output, Catch::StartsWith("| film | paper | -3 EV") && Catch::Contains("| kodak-vision3-500t | kodak-2383 |"));
+    r = darkroom("sensitometry --print-greys --print-viewing sideways");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("--print-viewing must be one of media-relative, absolute"));
 }

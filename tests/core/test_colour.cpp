@@ -62,9 +62,14 @@ TEST_CASE("a scene mid grey prints neutral at the paper's aim density", "[colour
     // are measured against them in test_quality.cpp.
     DevelopSettings spectral = clean(OutputMode::print);
     spectral.quality = Quality::high;
+    // Seen absolute, at the aim's reflectance; seen media-relative, where the scene's grey was.
+    spectral.print_viewing = PrintViewing::absolute;
     Image print = render(film, &paper, spectral, grey);
     double aim = std::pow(10.0, -paper.mid_grey_aim_density);
     for (int c = 0; c < 3; ++c) CHECK(print.at(1, 1)[c] == Approx(aim).epsilon(1e-5));
+    spectral.print_viewing = PrintViewing::media_relative;
+    print = render(film, &paper, spectral, grey);
+    for (int c = 0; c < 3; ++c) CHECK(print.at(1, 1)[c] == Approx(0.18).epsilon(1e-5));
     // A grey ramp: exactly neutral only at mid grey, since the same ratio of three dyes is
     // not neutral at every density (their sum is not flat); the tolerance is stated for
     // these test stocks (the presets' own test reads the published curves).
@@ -82,8 +87,8 @@ TEST_CASE("printer lights and filtration move the print's colour the way a lab's
     Image grey(2, 2, 3, 0.18f);
     DevelopSettings s = clean(OutputMode::print);
     Image automatic = render(film, &paper, s, grey);
-    PrintSettings lights{mid_grey_exposure_lux_s(film.iso_speed), {37, 25, 25}, {0, 0, 0}, 0};
-    PrintExposure base = PrintExposure::design(film, paper, {mid_grey_exposure_lux_s(film.iso_speed), {25, 25, 25}, {0, 0, 0}, 0});
+    PrintSettings lights{mid_grey_exposure_lux_s(film.iso_speed), {37, 25, 25}, {0, 0, 0}, 0, {}};
+    PrintExposure base = PrintExposure::design(film, paper, {mid_grey_exposure_lux_s(film.iso_speed), {25, 25, 25}, {0, 0, 0}, 0, {}});
     PrintExposure more_red = PrintExposure::design(film, paper, lights);
     // 12 points = 0.3 log exposure on the red-sensitive layer only.
     CHECK(std::log10(more_red.light_lux_s()[0] / base.light_lux_s()[0]) == Approx(0.3));
@@ -104,7 +109,7 @@ TEST_CASE("the enlarger's exposure by layer factors of the transmittance equals 
     // (The fast tiers' print table exposes its grid this way: PrintExposure::layer_transmittance.)
     const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     const PrintExposure enlarger =
-        PrintExposure::design(film, paper, {mid_grey_exposure_lux_s(film.iso_speed), {27, 24, 25}, {10, 0, 5}, 0.5});
+        PrintExposure::design(film, paper, {mid_grey_exposure_lux_s(film.iso_speed), {27, 24, 25}, {10, 0, 5}, 0.5, {}});
     REQUIRE(enlarger.spectral());
     for (double d0 : {0.1, 0.9, 2.4})
         for (double d1 : {0.5, 1.6, 3.1})
@@ -126,12 +131,18 @@ TEST_CASE("scan output is Cineon code values of the developed density", "[colour
     s.output = OutputMode::density;
     Image density = render(film, nullptr, s, scene);
     s.output = OutputMode::scan;
-    Image scan = render(film, nullptr, s, scene);
+    Image balanced = render(film, nullptr, s, scene);
+    s.scan_balance = false;
+    Image raw = render(film, nullptr, s, scene);
+    const double log_h_grey = std::log10(mid_grey_exposure_lux_s(film.iso_speed));
     for (int y = 0; y < 32; ++y)
         for (int x = 0; x < 48; ++x)
             for (int c = 0; c < 3; ++c) {
-                double d_min = film.layers[c].density_curve.y_min();
-                REQUIRE(scan.at(x, y)[c] * 1023.0 == Approx(95.0 + (density.at(x, y)[c] - d_min) / 0.002).epsilon(1e-5));
+                const Curve& curve = film.layers[c].density_curve;
+                const double d = density.at(x, y)[c];
+                // Unbalanced: base+fog at code 95; balanced: the 0 EV mid grey's density at 445.
+                REQUIRE(raw.at(x, y)[c] * 1023.0 == Approx(95.0 + (d - curve.y_min()) / 0.002).epsilon(1e-5));
+                REQUIRE(balanced.at(x, y)[c] * 1023.0 == Approx(445.0 + (d - curve(log_h_grey)) / 0.002).epsilon(1e-5));
             }
 }
 

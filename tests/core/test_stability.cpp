@@ -107,32 +107,58 @@ DensityRange density_range(const Stock& stock, size_t layer, const DevelopSettin
     return {d_min, d_min - 1e-5, d_max + excursion + 1e-5};
 }
 
-// The print's colour is linear in its spectral reflectance R (print.h: view_print), so
-// channel c is sum_i w_c(i) R(i) and, for 0 <= R <= 1 (a reflection print cannot return
-// more light than falls on it), lies within [sum of the negative w_c, sum of the positive
-// w_c]; its luminance (CIE Y, whose weights are non-negative) lies between 0 and that of
-// the perfect white R = 1, which view_print promises is (1, 1, 1).
+// The print's colour is linear in its spectral reflectance R (print.h, PrintView): channel c
+// is sum_i v_c(i) R(i), v(i) the view of the impulse at wavelength i (reflectance_to_linear_srgb,
+// then media-relative viewing's matrix g M), so for 0 <= R <= 1 (a reflection print cannot
+// return more light than falls on it) it lies within [sum of the negative v_c, sum of the
+// positive v_c], and its luminance likewise. Gamut compression moves a colour towards
+// (Y, Y, Y) at its luminance Y and no component below 0: within the union of the two ranges.
 struct PrintRange {
     std::array<double, 3> lo{}, hi{};
+    double luminance_lo = 0, luminance_hi = 0;
 };
-PrintRange print_range(const Stock& paper) {
+PrintRange print_range(const Stock& paper, const DevelopSettings& s) {
+    const bool relative = s.print_viewing == PrintViewing::media_relative;
+    const double gain = relative ? 0.18 * std::pow(10.0, paper.mid_grey_aim_density) : 1.0;
     PrintRange r;
-    if (!paper.is_colour()) {  // silver: the three channels are the reflectance itself
-        r.lo = {0, 0, 0};
-        r.hi = {1, 1, 1};
+    if (!paper.is_colour()) {  // silver: the three channels are the reflectance itself, times the gain
+        r.hi = {gain, gain, gain};
+        r.luminance_hi = gain;
         return r;
+    }
+    Matrix3 view{{{gain, 0, 0}, {0, gain, 0}, {0, 0, gain}}};
+    if (relative) {
+        double d_min[3];
+        for (int l = 0; l < 3; ++l) d_min[l] = paper.layers[l].density_curve.y_min();
+        const Matrix3 m = adaptation_to_d65(reflectance_to_linear_srgb(transmittance_of(spectral_density(paper, d_min, d_min))));
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) view[i][k] = gain * m[i][k];
     }
     for (int i = 0; i < kSpectralSamples; ++i) {
         Spectrum impulse = flat_spectrum(0.0);
         impulse[i] = 1.0;
-        Rgb w = reflectance_to_linear_srgb(impulse);
+        const Rgb w = multiply(view, reflectance_to_linear_srgb(impulse));
         for (int c = 0; c < 3; ++c) (w[c] < 0 ? r.lo : r.hi)[c] += w[c];
+        (darkroom::luminance(w) < 0 ? r.luminance_lo : r.luminance_hi) += darkroom::luminance(w);
     }
+    if (s.print_gamut_compression)
+        for (int c = 0; c < 3; ++c) {
+            r.lo[c] = std::max(0.0, std::min(r.lo[c], r.luminance_lo));
+            r.hi[c] = std::max(r.hi[c], r.luminance_hi);
+        }
     return r;
 }
 double luminance(const float* rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
 
 constexpr double kScanBaseCode = 95.0, kScanDensityPerCode = 0.002, kScanFullCode = 1023.0;
+
+// The density a scan writes at code 95: the layer's base+fog, or balanced, where the 0 EV mid
+// grey's density is at the aim code.
+double scan_base_density(const Stock& film, size_t layer, const DevelopSettings& s) {
+    const Curve& curve = film.layers[layer].density_curve;
+    if (!s.scan_balance) return curve.y_min();
+    return curve(std::log10(mid_grey_exposure_lux_s(film.iso_speed))) - (s.scan_aim_code - kScanBaseCode) * kScanDensityPerCode;
+}
 
 // The first pixel of `out` that is not finite or lies outside its output's range (empty
 // when every pixel is fine). `in` is the input, for the texture's sign.
@@ -142,7 +168,9 @@ std::string out_of_range(const Image& out, const Image& in, const Stock& film, c
     const double film_width = s.frame_width_mm > 0 ? s.frame_width_mm : film.frame_width_mm;
     std::vector<DensityRange> density;
     for (size_t l = 0; l < film.layers.size(); ++l) density.push_back(density_range(film, l, s, film_width, frame_width));
-    const PrintRange print = print_range(paper);
+    const PrintRange print = print_range(paper, s);
+    double scan_base[3];
+    for (int c = 0; c < 3; ++c) scan_base[c] = scan_base_density(film, std::min<size_t>(c, film.layers.size() - 1), s);
     for (int y = out.window.y0; y < out.window.y1; ++y)
         for (int x = out.window.x0; x < out.window.x1; ++x) {
             const float* px = out.at(x, y);
@@ -163,8 +191,8 @@ std::string out_of_range(const Image& out, const Image& in, const Stock& film, c
                         break;
                     case OutputMode::density: lo = d.lo, hi = d.hi; break;
                     case OutputMode::scan:  // Cineon code values of the density range
-                        lo = (kScanBaseCode + (d.lo - d.d_min) / kScanDensityPerCode) / kScanFullCode - 1e-6;
-                        hi = (kScanBaseCode + (d.hi - d.d_min) / kScanDensityPerCode) / kScanFullCode + 1e-6;
+                        lo = (kScanBaseCode + (d.lo - scan_base[c]) / kScanDensityPerCode) / kScanFullCode - 1e-6;
+                        hi = (kScanBaseCode + (d.hi - scan_base[c]) / kScanDensityPerCode) / kScanFullCode + 1e-6;
                         break;
                     case OutputMode::texture: lo = -FLT_MAX, hi = FLT_MAX; break;
                 }
@@ -173,8 +201,9 @@ std::string out_of_range(const Image& out, const Image& in, const Stock& film, c
                     return problem.str();
                 }
             }
-            if (s.output == OutputMode::print && !(luminance(px) >= -1e-6 && luminance(px) <= 1.0 + 1e-5))
-                return problem.str() + "luminance outside [0, that of the perfect white (1)]";
+            if (s.output == OutputMode::print &&
+                !(luminance(px) >= print.luminance_lo - 1e-6 && luminance(px) <= print.luminance_hi * (1 + 1e-5)))
+                return problem.str() + "luminance outside that of the prints from R = 0 to the perfect white";
         }
     return "";
 }

@@ -29,6 +29,8 @@ Look unusual_look() {
     s.grain_amount = {0.5, 1, 1.5}, s.grain_size = {2, 2, 2}, s.grain_density_exponent = {0.4, 0.3, 0.2};
     s.printer_lights = {24, 25, 27}, s.filtration_ymc = {0, 10, 20}, s.frame_width_mm = 24.89;
     s.print_width_mm = 254, s.seed = 18446744073709551615ull;
+    s.print_viewing = PrintViewing::absolute, s.print_gamut_compression = false;
+    s.scan_balance = false, s.scan_aim_code = 470;
     l.colour = {"config.ocio", "ACEScg", "", {"sRGB", "Film"}};
     l.grain_profile = "plate.json";
     l.grain_profile_gain = {0.8, 1, 1.2}, l.grain_profile_size = {1.5, 1.5, 1.5}, l.grain_profile_tilt = -0.5;
