@@ -47,6 +47,17 @@ inline float film_value(float v) {
     return v > -std::numeric_limits<float>::infinity() ? std::clamp(v, -max, max) : 0.0f;
 }
 
+// An interleaved image whose pixels come recycled and unset, as a Plane's (image.h): a 4K
+// frame's proxy is 26 MB, which fresh pages would fault in zeroed at every run.
+struct UnsetImage {
+    std::vector<float, UnsetAllocator<float>> pixels;
+    ImageView view;
+    UnsetImage(const Window& w, int channels) {
+        pixels.resize(size_t(std::max<long long>(w.pixel_count(), 0)) * size_t(channels));
+        view = {pixels.data(), w, channels, channels, std::ptrdiff_t(channels) * w.width()};
+    }
+};
+
 void add_time(StageTimes* times, const char* stage, std::chrono::steady_clock::time_point since) {
     if (times) times->add(stage, std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count());
 }
@@ -75,49 +86,75 @@ void Plan::run_proxy(const ConstImageView& in, const ImageView& out, const Windo
     // as the film sees them (NaN as no light), so an image's edge block is its own pixels'.
     auto start = std::chrono::steady_clock::now();
     const int colours = colour_channel_count(in);
-    Image small(proxy_in, colours);
+    UnsetImage small(proxy_in, colours);
     parallel_for(proxy_in.y0, proxy_in.y1, threads, [&](int y0, int y1) {
         for (int Y = y0; Y < y1; ++Y) {
             const Window rows = frame_cover({proxy_in.x0, Y, proxy_in.x1, Y + 1}).intersected(frame_);
-            for (int X = proxy_in.x0; X < proxy_in.x1; ++X) {
+            const float* first = in.at(rows.x0, rows.y0);
+            const float* second = rows.height() == 2 ? in.at(rows.x0, rows.y0 + 1) : nullptr;
+            float* px = small.view.at(proxy_in.x0, Y);
+            for (int X = proxy_in.x0; X < proxy_in.x1; ++X, px += colours) {
                 const int x0 = std::max(X * kScale, frame_.x0), x1 = std::min(X * kScale + kScale, frame_.x1);
-                const float count = float((x1 - x0) * rows.height());
-                float* px = small.at(X, Y);
+                const std::ptrdiff_t at = (x0 - rows.x0) * in.pixel_stride;
+                const std::ptrdiff_t next = x1 - x0 == 2 ? in.pixel_stride : -1;  // (-1: no second column)
+                // 1, 2 or 4 pixels: the reciprocal is exact, so this is the sum over the count.
+                const float share = 1.0f / float((x1 - x0) * rows.height());
                 for (int c = 0; c < colours; ++c) {
-                    float sum = 0;
-                    for (int y = rows.y0; y < rows.y1; ++y)
-                        for (int x = x0; x < x1; ++x) sum += film_value(in.at(x, y)[c]);
-                    px[c] = sum / count;
+                    float sum = film_value(first[at + c]);
+                    if (next > 0) sum += film_value(first[at + next + c]);
+                    if (second) {
+                        sum += film_value(second[at + c]);
+                        if (next > 0) sum += film_value(second[at + next + c]);
+                    }
+                    px[c] = sum * share;
                 }
             }
         }
     });
     add_time(times, "downsample", start);
 
-    Image result(proxy_out, 3);
-    proxy_->run(small.view(), result.view(), threads, times);
+    UnsetImage result(proxy_out, 3);  // (the proxy's run writes every pixel of it)
+    proxy_->run(small.view, result.view, threads, times);
 
-    // Up: bilinear, along x then y; the input's alpha (the channel after its colour) copied
+    // Up: bilinear, along x then y (each proxy row along x once); the input's alpha (the channel after its colour) copied
     // at the frame's pixels, as the other tiers do.
     start = std::chrono::steady_clock::now();
     const Window& pf = proxy_->frame_;
     const bool copy_alpha = colours < in.channels && out.channels >= 4;
     std::vector<Taps> columns;
     for (int x = out_window.x0; x < out_window.x1; ++x) columns.push_back(taps(x, pf.x0, pf.x1));
-    parallel_for(out_window.y0, out_window.y1, threads, [&](int y0, int y1) {
-        for (int y = y0; y < y1; ++y) {
-            const Taps ty = taps(y, pf.y0, pf.y1);
-            const float* near = result.at(proxy_out.x0, ty.near);
-            const float* far = result.at(proxy_out.x0, ty.far);
-            float* px = out.at(out_window.x0, y);
-            for (int i = 0; i < out_window.width(); ++i, px += out.pixel_stride) {
-                const int n = (columns[size_t(i)].near - proxy_out.x0) * 3, f = (columns[size_t(i)].far - proxy_out.x0) * 3;
-                for (int c = 0; c < 3; ++c) {
-                    const float near_row = 0.75f * near[n + c] + 0.25f * near[f + c];
-                    const float far_row = 0.75f * far[n + c] + 0.25f * far[f + c];
-                    px[c] = 0.75f * near_row + 0.25f * far_row;
+    const int width = out_window.width();
+    parallel_for(out_window.y0, out_window.y1, threads, [&](int band_y0, int band_y1) {
+        // In bands of rows, each proxy row a band reads upsampled along x once (a row serves
+        // up to four).
+        constexpr int kRows = 32;
+        std::vector<float> along_x(size_t(kRows / 2 + 3) * size_t(width) * 3);
+        for (int y0 = band_y0; y0 < band_y1; y0 += kRows) {
+            const int y1 = std::min(band_y1, y0 + kRows);
+            const Taps top = taps(y0, pf.y0, pf.y1), bottom = taps(y1 - 1, pf.y0, pf.y1);
+            const int first = std::min(top.near, top.far), last = std::max(bottom.near, bottom.far);
+            for (int Y = first; Y <= last; ++Y) {
+                const float* row = result.view.at(proxy_out.x0, Y);
+                float* wide = &along_x[size_t(Y - first) * size_t(width) * 3];
+                for (int i = 0; i < width; ++i) {
+                    const int n = (columns[size_t(i)].near - proxy_out.x0) * 3;
+                    const int f = (columns[size_t(i)].far - proxy_out.x0) * 3;
+                    for (int c = 0; c < 3; ++c) wide[3 * i + c] = 0.75f * row[n + c] + 0.25f * row[f + c];
                 }
-                if (copy_alpha) px[3] = in.at(out_window.x0 + i, y)[colours];
+            }
+            for (int y = y0; y < y1; ++y) {
+                const Taps ty = taps(y, pf.y0, pf.y1);
+                const float* near = &along_x[size_t(ty.near - first) * size_t(width) * 3];
+                const float* far = &along_x[size_t(ty.far - first) * size_t(width) * 3];
+                float* px = out.at(out_window.x0, y);
+                if (out.pixel_stride == 3) {
+                    for (int i = 0; i < 3 * width; ++i) px[i] = 0.75f * near[i] + 0.25f * far[i];
+                    continue;
+                }
+                for (int i = 0; i < width; ++i, px += out.pixel_stride) {
+                    for (int c = 0; c < 3; ++c) px[c] = 0.75f * near[3 * i + c] + 0.25f * far[3 * i + c];
+                    if (copy_alpha) px[3] = in.at(out_window.x0 + i, y)[colours];
+                }
             }
         }
     });
