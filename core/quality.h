@@ -15,8 +15,8 @@
 //              through a kernel without its negligible outer taps
 //   preview    as fast, on a proxy of the frame at half its resolution (twice the pixel
 //              pitch: grain, MTF and halation keep their size on the film), averaged down
-//              from the frame's pixels and its result upsampled bilinearly; about a quarter
-//              of fast's work, for scrubbing and dragging sliders
+//              from the frame's pixels and its result upsampled bilinearly: the film's and
+//              paper's stages on a quarter of the pixels, for scrubbing and dragging sliders
 //
 // Every tier is measured against the reference by `darkroom bench`.
 #pragma once
