@@ -28,7 +28,8 @@
 //   scanned from the print shows).
 // Disabled stages: the fast tier again with grain, MTF and halation off in turn, each left
 // out of the plan and, for comparison, kept in it at its neutral value. Then the fast tier
-// stage after stage and at each narrower instruction set the processor runs.
+// stage after stage and at each narrower instruction set the processor runs. Then its edit
+// latency: one setting changed at a time (EditLatency).
 #pragma once
 
 #include <functional>
@@ -119,6 +120,14 @@ struct RunVariant {
     bool identical_pixels = false;
 };
 
+// Edit latency: the fast tier's time to compile and develop the frame after one setting of
+// the look changed (a slider dragged in a host), against compiling the same look again and
+// developing it (the steady re-render), timed in turn, each round another value.
+struct EditLatency {
+    std::string setting;
+    double seconds = 0;  // fastest of the rounds
+};
+
 struct TargetCheck {
     bool evaluated = false;    // the fast tier was benchmarked
     double max_copy_ratio = 10, max_mean_de2000 = 0.5;
@@ -151,6 +160,8 @@ struct BenchReport {
     std::vector<DisabledStage> disabled;
     std::string isa;                  // the instruction set the tiers ran on (core/simd.h)
     std::vector<RunVariant> fast_run_variants;
+    double steady_rerender_seconds = 0;  // compile the same look and develop (fastest of the rounds)
+    std::vector<EditLatency> edits;
     TargetCheck target;
 };
 

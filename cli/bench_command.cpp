@@ -125,6 +125,10 @@ nlohmann::json report_json(const bench::BenchReport& r) {
                                             {"seconds", v.seconds},
                                             {"copy_ratio", bench::copy_ratio(v.seconds, r.copy_seconds)},
                                             {"identical_pixels", v.identical_pixels}});
+    doc["edit_latency"] = {{"steady_rerender_seconds", r.steady_rerender_seconds}, {"edits", nlohmann::json::array()}};
+    for (const auto& e : r.edits)
+        doc["edit_latency"]["edits"].push_back(
+            {{"setting", e.setting}, {"seconds", e.seconds}, {"x_steady", e.seconds / r.steady_rerender_seconds}});
     doc["target"] = {{"evaluated", r.target.evaluated},
                      {"tier", "fast"},
                      {"max_copy_ratio", r.target.max_copy_ratio},
@@ -271,6 +275,15 @@ void print_report(const bench::BenchReport& r) {
             print_row("  " + v.way, {ms_cell(v.seconds, copy_s), v.identical_pixels ? "yes" : "NO"});
         std::printf("(stage after stage: each stage over whole planes, as the other tiers run; vectors: the "
                     "kernels compiled for a narrower instruction set)\n");
+    }
+    if (!r.edits.empty()) {
+        std::printf("\nfast tier edit latency (compile and develop the whole frame after one setting changed):\n");
+        print_row("setting changed", {"compile + develop", "x steady"});
+        print_row("  none (steady)", {number_cell(r.steady_rerender_seconds * 1e3, "%.1f ms"), "1.00x"});
+        for (const auto& e : r.edits)
+            print_row("  " + e.setting, {number_cell(e.seconds * 1e3, "%.1f ms"),
+                                         number_cell(e.seconds / r.steady_rerender_seconds, "%.2fx")});
+        std::printf("(fastest of %d rounds, each a new value of every setting, timed in turn)\n", r.runs);
     }
     if (!r.target.evaluated)
         std::printf("\ntarget: not evaluated, the fast tier was not run\n");

@@ -1,6 +1,7 @@
 #include "core/develop.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -319,14 +320,16 @@ void develop_paper(const Stock& paper, const double* paper_exposure_lux_s, doubl
 }
 
 
-// The fast tiers' tables, kept: a plan compiled again for another exposure, grain, MTF or
-// halation (a slider dragged in a host) prints the same, and its table, about a tenth of a
-// second of spectral sums on two cores, is taken from the last few built, found by `key`:
-// the bytes of everything the table reads.
-std::shared_ptr<const Table3D> cached_table(const std::string& key,
-                                            const std::function<std::shared_ptr<const Table3D>()>& build) {
+// The last few values of a kind built, found by the bytes of everything they read (`key`);
+// `build` makes one that is not there. Shared by every plan of the process.
+// Bumped by forget_print_tables: keys carry it, so what was kept before is never found again.
+std::atomic<unsigned> kept_generation{0};
+
+template <typename T>
+std::shared_ptr<const T> recently_built(const std::string& bytes, const std::function<std::shared_ptr<const T>()>& build) {
+    const std::string key = std::to_string(kept_generation.load()) + ":" + bytes;
     static std::mutex mutex;
-    static std::vector<std::pair<std::string, std::shared_ptr<const Table3D>>> recent;  // the last used last
+    static std::vector<std::pair<std::string, std::shared_ptr<const T>>> recent;  // the last used last
     constexpr size_t kKept = 4;
     {
         std::lock_guard<std::mutex> lock(mutex);
@@ -336,16 +339,15 @@ std::shared_ptr<const Table3D> cached_table(const std::string& key,
             return recent.back().second;
         }
     }
-    std::shared_ptr<const Table3D> table = build();
+    std::shared_ptr<const T> value = build();
     std::lock_guard<std::mutex> lock(mutex);  // (another compile may have built it meanwhile: either serves)
     if (recent.size() == kKept) recent.erase(recent.begin());
-    recent.emplace_back(key, table);
-    return table;
+    recent.emplace_back(key, value);
+    return value;
 }
 
-// Appends the bytes of `count` values to a table's key.
 template <typename T>
-void append_key(std::string& key, const T* v, size_t count) {
+void append_bytes(std::string& key, const T* v, size_t count) {
     key.append(reinterpret_cast<const char*>(v), sizeof *v * count);
 }
 
@@ -353,41 +355,193 @@ void append_key(std::string& key, const T* v, size_t count) {
 // curves (their minima are the dyes' zero).
 void append_view_key(std::string& key, const Stock& material) {
     const size_t layers = material.layers.size();
-    append_key(key, &layers, 1), append_key(key, material.base_density.data(), material.base_density.size());
+    append_bytes(key, &layers, 1), append_bytes(key, material.base_density.data(), material.base_density.size());
     for (const Layer& l : material.layers) {
-        append_key(key, l.dye_density.data(), l.dye_density.size());
+        append_bytes(key, l.dye_density.data(), l.dye_density.size());
         for (const std::vector<double>* v : {&l.density_curve.x, &l.density_curve.y}) {
             const size_t n = v->size();
-            append_key(key, &n, 1), append_key(key, v->data(), n);
+            append_bytes(key, &n, 1), append_bytes(key, v->data(), n);
         }
     }
 }
 
+// The paper's log10 exposures at every node of a grid of negatives' densities, printed at
+// unit lights (PrintExposure::at_unit_lights): the printer lights and print exposure add
+// log10 of their light to a layer's, so one grid serves every light. x fastest.
+struct PaperLogExposures {
+    std::vector<std::array<double, 3>> log_h;
+};
+
+std::shared_ptr<const PaperLogExposures> paper_log_exposures(const PrintExposure& enlarger,
+                                                             const std::array<double, 3>& lo,
+                                                             const std::array<double, 3>& hi, int nodes, int threads) {
+    const PrintExposure unit = enlarger.at_unit_lights();
+    std::string key = unit.fingerprint();
+    append_bytes(key, lo.data(), 3), append_bytes(key, hi.data(), 3), append_bytes(key, &nodes, 1);
+    return recently_built<PaperLogExposures>(key, [&] {
+        // Each axis node's factor of the negative's transmittance, computed once.
+        std::array<std::vector<Spectrum>, 3> transmittance;
+        for (int a = 0; a < 3 && unit.spectral(); ++a)
+            for (int i = 0; i < nodes; ++i)
+                transmittance[a].push_back(unit.layer_transmittance(a, Table3D::node_coordinate(lo[a], hi[a], nodes, i)));
+        auto grid = std::make_shared<PaperLogExposures>();
+        grid->log_h.resize(size_t(nodes) * nodes * nodes);
+        parallel_for(0, nodes, threads, [&](int k_begin, int k_end) {
+            for (int k = k_begin; k < k_end; ++k)
+                for (int j = 0; j < nodes; ++j)
+                    for (int i = 0; i < nodes; ++i) {
+                        double h[3];
+                        if (unit.spectral()) {
+                            unit.expose({&transmittance[0][i], &transmittance[1][j], &transmittance[2][k]}, h);
+                        } else {
+                            const double d[3] = {Table3D::node_coordinate(lo[0], hi[0], nodes, i),
+                                                 Table3D::node_coordinate(lo[1], hi[1], nodes, j),
+                                                 Table3D::node_coordinate(lo[2], hi[2], nodes, k)};
+                            unit.expose(d, h);
+                        }
+                        auto& out = grid->log_h[(size_t(k) * nodes + j) * nodes + i];
+                        for (int l = 0; l < 3; ++l) out[l] = std::log10(h[l]);  // (-inf for no light)
+                    }
+        });
+        return std::shared_ptr<const PaperLogExposures>(std::move(grid));
+    });
+}
+
+// The view of a colour print (PrintView) as a table over its three layers' densities, in
+// linear Rec.709 (floats), for the print tables' nodes: 4-point Lagrange (cubic)
+// interpolation per axis between nodes 0.06 D apart. The view is a sum of exponentials of the densities, whose
+// cubic interpolant is within about 1e-5 of it (the error term h^4 f/24 x 9/16, f
+// at most (ln 10 x the dyes' peak density)^4 f), far under the print table's own error
+// between its nodes; it is built once for a paper, where the view itself at each of the print
+// table's nodes took most of the table's build.
+class PaperViewTable {
+public:
+    static constexpr int kNodes = 65;
+
+    PaperViewTable(const Stock& paper, const ViewSettings& seen, int threads) {
+        const PrintView view(paper, seen);
+        // The densities the paper's curves give, with two nodes past each end for the cubic.
+        for (int a = 0; a < 3; ++a) {
+            const Curve& curve = paper.layers[size_t(a)].density_curve;
+            step_[a] = std::max(curve.y_max() - curve.y_min(), 1e-3) / (kNodes - 5);
+            lo_[a] = curve.y_min() - 2 * step_[a];
+        }
+        values_.resize(size_t(kNodes) * kNodes * kNodes);
+        parallel_for(0, kNodes, threads, [&](int k_begin, int k_end) {
+            for (int k = k_begin; k < k_end; ++k)
+                for (int j = 0; j < kNodes; ++j)
+                    for (int i = 0; i < kNodes; ++i) {
+                        const double d[3] = {lo_[0] + i * step_[0], lo_[1] + j * step_[1], lo_[2] + k * step_[2]};
+                        double rgb[3];
+                        view.rgb(d, rgb);
+                        values_[(size_t(k) * kNodes + j) * kNodes + i] = Float4{float(rgb[0]), float(rgb[1]), float(rgb[2]), 0};
+                    }
+        });
+    }
+
+    void rgb(const double* density, double* rgb) const {
+        int first[3];
+        float weight[3][4];
+        for (int a = 0; a < 3; ++a) {
+            const double u = (density[a] - lo_[a]) / step_[a];
+            const int i = std::clamp(int(std::floor(u)), 1, kNodes - 3);
+            const double t = u - i;
+            first[a] = i - 1;
+            weight[a][0] = float(-t * (t - 1) * (t - 2) / 6);
+            weight[a][1] = float((t + 1) * (t - 1) * (t - 2) / 2);
+            weight[a][2] = float(-(t + 1) * t * (t - 2) / 2);
+            weight[a][3] = float((t + 1) * t * (t - 1) / 6);
+        }
+        // A node's three values a vector (and a pad): 64 vector multiply-adds.
+        Float4 sum{};
+        for (int k = 0; k < 4; ++k)
+            for (int j = 0; j < 4; ++j) {
+                const Float4* row =
+                    &values_[(size_t(first[2] + k) * kNodes + size_t(first[1] + j)) * kNodes + size_t(first[0])];
+                const Float4 along = row[0] * weight[0][0] + row[1] * weight[0][1] + row[2] * weight[0][2] +
+                                     row[3] * weight[0][3];
+                sum += along * (weight[2][k] * weight[1][j]);
+            }
+        for (int c = 0; c < 3; ++c) rgb[c] = sum[c];
+    }
+
+private:
+    using Float4 = float __attribute__((vector_size(16)));
+    std::array<double, 3> lo_{}, step_{};
+    std::vector<Float4> values_;  // x fastest
+};
+
+std::shared_ptr<const PaperViewTable> paper_view_table(const Stock& paper, const ViewSettings& seen, int threads) {
+    std::string key;  // (what PrintView and the grid read: the viewing, the paper's base, dyes and density ranges)
+    append_bytes(key, &seen.viewing, 1), append_bytes(key, &seen.compress_gamut, 1);
+    append_bytes(key, paper.base_density.data(), paper.base_density.size());
+    for (const Layer& l : paper.layers) {
+        const double range[2] = {l.density_curve.y_min(), l.density_curve.y_max()};
+        append_bytes(key, l.dye_density.data(), l.dye_density.size()), append_bytes(key, range, 2);
+    }
+    return recently_built<PaperViewTable>(key, [&] { return std::make_shared<const PaperViewTable>(paper, seen, threads); });
+}
+
+// A curve's values as Curve::operator() gives them, bit for bit, its segment found from a
+// uniform grid of buckets instead of a binary search (the print tables' nodes evaluate the
+// paper's three curves each).
+class CurveLookup {
+public:
+    explicit CurveLookup(const Curve& curve) : curve_(curve) {
+        const std::vector<double>& x = curve.x;
+        step_ = (x.back() - x.front()) / (4 * double(x.size()));
+        // Each bucket starts from the segment the bucket before it starts in, so that a value
+        // rounded into the next bucket never starts past its own segment.
+        for (size_t b = 0; b <= 4 * x.size(); ++b)
+            first_.push_back(size_t(std::upper_bound(x.begin(), x.end(), x.front() + (double(b) - 1) * step_) - x.begin()));
+    }
+    double operator()(double at) const {
+        const std::vector<double>& x = curve_.x;
+        const std::vector<double>& y = curve_.y;
+        if (!(at > x.front())) return y.front();  // (as Curve::operator(): NaN held at the low end)
+        if (at >= x.back()) return y.back();
+        size_t hi = first_[std::min(size_t((at - x.front()) / step_), first_.size() - 1)];
+        while (x[hi] <= at) ++hi;  // (the upper bound: the first node past `at`)
+        const size_t lo = hi - 1;
+        const double t = (at - x[lo]) / (x[hi] - x[lo]);
+        return y[lo] + t * (y[hi] - y[lo]);
+    }
+
+private:
+    const Curve& curve_;
+    double step_ = 0;
+    std::vector<size_t> first_;
+};
+
 // The one print table of a colour negative on colour paper: the negative's densities -> the
-// print's linear Rec.709, the high tier's print at each node, held as cube roots (tables.h).
+// print's linear Rec.709, held as cube roots (tables.h). Each node is the paper's curves at
+// its log exposures (paper_log_exposures, shifted by the lights) viewed through the paper's
+// view table, both kept across plans: a plan compiled again for another exposure, grain, MTF
+// or halation prints the same table, taken from the last few built; one for other printer
+// lights or print exposure (a slider dragged in a host) only develops and views the grid's
+// exposures again, and one for other filtration exposes the grid again too.
 std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock& paper, const PrintExposure& enlarger,
                                                   int nodes, int threads) {
     std::array<double, 3> lo, hi;
     table_density_range(film, lo, hi);
-    std::string key = "print " + enlarger.fingerprint();
-    append_key(key, lo.data(), 3), append_key(key, hi.data(), 3), append_key(key, &nodes, 1);
+    std::string key = enlarger.fingerprint();
+    append_bytes(key, lo.data(), 3), append_bytes(key, hi.data(), 3), append_bytes(key, &nodes, 1);
     append_view_key(key, paper);  // (what the paper's curves and view read)
-    return cached_table(key, [&] {
-        // Each axis node's factor of the negative's transmittance, computed once.
-        std::array<std::vector<Spectrum>, 3> transmittance;
-        for (int a = 0; a < 3 && enlarger.spectral(); ++a)
-            for (int i = 0; i < nodes; ++i)
-                transmittance[a].push_back(
-                    enlarger.layer_transmittance(a, Table3D::node_coordinate(lo[a], hi[a], nodes, i)));
-        const PrintView view(paper, enlarger.view());
-        return std::make_shared<const Table3D>(lo, hi, nodes, threads, [&](const int* node, const double* d, double* rgb) {
-            double h[3], paper_density[3];
-            if (enlarger.spectral())
-                enlarger.expose({&transmittance[0][node[0]], &transmittance[1][node[1]], &transmittance[2][node[2]]}, h);
-            else
-                enlarger.expose(d, h);
-            develop_paper(paper, h, paper_density);
-            view.rgb(paper_density, rgb);
+    return recently_built<Table3D>(key, [&] {
+        const std::shared_ptr<const PaperLogExposures> grid = paper_log_exposures(enlarger, lo, hi, nodes, threads);
+        const std::shared_ptr<const PaperViewTable> view = paper_view_table(paper, enlarger.view(), threads);
+        double log_light[3];
+        for (int j = 0; j < 3; ++j) log_light[j] = std::log10(enlarger.light_lux_s()[size_t(j)]);
+        const double log_max = std::log10(kMaxInput), log_min = -30;  // (develop_paper's clamp)
+        const CurveLookup curves[3] = {CurveLookup(paper.layers[0].density_curve),
+                                       CurveLookup(paper.layers[1].density_curve),
+                                       CurveLookup(paper.layers[2].density_curve)};
+        return std::make_shared<const Table3D>(lo, hi, nodes, threads, [&](const int* node, const double*, double* rgb) {
+            const auto& log_h = grid->log_h[(size_t(node[2]) * nodes + size_t(node[1])) * nodes + size_t(node[0])];
+            double paper_density[3];
+            for (int j = 0; j < 3; ++j)
+                paper_density[j] = curves[j](std::clamp(log_light[j] + log_h[j], log_min, log_max));
+            view->rgb(paper_density, rgb);
         }, Table3D::Encoding::cube_root);
     });
 }
@@ -398,10 +552,10 @@ std::shared_ptr<const Table3D> shared_view_table(const Stock& film, const ViewSe
     std::array<double, 3> lo, hi;
     table_density_range(film, lo, hi);
     std::string key = "view ";
-    append_key(key, &seen.viewing, 1), append_key(key, &seen.compress_gamut, 1);
-    append_key(key, lo.data(), 3), append_key(key, hi.data(), 3), append_key(key, &nodes, 1);
+    append_bytes(key, &seen.viewing, 1), append_bytes(key, &seen.compress_gamut, 1);
+    append_bytes(key, lo.data(), 3), append_bytes(key, hi.data(), 3), append_bytes(key, &nodes, 1);
     append_view_key(key, film);
-    return cached_table(key, [&] {
+    return recently_built<Table3D>(key, [&] {
         const PrintView view(film, seen);
         return std::make_shared<const Table3D>(
             lo, hi, nodes, threads, [&](const int*, const double* d, double* rgb) { view.rgb(d, rgb); },
@@ -410,6 +564,8 @@ std::shared_ptr<const Table3D> shared_view_table(const Stock& film, const ViewSe
 }
 
 }  // namespace
+
+void forget_print_tables() { ++kept_generation; }
 
 void print_densities(const PrintExposure& enlarger, const Stock& paper, const double* negative_density,
                      double* paper_density) {
@@ -449,6 +605,26 @@ Window image_window(const FrameGeometry& frame) {
 
 Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
                    const FrameGeometry& frame, int threads, const PlanStructure& structure) {
+    const Window image = image_window(frame);
+    if (quality_tier(settings.quality).proxy_scale == 1)
+        return compile_pixels(film, paper, settings, frame, threads, structure);
+    // The proxy's film and print widths are its pixels' (a frame of odd width has half a
+    // block past its edge), so its pitch is exactly twice the frame's.
+    const FrameGeometry proxy = proxy_geometry(frame);
+    const double widen = double(proxy.film_width_px()) * 2 / frame.film_width_px();
+    DevelopSettings at_proxy = settings;
+    at_proxy.frame_width_mm = (settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm) * widen;
+    if (paper) at_proxy.print_width_mm = (settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm) * widen;
+    Plan p = compile_pixels(film, paper, at_proxy, proxy, threads, structure);
+    p.proxy_ = std::make_shared<const Plan>(p);
+    p.settings_ = settings;
+    p.frame_ = image;
+    p.film_width_px_ = frame.film_width_px();
+    return p;
+}
+
+Plan Plan::compile_pixels(const Stock& film, const Stock* paper, const DevelopSettings& settings,
+                          const FrameGeometry& frame, int threads, const PlanStructure& structure) {
     const Window image = image_window(frame);
     if (!is_camera_film(film.kind))
         throw std::invalid_argument("'" + film.id + "' is not a film stock (it is a paper or print film)");
@@ -519,6 +695,7 @@ Plan Plan::in_image(const FrameGeometry& image) const {
         throw std::invalid_argument("Plan::in_image: another film frame width or channel count needs its own plan");
     Plan p = *this;
     p.frame_ = image_window(image);
+    if (proxy_) p.proxy_ = std::make_shared<const Plan>(proxy_->in_image(proxy_geometry(image)));
     return p;
 }
 
@@ -536,12 +713,21 @@ Plan Plan::for_frame(int frame) const {
             if (g) g->key.frame = frame;
         *stages = std::move(m);
     }
+    if (proxy_) p.proxy_ = std::make_shared<const Plan>(proxy_->for_frame(frame));
     return p;
 }
 
-int Plan::halo_px() const { return film_stages_->halo_px() + (print_ ? paper_stages_->halo_px() : 0); }
+int Plan::halo_px() const {
+    const int own = film_stages_->halo_px() + (print_ ? paper_stages_->halo_px() : 0);
+    // (A proxy's halo in its pixels, its interpolation's pixel, and a block's rounding.)
+    return proxy_ ? 2 * (own + 1) + 1 : own;
+}
 
-Window Plan::input_window(const Window& output) const { return output.grown(halo_px()).intersected(frame_); }
+Window Plan::input_window(const Window& output) const {
+    if (!proxy_) return output.grown(halo_px()).intersected(frame_);
+    const Window proxy_in = proxy_->input_window(proxy_window(output));
+    return Window{2 * proxy_in.x0, 2 * proxy_in.y0, 2 * proxy_in.x1, 2 * proxy_in.y1}.intersected(frame_);
+}
 
 std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& film_out, int threads,
                                       StageTimes* times) const {
@@ -734,6 +920,10 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
         throw std::invalid_argument("the input image does not cover the window and its halo");
     if (in.channels < 1 || out.channels < 3) throw std::invalid_argument("need 1+ input channels and 3+ output channels");
 
+    if (proxy_) {
+        run_proxy(in, out, out_window, threads, times);
+        return;
+    }
     if (runs_in_one_pass()) {
         run_one_pass(in, out, out_window, threads, times);
         return;
@@ -796,6 +986,15 @@ std::string long_reference_render_warning(const Plan& plan, const Window& out, c
 
 std::vector<std::string> Plan::describe() const {
     std::vector<std::string> lines;
+    if (proxy_) {
+        const FrameGeometry proxy = proxy_geometry({frame_.width(), frame_.height(), monochrome_, frame_.x0, frame_.y0,
+                                                    film_width_px_});
+        lines.push_back("proxy: the frame at half resolution (" + std::to_string(proxy.width) + "x" +
+                        std::to_string(proxy.height) + " px, twice the pixel pitch), each pixel the mean of a 2x2 "
+                        "block; its result upsampled bilinearly");
+        for (const std::string& line : proxy_->describe()) lines.push_back(line);
+        return lines;
+    }
     auto material = [&](const MaterialStages& m, const char* role, bool exposed_by_scene) {
         lines.push_back(std::string(role) + " " + m.stock.id + ": pixel pitch " + fmt(m.pixel_pitch_um) + " um");
         for (size_t i = 0; i < m.stock.layers.size(); ++i) {

@@ -135,6 +135,11 @@ struct FrameGeometry {
     int film_width_px() const { return film_width > 0 ? film_width : width; }
 };
 
+// The frame of the preview tier's proxy (QualityTier::proxy_scale): each of its pixels a 2x2
+// block of the film frame's, blocks counted from the film frame's origin (an image's window
+// grows to whole blocks), so its pixel pitch is twice the frame's.
+FrameGeometry proxy_geometry(const FrameGeometry& frame);
+
 // One material's run of the pipeline, precomputed (core/material_stages.h: the plan's
 // internals, not part of the API).
 struct MaterialStages;
@@ -209,6 +214,14 @@ private:
     bool runs_in_one_pass() const;
     void run_one_pass(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
                       StageTimes* times) const;
+    // The preview tier (develop_proxy.cpp): the proxy's pixels an output window interpolates,
+    // and the run: the input averaged down to the proxy, its plan, and the result upsampled.
+    Window proxy_window(const Window& output) const;
+    void run_proxy(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
+                   StageTimes* times) const;
+    // The plan at the frame's own pixels (compile() wraps it for a proxy tier).
+    static Plan compile_pixels(const Stock& film, const Stock* paper, const DevelopSettings& settings,
+                               const FrameGeometry& frame, int threads, const PlanStructure& structure);
 
     DevelopSettings settings_;
     PlanStructure structure_;
@@ -234,7 +247,16 @@ private:
     // the fast tiers, else spectrally per pixel); no paper.
     bool views_film_ = false;
     void view_film_row(const float* const* density, float* const* rgb, int width) const;
+    // The preview tier: the plan of the proxy frame (proxy_geometry), which this one upsamples;
+    // null where the plan runs at the frame's pixels. (This plan's other members are the
+    // proxy's, for the per-pixel stages above, which do not depend on the pitch.)
+    std::shared_ptr<const Plan> proxy_;
 };
+
+// The fast tiers' print tables and the parts they are built from (the paper's log exposures
+// of a grid of negatives, the paper's view) are kept across plans, a few of each, found by
+// what they read. Forgets them: the next plan builds its own afresh (tests compare the two).
+void forget_print_tables();
 
 // The reference tier's time grows with the film's area a pixel covers, not the pixel count
 // (a thumbnail of a whole film frame draws millions of silver grains a pixel): a warning

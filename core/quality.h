@@ -14,7 +14,10 @@
 //              centre delta and separable terms), halation on an 8x coarser grid, tabulated
 //              H&D curves, grain from hashed noise (sums of uniform bytes: core/random.h)
 //              through a kernel without its negligible outer taps
-//   preview    as fast with smaller kernels
+//   preview    as fast, on a proxy of the frame at half its resolution (twice the pixel
+//              pitch: grain, MTF and halation keep their size on the film), averaged down
+//              from the frame's pixels and its result upsampled bilinearly: the film's and
+//              paper's stages on a quarter of the pixels, for scrubbing and dragging sliders
 //
 // Every tier is measured against the reference by `darkroom bench`.
 #pragma once
@@ -52,6 +55,10 @@ struct QualityTier {
     // H&D curves: 0 = evaluated per pixel; otherwise a table with 2^bits samples per
     // octave of exposure (stages/tables.h).
     int curve_table_bits;
+    // 1: every stage at the frame's pixels; 2: on a proxy at half the resolution (twice the
+    // pixel pitch, so grain, MTF and halation keep their size on the film), with the settings
+    // above, its result upsampled to the frame's pixels (core/develop_proxy.cpp).
+    int proxy_scale;
 };
 
 // The default of the command line, the plugin and the Python module: the fastest tier

@@ -409,6 +409,16 @@ OfxPointD render_scale(const Props& args) {
     return {args.get_double_or(kOfxImageEffectPropRenderScale, 1.0, 0), args.get_double_or(kOfxImageEffectPropRenderScale, 1.0, 1)};
 }
 
+// The node's settings for a render at `scale`: a host that asks for a proxy (a render scale
+// below 1, while scrubbing or dragging a slider) gets the preview tier where the node is at
+// fast, the default; high and reference stay as chosen.
+NodeSettings settings_at(OfxImageEffectHandle effect, OfxTime time, OfxPointD scale) {
+    NodeSettings settings = read_parameters(effect, time);
+    Quality& quality = settings.look.settings.quality;
+    if ((scale.x < 1 || scale.y < 1) && quality == Quality::fast) quality = Quality::preview;
+    return settings;
+}
+
 OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     Instance& inst = instance_of(effect);
     const OfxTime time = args.get_double(kOfxPropTime);
@@ -418,7 +428,7 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     if (window.x2 <= window.x1 || window.y2 <= window.y1)
         throw RenderError("the host asked to render an empty window " + rect_text(window));
 
-    NodeSettings settings = read_parameters(effect, time);
+    NodeSettings settings = settings_at(effect, time, scale);
     OfxImageClipHandle source_clip = nullptr;
     const Placement placement = source_placement(effect, time, scale, settings, &source_clip);
     const OfxRectI& film = placement.film;
@@ -521,7 +531,7 @@ OfxStatus regions_of_interest(OfxImageEffectHandle effect, const Props& in_args,
     OfxRectD region{};
     for (int i = 0; i < 4; ++i) (&region.x1)[i] = in_args.get_double(kOfxImageEffectPropRegionOfInterest, i);
     OfxImageClipHandle source = nullptr;
-    const NodeSettings settings = read_parameters(effect, time);
+    const NodeSettings settings = settings_at(effect, time, scale);
     const Placement placement = source_placement(effect, time, scale, settings, &source);
     const double pixel_aspect = clip_props(source).get_double_or(kOfxImagePropPixelAspectRatio, 1.0);
     const double sx = scale.x / (pixel_aspect > 0 ? pixel_aspect : 1.0), sy = scale.y;

@@ -132,11 +132,13 @@ PrintExposure PrintExposure::design(const Stock& film, const Stock& paper, const
         p.light_lux_s_[j] = std::pow(10.0, log_h_aim) / grey_exposure *
                             std::pow(10.0, kLogExposurePerPoint * (points - 25.0)) *
                             std::exp2(settings.print_exposure_ev);
-        p.neutral_light_[j] = 0;
+        p.neutral_light_[j] = p.neutral_unit_light_[j] = 0;
         for (int i = 0; i < kSpectralSamples; ++i) {
             double filtration = settings.filtration_ymc[0] * filters[0][i] + settings.filtration_ymc[1] * filters[1][i] +
                                 settings.filtration_ymc[2] * filters[2][i];
-            p.weighted_light_[j][i] *= p.light_lux_s_[j] * std::pow(10.0, -filtration / 100.0);
+            p.unit_light_[j][i] = p.weighted_light_[j][i] * std::pow(10.0, -filtration / 100.0);
+            p.weighted_light_[j][i] = p.unit_light_[j][i] * p.light_lux_s_[j];
+            p.neutral_unit_light_[j] += p.unit_light_[j][i];
             p.neutral_light_[j] += p.weighted_light_[j][i];
         }
     }
@@ -178,6 +180,14 @@ std::string PrintExposure::fingerprint() const {
     append(neutral_negative_), append(weighted_light_), append(neutral_light_), append(aim_density_),
         append(light_lux_s_), append(view_.viewing), append(view_.compress_gamut);
     return bytes;
+}
+
+PrintExposure PrintExposure::at_unit_lights() const {
+    PrintExposure p = *this;
+    p.weighted_light_ = unit_light_;
+    p.neutral_light_ = neutral_unit_light_;
+    p.light_lux_s_ = {1.0, 1.0, 1.0};
+    return p;
 }
 
 PrintView::PrintView(const Stock& paper, const ViewSettings& settings) : paper_(&paper), settings_(settings) {

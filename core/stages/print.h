@@ -82,6 +82,11 @@ public:
     // The bytes of everything expose() reads (the film's dyes and base, the lights, the
     // filtration): exposures with equal fingerprints expose every negative alike.
     std::string fingerprint() const;
+    // The same enlarger with every light 1 lux-second: the printer lights and print exposure
+    // only scale each paper layer's exposure (light_lux_s), so this one's exposures times
+    // light_lux_s are this enlarger's, for any lights (the fast tiers' print tables keep
+    // the paper's log exposures of a grid of negatives by its fingerprint).
+    PrintExposure at_unit_lights() const;
 
 private:
     // The negative's spectral density: base + sum_i (D_i - d_min_i) dye_i.
@@ -90,9 +95,10 @@ private:
     std::array<double, 3> film_d_min_{};
     int film_layers_ = 1, paper_layers_ = 1;
     bool neutral_negative_ = true;
-    // Per paper layer: the normalised light L F S_j / sum L S_j times k_j, and its sum.
-    std::array<Spectrum, 3> weighted_light_{};
-    std::array<double, 3> neutral_light_{};
+    // Per paper layer: the normalised light L F S_j / sum L S_j times k_j, and its sum; and
+    // the same at k_j = 1.
+    std::array<Spectrum, 3> weighted_light_{}, unit_light_{};
+    std::array<double, 3> neutral_light_{}, neutral_unit_light_{};
     std::array<double, 3> aim_density_{}, light_lux_s_{};
     ViewSettings view_;
 };

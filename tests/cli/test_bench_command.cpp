@@ -67,6 +67,13 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
         CHECK(v["seconds"].get<double>() > 0);
         CHECK(v["identical_pixels"] == true);
     }
+    // The edit latency: each setting a slider changes, against compiling the same look again.
+    const auto& edits = doc["edit_latency"];
+    const double steady = edits["steady_rerender_seconds"];
+    CHECK(steady > 0);
+    REQUIRE(edits["edits"].size() == 5);
+    for (const auto& e : edits["edits"])
+        CHECK(e["x_steady"].get<double>() == Approx(e["seconds"].get<double>() / steady));
     for (const char* key : {"evaluated", "copy_ratio", "mean_de2000", "grain_within_tolerance", "pass"})
         CHECK(doc["target"].contains(key));
     CHECK(doc["target"]["evaluated"] == true);

@@ -137,7 +137,9 @@ TEST_CASE("same settings give identical pixels for any thread count and window",
     s.frame = 3;
     s.frame_width_mm = 3.0;  // ~19 um pixels: the MTF kernel has a real radius
     s.print_width_mm = 20.0;
-    for (OutputMode mode : {OutputMode::print, OutputMode::negative}) {
+    for (auto [quality, mode] : {std::pair{Quality::fast, OutputMode::print}, std::pair{Quality::fast, OutputMode::negative},
+                                 std::pair{Quality::preview, OutputMode::print}, std::pair{Quality::preview, OutputMode::negative}}) {
+        s.quality = quality;
         s.output = mode;
         Image one = render(film, &paper, s, scene, 1);
         Image many = render(film, &paper, s, scene, 7);
@@ -150,6 +152,7 @@ TEST_CASE("same settings give identical pixels for any thread count and window",
         }
     }
     // Another frame or seed gives other grain.
+    s.quality = Quality::fast;
     s.output = OutputMode::negative;
     Image frame3 = render(film, &paper, s, scene);
     s.frame = 4;

@@ -292,7 +292,10 @@ TEST_CASE("bad and extreme pixels give finite, in-range output in every mode and
 
 TEST_CASE("without grain, MTF and halation each bad pixel develops as its documented replacement", "[stability]") {
     const std::vector<float> values = bad_values(1);
-    for (Quality q : kQualities)
+    for (Quality q : kQualities) {
+        // (A proxy averages each 2x2 block and interpolates between blocks, so no pixel is its
+        // own; its blocks take bad values as the film does: "the preview tier is the fast tier ...")
+        if (quality_tier(q).proxy_scale > 1) continue;
         for (const StockPair& p : stock_pairs())
             for (OutputMode mode : kModes) {
                 INFO(quality_name(q) << ", " << p.name << ", " << mode_name(mode));
@@ -306,6 +309,7 @@ TEST_CASE("without grain, MTF and halation each bad pixel develops as its docume
                 CHECK(same_colours(out, develop(plan, treated_image(in, mode))));
                 if (mode == OutputMode::texture) CHECK(sign_changed(out, in) == "");
             }
+    }
 }
 
 TEST_CASE("exposures at the +-64 EV limits develop in range and just past them are refused", "[stability]") {

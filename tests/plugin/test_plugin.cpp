@@ -304,8 +304,9 @@ TEST_CASE("render scale 0.5 renders the half-resolution frame with the same phys
     INFO(inst->effect().persistent_message);
     REQUIRE(r.status == kOfxStatOK);
     // The frame width in mm is the same, so the pixel pitch doubles: exactly what the CLI
-    // does with the half-size image and the same --frame-width-mm.
-    std::vector<float> cli = develop(input, kCommonFlags + " --frame 3");
+    // does with the half-size image and the same --frame-width-mm; and a proxy render at the
+    // default Quality (fast) is a preview.
+    std::vector<float> cli = develop(input, kCommonFlags + " --frame 3 --quality preview");
     std::vector<float> ofx = r.output.to_top_down();
     REQUIRE(ofx.size() == cli.size());
     CHECK(std::memcmp(ofx.data(), cli.data(), cli.size() * sizeof(float)) == 0);
