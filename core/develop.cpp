@@ -529,7 +529,10 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
     append_view_key(key, paper);  // (what the paper's curves and view read)
     return recently_built<Table3D>(key, [&] {
         const std::shared_ptr<const PaperLogExposures> grid = paper_log_exposures(enlarger, lo, hi, nodes, threads);
-        const std::shared_ptr<const PaperViewTable> view = paper_view_table(paper, enlarger.view(), threads);
+        // The view is tabulated before the gamut compression, whose knee a cubic would round
+        // off, and compressed at each node.
+        const ViewSettings seen = enlarger.view();
+        const std::shared_ptr<const PaperViewTable> view = paper_view_table(paper, {seen.viewing, false}, threads);
         double log_light[3];
         for (int j = 0; j < 3; ++j) log_light[j] = std::log10(enlarger.light_lux_s()[size_t(j)]);
         const double log_max = std::log10(kMaxInput), log_min = -30;  // (develop_paper's clamp)
@@ -542,6 +545,10 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
             for (int j = 0; j < 3; ++j)
                 paper_density[j] = curves[j](std::clamp(log_light[j] + log_h[j], log_min, log_max));
             view->rgb(paper_density, rgb);
+            if (seen.compress_gamut) {
+                const Rgb compressed = compress_to_gamut({rgb[0], rgb[1], rgb[2]});
+                std::copy(compressed.begin(), compressed.end(), rgb);
+            }
         }, Table3D::Encoding::cube_root);
     });
 }

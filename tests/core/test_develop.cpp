@@ -53,7 +53,11 @@ TEST_CASE("a reversal film's print is the film itself, viewed: more light gives 
     DevelopSettings density = s;
     density.output = OutputMode::density;
     const Image d = render(slide, nullptr, density, ramp);
-    const PrintView view(slide);
+    const PrintView view(slide, {s.print_viewing, s.print_gamut_compression});
+    // Seen media-relative (the default), a normally exposed mid grey is 0.18, as on every print.
+    REQUIRE(s.print_viewing == PrintViewing::media_relative);
+    const float* grey = slide_print.at(6, 0);
+    CHECK(luminance({grey[0], grey[1], grey[2]}) == Approx(0.18).epsilon(0.02));
     for (int i = 0; i < 13; ++i) {
         INFO("step " << i);
         const double layer_density[3] = {d.at(i, 0)[0], d.at(i, 0)[1], d.at(i, 0)[2]};
