@@ -114,6 +114,7 @@ bool Plan::runs_in_one_pass() const {
     if (!structure_.one_pass || settings_.output == OutputMode::texture) return false;
     const MaterialStages& film = *film_stages_;
     if (film.curve_tables.empty() || !separable_scatter(film)) return false;  // (the tiers that tabulate curves)
+    if (film.couplers) return false;  // (the inhibitor's spread runs over whole planes)
     int decimation = 0;  // the film's halation on one coarse grid
     for (size_t l = 0; l < film.halation.size(); ++l) {
         if (film.boolean_grain[l]) return false;
