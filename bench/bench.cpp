@@ -383,7 +383,8 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
             };
             const Off offs[] = {{"grain", [](DevelopSettings& d) { d.grain = false; }},
                                 {"scatter", [](DevelopSettings& d) { d.mtf = false; }},
-                                {"halation", [](DevelopSettings& d) { d.halation = 0; }}};
+                                {"halation", [](DevelopSettings& d) { d.halation = 0; }},
+                                {"DIR couplers", [](DevelopSettings& d) { d.dir_couplers = 0; }}};
             for (const Off& off : offs) {
                 say(std::string("fast without ") + off.stage + ", in turn with it and with it at neutral");
                 DevelopSettings d = s;

@@ -25,7 +25,7 @@
 //   under another seed: that is the measurement's noise floor. With print_grain, the same
 //   wedge printed as well, each channel of the print read as a density (what a plate
 //   scanned from the print shows).
-// Disabled stages: the fast tier again with grain, MTF and halation off in turn, each left
+// Disabled stages: the fast tier again with grain, MTF, halation and DIR couplers off in turn, each left
 // out of the plan and, for comparison, kept in it at its neutral value. Then the fast tier
 // stage after stage and at each narrower instruction set the processor runs.
 #pragma once
