@@ -201,11 +201,12 @@ std::vector<Parameter> make_table() {
         "seed", "", "Grain seed: the grain is a function of (seed, frame, layer, pixel)");
 
     // Development.
-    add(number("dir-couplers", [](Look& l) -> auto& { return l.settings.dir_couplers; }, 0, kMaxDirCouplers, 0, 2),
-        kDevelopment, "DIR couplers", "dirCouplers", "",
-        "Multiplies the colour negative's DIR couplers: development inhibited by the density around, in its own and "
-        "the other layers (interimage colour and edge effects; 0 = off, the data sheet's curves per pixel)")
-        .animatable = true;
+    Parameter& couplers =
+        add(number("dir-couplers", [](Look& l) -> auto& { return l.settings.dir_couplers; }, 0, kMaxDirCouplers, 0, 2),
+            kDevelopment, "DIR couplers", "dirCouplers", "",
+            "Multiplies the colour negative's DIR couplers: development inhibited by the density around, in its own "
+            "and the other layers (interimage colour and edge effects; 0 = off, the data sheet's curves per pixel)");
+    couplers.animatable = couplers.per_pixel = true;  // (a LUT holds their colour, spread 0)
     add(number("dir-coupler-spread", [](Look& l) -> auto& { return l.settings.dir_coupler_spread; }, 0,
                kMaxDirCouplerSpread, 0, 4),
         kDevelopment, "Inhibitor spread", "dirCouplerSpread", "",
