@@ -185,7 +185,6 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
     return m;
 }
 
-// Halation then scatter of one layer's exposure (on its window) into `out`.
 // `out` of a plane that covers it (the plane itself when it is `out`).
 Plane cropped(Plane p, const Window& out) {
     if (p.window == out) return p;
@@ -194,6 +193,7 @@ Plane cropped(Plane p, const Window& out) {
     return c;
 }
 
+// Halation then scatter of one layer's exposure (on its window) into `out`.
 Plane spread_exposure(const MaterialStages& m, size_t layer, Plane exposure, const Window& out, const Window& frame,
                       int threads, StageTimes* times) {
     if (m.halation[layer]) {
