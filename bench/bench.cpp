@@ -201,6 +201,7 @@ std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality 
     DevelopSettings s = density_target(q, 0, pitch_um, width);
     s.grain = false;
     s.halation = 0;
+    s.dir_couplers = 0;  // (their edge effect raises the density's modulation: the stock's MTF is optical)
     Plan plan = Plan::compile(film, nullptr, s, {width, 1}, threads);
     int halo = width / 2 - plan.input_window({width / 2, 0, width / 2 + 1, 1}).x0;
     if (halo >= width / 4) {

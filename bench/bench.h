@@ -151,7 +151,7 @@ struct BenchReport {
 };
 
 // The MTF the density output shows at the given frequencies (cycles per pixel, up to 0.5),
-// per film layer, at `pitch_um` with grain and halation off: one-row sine targets of
+// per film layer, at `pitch_um` with grain, halation and DIR couplers off: one-row sine targets of
 // modulation 0.1 around mid-grey exposure, read back to exposure through each layer's H&D
 // curve and divided by the input's modulation measured the same way (sine_amplitude).
 std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality quality, double pitch_um,

@@ -198,7 +198,7 @@ void print_report(const bench::BenchReport& r) {
     tier_row("print CIEDE2000 max", [&](const auto& t) { return error_cell(t, t.print_error.max); }, "grain off in both");
     tier_row("negative max |dD|", [&](const auto& t) { return error_cell(t, t.density_error); }, "density, grain off");
     tier_row("MTF max |d response|", [&](const auto& t) { return error_cell(t, t.mtf_error); },
-             "sine targets to Nyquist, grain and halation off");
+             "sine targets to Nyquist, grain, halation and DIR couplers off");
     // The negative's grain, and the print's where it was measured (--print-grain).
     const bool print_grain = r.print_grain;
     for (const auto& [prefix, grain] : {std::pair{"", &bench::TierResult::grain},
