@@ -211,6 +211,7 @@ std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality 
     DevelopSettings s = density_target(q, 0, pitch_um, width);
     s.grain = false;
     s.halation = 0;
+    s.dir_couplers = 0;  // (their edge effect raises the density's modulation: the stock's MTF is optical)
     Plan plan = Plan::compile(film, nullptr, s, {width, 1}, threads);
     int halo = width / 2 - plan.input_window({width / 2, 0, width / 2 + 1, 1}).x0;
     if (halo >= width / 4) {
@@ -425,7 +426,8 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
             };
             const Off offs[] = {{"grain", [](DevelopSettings& d) { d.grain = false; }},
                                 {"scatter", [](DevelopSettings& d) { d.mtf = false; }},
-                                {"halation", [](DevelopSettings& d) { d.halation = 0; }}};
+                                {"halation", [](DevelopSettings& d) { d.halation = 0; }},
+                                {"DIR couplers", [](DevelopSettings& d) { d.dir_couplers = 0; }}};
             for (const Off& off : offs) {
                 say(std::string("fast without ") + off.stage + ", in turn with it and with it at neutral");
                 DevelopSettings d = s;

@@ -26,7 +26,7 @@
 //   under another seed: that is the measurement's noise floor. With print_grain, the same
 //   wedge printed as well, each channel of the print read as a density (what a plate
 //   scanned from the print shows).
-// Disabled stages: the fast tier again with grain, MTF and halation off in turn, each left
+// Disabled stages: the fast tier again with grain, MTF, halation and DIR couplers off in turn, each left
 // out of the plan and, for comparison, kept in it at its neutral value. Then the fast tier
 // stage after stage and at each narrower instruction set the processor runs. Then its edit
 // latency: one setting changed at a time (EditLatency).
@@ -166,7 +166,7 @@ struct BenchReport {
 };
 
 // The MTF the density output shows at the given frequencies (cycles per pixel, up to 0.5),
-// per film layer, at `pitch_um` with grain and halation off: one-row sine targets of
+// per film layer, at `pitch_um` with grain, halation and DIR couplers off: one-row sine targets of
 // modulation 0.1 around mid-grey exposure, read back to exposure through each layer's H&D
 // curve and divided by the input's modulation measured the same way (sine_amplitude).
 std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality quality, double pitch_um,

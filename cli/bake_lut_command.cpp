@@ -46,7 +46,7 @@ std::string describe_look(const Look& look, const std::string& input, const ocio
           << "/" << s.printer_lights[1] << "/" << s.printer_lights[2];
     d << "\ninput: " << (input.empty() ? "the working space (linear Rec.709, D65)" : input)
       << "\noutput: " << output.description()
-      << "\ngrain, MTF and halation are left out: they are not per-pixel";
+      << "\ngrain, MTF, halation and the DIR couplers' edge effects are left out: they are not per-pixel";
     return d.str();
 }
 
@@ -55,14 +55,18 @@ std::string describe_look(const Look& look, const std::string& input, const ocio
 // negative's three densities, the one stage a 3D LUT must sample: on the lattice of the
 // plan's own print table, so the file is the plan. Other outputs are one curve per layer,
 // and so is a black-and-white print (one layer on one). None (the whole look sampled) for
-// the texture output, which develops no negative, and for a colour print computed per pixel
+// the texture output, which develops no negative, for a colour negative with DIR couplers
+// (each layer's density depends on all three exposures), and for a colour print computed per pixel
 // (the high and reference tiers): sampled on a density lattice that print missed by more
 // than the whole look sampled in stops does (docs/development/luts.md).
-std::optional<ocio::LayeredLook> layered_look(const Plan& plan, OutputMode output, const ColourIO& colour) {
+std::optional<ocio::LayeredLook> layered_look(const Plan& plan, const DevelopSettings& s, const ColourIO& colour) {
     const Stock& film = plan.film();
     const size_t layers = film.layers.size();
+    const OutputMode output = s.output;
     const bool colour_print = output == OutputMode::print && layers == 3;
     if (output == OutputMode::texture || (colour_print && !plan.print_table())) return std::nullopt;
+    // DIR couplers develop each layer from all three exposures: no curve per layer holds that.
+    if (s.dir_couplers > 0 && stock_dir_couplers(film) != DirCouplerSpec{}) return std::nullopt;
     ocio::LayeredLook look;
     look.log10_exposure_lo = INFINITY;
     look.log10_exposure_hi = -INFINITY;
@@ -105,6 +109,7 @@ void run_bake_lut(const BakeLutOptions& o) {
     s.grain = false;
     s.mtf = false;
     s.halation = 0;
+    s.dir_coupler_spread = 0;  // (the couplers' colour per pixel, without their edge effects)
     ocio::LutFormat format;
     try {
         format = ocio::lut_format_for_path(o.output);
@@ -133,7 +138,7 @@ void run_bake_lut(const BakeLutOptions& o) {
     settings.description = describe_look(look, colour.input_space(), colour.output_conversion());
     ocio::BakedLut baked;
     try {
-        const std::optional<ocio::LayeredLook> layered = layered_look(plan, s.output, colour);
+        const std::optional<ocio::LayeredLook> layered = layered_look(plan, s, colour);
         baked = ocio::bake_look(colour.converter(), colour.input_space(), develop_lattice, settings, format,
                                 layered ? &*layered : nullptr);
     } catch (const ocio::OcioError& e) {

@@ -63,7 +63,7 @@ nlohmann::json report_json(const bench::BenchReport& r) {
         {"frame", {{"width", r.width}, {"height", r.height}, {"scene", "demo"}, {"pixel_pitch_um", r.pixel_pitch_um}}},
         {"film", r.film},
         {"paper", r.paper},
-        {"look", "print, grain, MTF and halation on"},
+        {"look", "print, grain, MTF, halation and DIR couplers on"},
         {"timed_runs", r.runs},
         {"warmup_runs", 1},
         {"copy_seconds", r.copy_seconds},
@@ -162,7 +162,7 @@ void print_row(const std::string& label, const std::vector<std::string>& cells, 
 void print_report(const bench::BenchReport& r) {
     const double copy_s = r.copy_seconds;
     std::printf("darkroom bench: %s printed on %s, the %dx%d demo scene at %.3g um on film (a 4096 px wide frame's "
-                "pitch), grain, MTF and halation on\n",
+                "pitch), grain, MTF, halation and DIR couplers on\n",
                 r.film.c_str(), r.paper.c_str(), r.width, r.height, r.pixel_pitch_um);
     std::printf("machine: %s, %d cores, %d threads used, %s vectors\n", r.machine.cpu.c_str(), r.machine.cores,
                 r.threads, r.isa.c_str());
@@ -211,7 +211,7 @@ void print_report(const bench::BenchReport& r) {
     tier_row("print CIEDE2000 max", [&](const auto& t) { return error_cell(t, t.print_error.max); }, "grain off in both");
     tier_row("negative max |dD|", [&](const auto& t) { return error_cell(t, t.density_error); }, "density, grain off");
     tier_row("MTF max |d response|", [&](const auto& t) { return error_cell(t, t.mtf_error); },
-             "sine targets to Nyquist, grain and halation off");
+             "sine targets to Nyquist, grain, halation and DIR couplers off");
     // The negative's grain, and the print's where it was measured (--print-grain).
     const bool print_grain = r.print_grain;
     for (const auto& [prefix, grain] : {std::pair{"", &bench::TierResult::grain},

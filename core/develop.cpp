@@ -164,15 +164,38 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         else
             m.grain.back() = g;
     }
+    // A colour negative's DIR couplers (the texture output develops nothing, its tone unchanged).
+    const DirCouplerSpec couplers = stock_dir_couplers(stock);
+    if (s.output != OutputMode::texture && couplers != DirCouplerSpec{}) {
+        if (s.dir_couplers == 0) {
+            skipped.push_back("DIR couplers (" + std::string(role) + "): turned off");
+        } else {
+            require_kernel_budget(4 * couplers.diffusion_um * s.dir_coupler_spread / m.pixel_pitch_um, frame_width_px,
+                                  frame_height_px,
+                                  "the DIR couplers' inhibitor (" + fmt(couplers.diffusion_um) + " um x " +
+                                      fmt(s.dir_coupler_spread) + pitch + ")",
+                                  "give a smaller dir-coupler-spread or a larger " + width_setting);
+            m.couplers = design_couplers(stock, s.dir_couplers, s.dir_coupler_spread, m.pixel_pitch_um,
+                                         tier.curve_table_bits);
+        }
+    }
     // The tabulated curves; with grain, each also gives the grain's amplitude at its density
     // from the same lookup (develop and grain then run as one pass over the rows).
     if (tier.curve_table_bits > 0)
         for (size_t i = 0; i < stock.layers.size(); ++i) {
             LogAxisTable::Function amplitude;
             if (const auto& g = m.grain[i]) amplitude = [g](double density) { return g->amplitude_at(density); };
-            m.curve_tables.emplace_back(stock.layers[i].density_curve, tier.curve_table_bits, amplitude);
+            m.curve_tables.emplace_back(m.develop_curve(i), tier.curve_table_bits, amplitude);
         }
     return m;
+}
+
+// `out` of a plane that covers it (the plane itself when it is `out`).
+Plane cropped(Plane p, const Window& out) {
+    if (p.window == out) return p;
+    Plane c = Plane::unset(out);
+    for (int y = out.y0; y < out.y1; ++y) std::copy_n(p.row(y) + (out.x0 - p.window.x0), out.width(), c.row(y));
+    return c;
 }
 
 // Halation then scatter of one layer's exposure (on its window) into `out`.
@@ -190,21 +213,57 @@ Plane spread_exposure(const MaterialStages& m, size_t layer, Plane exposure, con
         scatter(exposure, spread, m.scatter[layer], frame, threads);
         return spread;
     }
-    if (exposure.window == out) return exposure;
-    Plane cropped = Plane::unset(out);  // another layer's halo made the exposure larger than this one needs
-    for (int y = out.y0; y < out.y1; ++y)
-        std::copy_n(exposure.row(y) + (out.x0 - exposure.window.x0), out.width(), cropped.row(y));
-    return cropped;
+    return cropped(std::move(exposure), out);  // another layer's halo made it larger than this one needs
+}
+
+// The DIR couplers (core/stages/couplers.h): every layer's exposure spread onto `developed`
+// grown by the inhibitor's reach, the donors' net densities from it, spread, and each layer's
+// exposure on `developed` lowered by its inhibition.
+std::vector<Plane> inhibited_exposure(const MaterialStages& m, std::vector<Plane> exposure, const Window& developed,
+                                      const Window& frame, int threads, StageTimes* times) {
+    const CouplerStage& c = *m.couplers;
+    const Window reach = developed.grown(c.radius()).intersected(frame);
+    for (size_t l = 0; l < 3; ++l) exposure[l] = spread_exposure(m, l, std::move(exposure[l]), reach, frame, threads, times);
+    StageTimer timer(times, "DIR couplers");
+    std::vector<Plane> donor;
+    for (size_t l = 0; l < 3; ++l) {
+        donor.push_back(Plane::unset(reach));
+        parallel_for(reach.y0, reach.y1, threads, [&](int y0, int y1) {
+            for (int y = y0; y < y1; ++y) coupler_donor_row(c, l, exposure[l].row(y), donor[l].row(y), reach.width());
+        });
+        if (c.radius() > 0) {
+            Plane spread = Plane::unset(developed);
+            convolve_separable(donor[l], spread, c.taps, frame, threads);
+            donor[l] = std::move(spread);
+        }
+        exposure[l] = cropped(std::move(exposure[l]), developed);
+    }
+    parallel_for(developed.y0, developed.y1, threads, [&](int y0, int y1) {
+        for (int y = y0; y < y1; ++y) {
+            float* rows[3] = {exposure[0].row(y), exposure[1].row(y), exposure[2].row(y)};
+            const float* spread[3] = {donor[0].row(y), donor[1].row(y), donor[2].row(y)};
+            inhibit_rows(c, rows, spread, developed.width());
+        }
+    });
+    return exposure;
 }
 
 // One material: exposure planes (one per layer) on their window -> density planes on `out`.
 std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> exposure, const Window& out,
                                     const Window& frame, int threads, StageTimes* times) {
+    // The Boolean grain of a pixel depends on the densities around it: develop those too.
+    auto developed_window = [&](size_t i) {
+        return m.boolean_grain[i] ? out.grown(m.boolean_grain[i]->halo_px).intersected(frame) : out;
+    };
+    int boolean_halo = 0;  // (the couplers' inhibition reaches across the layers: develop all on one window)
+    for (const auto& g : m.boolean_grain) boolean_halo = std::max(boolean_halo, g ? g->halo_px : 0);
+    const Window all_developed = out.grown(boolean_halo).intersected(frame);
+    if (m.couplers) exposure = inhibited_exposure(m, std::move(exposure), all_developed, frame, threads, times);
     std::vector<Plane> density;
     for (size_t i = 0; i < exposure.size(); ++i) {
-        // The Boolean grain of a pixel depends on the densities around it: develop those too.
-        const Window developed = m.boolean_grain[i] ? out.grown(m.boolean_grain[i]->halo_px).intersected(frame) : out;
-        Plane d = spread_exposure(m, i, std::move(exposure[i]), developed, frame, threads, times);
+        const Window developed = developed_window(i);
+        Plane d = m.couplers ? cropped(std::move(exposure[i]), developed)
+                             : spread_exposure(m, i, std::move(exposure[i]), developed, frame, threads, times);
         if (m.grain[i] && !m.curve_tables.empty()) {
             StageTimer timer(times, kDevelopAndGrainStage);
             develop_with_grain(d, m.curve_tables[i], *m.grain[i], threads);
@@ -220,7 +279,7 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
                     if (!m.curve_tables.empty()) {
                         m.curve_tables[i].apply_row(row, row, developed.width());
                     } else {
-                        const Curve& curve = m.stock.layers[i].density_curve;
+                        const Curve& curve = m.develop_curve(i);
                         for (int x = 0; x < developed.width(); ++x)
                             row[x] = float(curve(std::log10(std::max(double(row[x]), 1e-30))));
                     }
@@ -234,9 +293,7 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
         if (m.boolean_grain[i]) {
             StageTimer timer(times, "grain");
             apply_boolean_grain(d, *m.boolean_grain[i], threads);
-            Plane cropped = Plane::unset(out);
-            for (int y = out.y0; y < out.y1; ++y) std::copy_n(d.row(y) + (out.x0 - developed.x0), out.width(), cropped.row(y));
-            d = std::move(cropped);
+            d = cropped(std::move(d), out);
         }
         density.push_back(std::move(d));
     }
@@ -290,6 +347,8 @@ void validate(const DevelopSettings& s) {
     check_range(s.print_width_mm, 0, kMaxFormatMm, "print width", "0-10000 mm");
     check_range(s.halation, 0, kMaxHalation, "halation", "0-100");
     check_range(s.scan_aim_code, 0, kMaxScanCode, "scan aim", "a code value 0-1023");
+    check_range(s.dir_couplers, 0, kMaxDirCouplers, "DIR couplers", "0-3");
+    check_range(s.dir_coupler_spread, 0, kMaxDirCouplerSpread, "DIR coupler spread", "0-10");
     for (int c = 0; c < 3; ++c) {
         const std::string channel = std::string(" (") + "RGB"[c] + ")";
         check_range(s.grain_amount[c], 0, kMaxGrainScale, "grain amount" + channel, "0-100");
@@ -582,11 +641,15 @@ void print_densities(const PrintExposure& enlarger, const Stock& paper, const do
 }
 
 int MaterialStages::halo_px() const {
-    int r = 0;
-    for (size_t i = 0; i < scatter.size(); ++i)
-        r = std::max(r, scatter[i].radius + (halation[i] ? halation[i]->radius : 0) +
-                            (boolean_grain[i] ? boolean_grain[i]->halo_px : 0));
-    return r;
+    int r = 0, spread = 0, boolean = 0;
+    for (size_t i = 0; i < scatter.size(); ++i) {
+        const int layer_spread = scatter[i].radius + (halation[i] ? halation[i]->radius : 0);
+        const int layer_boolean = boolean_grain[i] ? boolean_grain[i]->halo_px : 0;
+        r = std::max(r, layer_spread + layer_boolean);
+        spread = std::max(spread, layer_spread), boolean = std::max(boolean, layer_boolean);
+    }
+    // The couplers develop every layer on the union of their windows, and spread the inhibitor.
+    return couplers ? spread + boolean + couplers->radius() : r;
 }
 
 namespace {
@@ -790,10 +853,19 @@ std::vector<Plane> Plan::print(std::vector<Plane> negative, const Window& out, i
 
 namespace {
 
-// A layer's developed density at one exposure, as develop_material computes it per pixel.
+// A layer's developed density at one exposure, as develop_material computes it per pixel
+// (with couplers, in a uniform grey field: every layer at that exposure).
 double developed_density(const MaterialStages& m, size_t layer, double exposure_lux_s) {
+    if (m.couplers) {
+        float h[3], n[3], *rows[3] = {&h[0], &h[1], &h[2]};
+        const float* spread[3] = {&n[0], &n[1], &n[2]};
+        for (size_t l = 0; l < 3; ++l) h[l] = float(std::clamp(exposure_lux_s, 0.0, kMaxInput));
+        for (size_t l = 0; l < 3; ++l) coupler_donor_row(*m.couplers, l, &h[l], &n[l], 1);
+        inhibit_rows(*m.couplers, rows, spread, 1);
+        exposure_lux_s = h[layer];
+    }
     if (!m.curve_tables.empty()) return m.curve_tables[layer](float(exposure_lux_s));
-    return m.stock.layers[layer].density_curve(std::log10(std::max(exposure_lux_s, 1e-30)));
+    return m.develop_curve(layer)(std::log10(std::max(exposure_lux_s, 1e-30)));
 }
 
 }  // namespace
@@ -1024,7 +1096,8 @@ std::vector<std::string> Plan::describe() const {
                                      : std::to_string(m.scatter[i].separable.size()) + " separable terms" +
                                            (m.scatter[i].centre != 0 ? " and a centre delta" : "")));
             lines.push_back("  develop (" + l.name + "): H&D curve, D " + fmt(l.density_curve.y_min()) + " to " +
-                            fmt(l.density_curve.y_max()));
+                            fmt(l.density_curve.y_max()) +
+                            (m.couplers ? ", through the curve before the DIR couplers' inhibition" : ""));
             if (m.grain[i])
                 lines.push_back("  grain (" + l.name + "): " + fmt(m.grain[i]->pixel_sigma_at_unit_density()) +
                                 " D per pixel at net density 1, filter radius " + std::to_string(m.grain[i]->radius) +
@@ -1043,6 +1116,14 @@ std::vector<std::string> Plan::describe() const {
         lines.push_back("expose: scene-linear 0.18 -> " + fmt(0.18 * film_exposure_scale_) + " lux-s (ISO " +
                         fmt(film_stages_->stock.iso_speed) + ", " + fmt(settings_.exposure_ev) + " EV)");
     material(*film_stages_, "film", settings_.output != OutputMode::texture);
+    if (const auto& c = film_stages_->couplers) {
+        std::string rows;
+        for (int i = 0; i < 3; ++i)
+            rows += std::string(i ? "; " : "") + fmt(c->matrix[3 * i]) + " " + fmt(c->matrix[3 * i + 1]) + " " +
+                    fmt(c->matrix[3 * i + 2]);
+        lines.push_back("  DIR couplers: log H lowered by M x net density (rows R, G, B: " + rows +
+                        "), the inhibitor spread " + std::to_string(c->radius()) + " px");
+    }
     switch (settings_.output) {
         case OutputMode::print: {
             if (views_film_) {

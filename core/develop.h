@@ -61,6 +61,8 @@ inline constexpr double kMaxGrainScale = 100;     // grain amount and size multi
 inline constexpr double kMaxGrainResponse = 4;    // the density exponent of granularity
 inline constexpr double kMaxHalation = 100;       // multiplier of the stock's strength
 inline constexpr double kMaxFormatMm = 1e4;       // frame and print widths
+inline constexpr double kMaxDirCouplers = 3;      // multiplier of the stock's DIR couplers
+inline constexpr double kMaxDirCouplerSpread = 10;  // multiplier of their inhibitor's spread
 // The scan output: Cineon-style 10-bit printing-density code values (Kodak Cineon: 0.002
 // density per code value, base+fog at code 95), written as code / 1023.
 inline constexpr double kScanBaseCode = 95, kScanDensityPerCode = 0.002, kMaxScanCode = 1023;
@@ -75,6 +77,11 @@ struct DevelopSettings {
     bool mtf = true;
     // Halation: multiplies each film layer's halation strength (0 = off).
     double halation = 1.0;
+    // DIR couplers of a colour negative (core/stages/couplers.h): multiplies the stock's
+    // inhibition matrix (0 = off, the data sheet's curves per pixel) and the spread of its
+    // inhibitor on the film (0 = pointwise: interimage colour without edge effects).
+    double dir_couplers = 1.0;
+    double dir_coupler_spread = 1.0;
     // Per channel (R, G, B; a single-layer stock uses the first): multiplies the layer's RMS
     // granularity and grain size; a finite density_exponent replaces the stock's.
     std::array<double, 3> grain_amount{1.0, 1.0, 1.0};

@@ -9,6 +9,7 @@
 // the halo it shares with the band before.
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -98,6 +99,52 @@ private:
     std::unique_ptr<GrainNoiseStream> noise_stream_;
 };
 
+// The DIR couplers (core/stages/couplers.h) on the scattered exposure as it streams down the
+// rows: the donors' net densities of each row the scatter gives (on `film` grown by the
+// inhibitor's reach, `scattered`), spread by their own stream, and each row's exposure kept
+// in a ring until its inhibition is known. The same steps as develop.cpp's inhibited_exposure.
+class CouplerStream {
+public:
+    using ScatteredRow = std::function<float* const*(int y)>;  // row y of the three layers on `scattered`
+    CouplerStream(const CouplerStage& c, const Window& film, const Window& scattered, const Window& frame, int rows_end,
+                  ScatteredRow scattered_row)
+        : c_(c),
+          offset_(film.x0 - scattered.x0),
+          width_(film.width()),
+          slots_(2 * c.radius() + 2 * SeparableStream::kMaxRowsTogether + 2),
+          ring_(3, std::vector<float>(size_t(slots_) * size_t(scattered.width()))),
+          stride_(scattered.width()),
+          spread_(film.width(), std::vector<SeparableFilter>(3, SeparableFilter{{c.taps}, {1.0f}}), frame.y0, frame.y1,
+                  rows_end, [this, film, scattered, frame, scattered_row](int y, float* const* padded) {
+                      float* const* rows = scattered_row(y);
+                      const int padded_x0 = film.x0 - c_.radius(), padded_x1 = film.x1 + c_.radius();
+                      for (size_t l = 0; l < 3; ++l) {
+                          std::copy_n(rows[l], stride_, kept(l, y));
+                          coupler_donor_row(c_, l, rows[l], padded[l] + (scattered.x0 - padded_x0), stride_);
+                          hold_frame_edges(padded[l], padded_x0, padded_x1, frame);
+                      }
+                  }) {}
+    // Row y's inhibited exposure of each layer on `film`, in the stream's own rows (the caller's
+    // to change until the next call).
+    float* const* row(int y) {
+        const float* const* spread = spread_.row(y);
+        for (size_t l = 0; l < 3; ++l) out_[l] = kept(l, y) + offset_;
+        inhibit_rows(c_, out_, spread, width_);
+        return out_;
+    }
+
+private:
+    float* kept(size_t layer, int y) {
+        return ring_[layer].data() + size_t(((y % slots_) + slots_) % slots_) * size_t(stride_);
+    }
+    const CouplerStage& c_;
+    int offset_, width_, slots_;
+    std::vector<std::vector<float>> ring_;  // per layer, slots_ rows of `scattered`'s width
+    int stride_;
+    SeparableStream spread_;
+    float* out_[3];
+};
+
 // Rows of `planes` planes of a window's width.
 struct Rows {
     Rows(size_t planes, int width) : storage(planes, std::vector<float>(size_t(width))) {
@@ -135,8 +182,11 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
     const Window film_window = out_window.grown(paper_halo).intersected(frame_);  // the film's densities
     const ScatterFilters film_scatter_filters(film);
     const int film_radius = film_scatter_filters.radius;
+    // The DIR couplers' inhibitor reaches this far: the scatter's output spans its columns too.
+    const int coupler_radius = film.couplers ? film.couplers->radius() : 0;
+    const Window scattered = film_window.grown(coupler_radius).intersected(frame_);
     // The exposure the film's scatter reads: its rows past the frame's edges are its edge pixels'.
-    const int padded_x0 = film_window.x0 - film_radius, padded_x1 = film_window.x1 + film_radius;
+    const int padded_x0 = scattered.x0 - film_radius, padded_x1 = scattered.x1 + film_radius;
     const FilmExposure exposure(in, film.rgb_weights, monochrome_input_, film_exposure_scale_);
     std::vector<const HalationKernel*> halation_kernels;  // per layer, null where it has none
     for (const auto& h : film.halation) halation_kernels.push_back(h ? &*h : nullptr);
@@ -151,7 +201,9 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         // for the rows the band's print reads.
         const Window film_rows{film_window.x0, std::max(film_window.y0, band_begin - paper_halo), film_window.x1,
                                std::min(film_window.y1, band_end + paper_halo)};
-        const Window exposed = film_rows.grown(film_radius).intersected(frame_);
+        const Window scattered_rows{scattered.x0, std::max(frame_.y0, film_rows.y0 - coupler_radius), scattered.x1,
+                                    std::min(frame_.y1, film_rows.y1 + coupler_radius)};
+        const Window exposed = scattered_rows.grown(film_radius).intersected(frame_);
         std::unique_ptr<CoarseHalationStream> halation;
         if (halated)
             halation = std::make_unique<CoarseHalationStream>(
@@ -159,8 +211,8 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
                     exposure.row(y, x_begin, x_end - x_begin, rows);
                     clock.mark("expose");
                 });
-        SeparableStream film_scatter(film_window.width(), film_scatter_filters.filters, frame_.y0, frame_.y1,
-                                     film_rows.y1, [&](int y, float* const* padded) {
+        SeparableStream film_scatter(scattered.width(), film_scatter_filters.filters, frame_.y0, frame_.y1,
+                                     scattered_rows.y1, [&](int y, float* const* padded) {
             clock.mark(film_scatter_filters.stage);  // (the filtering of the rows read before)
             float* inside[3];
             for (size_t l = 0; l < layers; ++l) inside[l] = padded[l] + (exposed.x0 - padded_x0);
@@ -173,12 +225,26 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
             }
             for (size_t l = 0; l < layers; ++l) hold_frame_edges(padded[l], padded_x0, padded_x1, frame_);
         });
+        std::unique_ptr<CouplerStream> couplers;
+        if (film.couplers)
+            couplers = std::make_unique<CouplerStream>(*film.couplers, film_window, scattered, frame_, film_rows.y1,
+                                                       [&](int y) {
+                                                           float* const* rows = film_scatter.row(y);
+                                                           clock.mark(film_scatter_filters.stage);
+                                                           return rows;
+                                                       });
         LayerDevelop film_develop(film, film_window);
         // film_window's row y of each layer's densities, into `density`, or (null) in the scatter's
-        // rows, which it returns.
+        // (or the couplers') rows, which it returns.
         auto film_density_row = [&](int y, float* const* density) {
-            float* const* exposure = film_scatter.row(y);
-            clock.mark(film_scatter_filters.stage);
+            float* const* exposure;
+            if (couplers) {
+                exposure = couplers->row(y);
+                clock.mark("DIR couplers");
+            } else {
+                exposure = film_scatter.row(y);
+                clock.mark(film_scatter_filters.stage);
+            }
             if (!density) density = exposure;
             film_develop.row(y, exposure, density, film_window.width(), clock);
             return density;

@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/stages/couplers.h"
 #include "core/stages/grain.h"
 #include "core/stages/grain_boolean.h"
 #include "core/stages/halation.h"
@@ -28,6 +29,12 @@ struct MaterialStages {
     // per layer, the reference tier's grain instead (then `grain` is none)
     std::vector<std::optional<BooleanGrain>> boolean_grain;
     std::vector<LogAxisTable> curve_tables;          // per layer, when the tier tabulates curves
+    std::optional<CouplerStage> couplers;            // a colour film's DIR couplers; none when off
+    // The curve a layer develops its exposure through: the data sheet's, or with couplers
+    // the curve before inhibition.
+    const Curve& develop_curve(size_t layer) const {
+        return couplers ? couplers->before[layer] : stock.layers[layer].density_curve;
+    }
     int halo_px() const;
 };
 

@@ -290,7 +290,7 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
                 if (factor[i * 3 + j] != 0.0)
                     film_grain.mixed_noise.push_back({film.grain[j]->key, float(factor[i * 3 + j])});
         const Curve extra_at = make_curve(std::move(density_i), std::move(extra_i), "paper grain on the film's densities");
-        film.curve_tables[i] = LogAxisTable(film.stock.layers[i].density_curve, curve_table_bits,
+        film.curve_tables[i] = LogAxisTable(film.develop_curve(i), curve_table_bits,
                                             [film_grain, extra_at](double d) {
                                                 return std::hypot(film_grain.amplitude_at(d), extra_at(d));
                                             });

@@ -49,6 +49,8 @@ namespace {
 
 using stock_json::kHuge;
 using stock_json::kMaxDensity;
+using stock_json::kMaxDirCoupling;
+using stock_json::kMaxDirDiffusionUm;
 using stock_json::kMaxIsoSpeed;
 using stock_json::kMaxGrainSizeUm;
 using stock_json::kMaxHalationRadiusUm;
@@ -290,6 +292,23 @@ Layer read_layer(const FieldReader& r, const json& v, const Stock& stock) {
     return layer;
 }
 
+// A colour negative's DIR couplers: {"matrix": 3 rows (receiver layers R, G, B) of 3 donors,
+// "diffusion_um"}.
+DirCouplerSpec read_dir_couplers(const FieldReader& r, const json& v, const Stock& stock) {
+    if (stock.kind != StockKind::negative || !stock.is_colour())
+        r.fail("only colour negatives have DIR couplers (their inhibition acts between three dye layers)");
+    DirCouplerSpec c;
+    FieldReader rm = r.at("matrix");
+    const json& rows = r.field(v, "matrix");
+    if (!rows.is_array() || rows.size() != 3) rm.fail("expected 3 rows (receiver layers R, G, B) of 3 numbers");
+    for (size_t i = 0; i < 3; ++i) {
+        if (!rows[i].is_array() || rows[i].size() != 3) rm.at(i).fail("expected 3 numbers (donor layers R, G, B)");
+        for (size_t j = 0; j < 3; ++j) c.matrix[i][j] = rm.at(i).at(j).number(rows[i][j], 0.0, kMaxDirCoupling);
+    }
+    c.diffusion_um = r.at("diffusion_um").number(r.field(v, "diffusion_um"), 0.0, kMaxDirDiffusionUm);
+    return c;
+}
+
 const std::map<std::string, StockKind> kKindNames{
     {"negative", StockKind::negative},
     {"reversal", StockKind::reversal},
@@ -311,6 +330,22 @@ void check_layers(const FieldReader& r, const json& doc, const Stock& s) {
 }
 
 }  // namespace
+
+DirCouplerSpec default_dir_couplers() {
+    // Same-layer inhibition 0.3 and between layers 0.2 log10 H per unit net density, spread
+    // 15 um: the magnitude of the published fits of this model (docs/model/dir-couplers.md).
+    constexpr double kSameLayer = 0.3, kBetweenLayers = 0.2;
+    DirCouplerSpec c;
+    for (size_t i = 0; i < 3; ++i)
+        for (size_t j = 0; j < 3; ++j) c.matrix[i][j] = i == j ? kSameLayer : kBetweenLayers;
+    c.diffusion_um = 15.0;
+    return c;
+}
+
+DirCouplerSpec stock_dir_couplers(const Stock& stock) {
+    if (stock.kind != StockKind::negative || !stock.is_colour()) return {};
+    return stock.dir_couplers ? *stock.dir_couplers : default_dir_couplers();
+}
 
 std::string stock_kind_name(StockKind kind) {
     for (const auto& [name, k] : kKindNames)
@@ -373,6 +408,7 @@ Stock parse_stock_json(const std::string& text, const std::string& origin) {
         for (double& x : s.layers.back().density_curve.x) x += s.curve_log_h_offset;
     }
     check_layers(r, doc, s);
+    if (doc.contains("dir_couplers")) s.dir_couplers = read_dir_couplers(r.at("dir_couplers"), doc["dir_couplers"], s);
     if (doc.contains("base_density")) {
         if (!s.is_colour()) r.at("base_density").fail("only colour stocks have a spectral base density");
         s.base_density = read_spectrum(r.at("base_density"), doc["base_density"], false);
@@ -424,6 +460,8 @@ std::string stock_to_json(const Stock& s) {
         if (s.is_colour()) layer["dye_density"] = table(l.dye_density);
         doc["layers"].push_back(layer);
     }
+    if (s.dir_couplers)
+        doc["dir_couplers"] = {{"matrix", s.dir_couplers->matrix}, {"diffusion_um", s.dir_couplers->diffusion_um}};
     return doc.dump(2);
 }
 

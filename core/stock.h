@@ -9,6 +9,8 @@
 // JSON format are imported too (import_spektrafilm_profile).
 #pragma once
 
+#include <array>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -47,6 +49,22 @@ struct HalationSpec {
     double strength = 0.0;   // fraction of the layer's exposure added back, spread out
     double radius_um = 0.0;  // standard deviation of the (Gaussian) spread on the film
 };
+
+// DIR (development-inhibitor-releasing) couplers: as a layer develops, its couplers release
+// an inhibitor that diffuses through the emulsion and slows development in the same layer
+// and the others (docs/model/dir-couplers.md). Inhibition acts as a shift of log exposure:
+// receiver layer i develops as if its log10 H were lowered by sum_j matrix[i][j] times the
+// net density of donor layer j, blurred by a Gaussian of standard deviation diffusion_um.
+struct DirCouplerSpec {
+    std::array<std::array<double, 3>, 3> matrix{};  // [receiver][donor], log10 H per unit net density
+    double diffusion_um = 0.0;
+    bool operator==(const DirCouplerSpec& o) const { return matrix == o.matrix && diffusion_um == o.diffusion_um; }
+    bool operator!=(const DirCouplerSpec& o) const { return !(*this == o); }
+};
+
+// The default of a colour negative whose file gives no couplers (docs/model/dir-couplers.md:
+// the magnitude of published model fits, one value on the diagonal and one off it).
+DirCouplerSpec default_dir_couplers();
 
 struct Layer {
     std::string name;
@@ -87,9 +105,15 @@ struct Stock {
     // sheets), log10 of that exposure at the stock's speed, added to every curve's log H.
     double curve_log_h_offset = 0.0;
     std::vector<Layer> layers;
+    // Colour negatives: the couplers the file gives (none: default_dir_couplers()).
+    std::optional<DirCouplerSpec> dir_couplers;
 
     bool is_colour() const { return layers.size() == 3; }
 };
+
+// The couplers a stock develops with: a colour negative's own, else the default; other
+// stocks (black-and-white, papers, print films) none (a zero matrix).
+DirCouplerSpec stock_dir_couplers(const Stock& stock);
 
 // The spectral density of a developed material from its layers' densities (one per layer):
 // base + sum_l (D_l - d_min_l) dye_l. Per pixel; layer_d_min, when given, are the layers'

@@ -31,6 +31,9 @@ inline constexpr double kMinDensityRise = 0.1;
 // reflected by the base's back (some 0.13 mm thick), spreads a few hundred um.
 inline constexpr double kMaxGrainSizeUm = 50.0;
 inline constexpr double kMaxHalationRadiusUm = 5000.0;
+// DIR couplers: log10 H of inhibition per unit net density, and the inhibitor's spread.
+inline constexpr double kMaxDirCoupling = 2.0;
+inline constexpr double kMaxDirDiffusionUm = 500.0;
 
 // Reads fields of a JSON document, naming the file and the field path in every error.
 class FieldReader {

@@ -20,6 +20,7 @@ using nlohmann::json;
 constexpr const char* kStocks = "Stocks";
 constexpr const char* kExposure = "Exposure and printing";
 constexpr const char* kGrain = "Grain";
+constexpr const char* kDevelopment = "Development";
 constexpr const char* kOptics = "Optics and format";
 constexpr const char* kColour = "Colour management (OCIO)";
 
@@ -225,6 +226,19 @@ std::vector<Parameter> make_table() {
         .animatable = true;
     add(row<uint64_t>("seed", ParameterType::seed, [](Look& l) -> auto& { return l.settings.seed; }), kGrain, "Seed",
         "seed", "", "Grain seed: the grain is a function of (seed, frame, layer, pixel)");
+
+    // Development.
+    Parameter& couplers =
+        add(number("dir-couplers", [](Look& l) -> auto& { return l.settings.dir_couplers; }, 0, kMaxDirCouplers, 0, 2),
+            kDevelopment, "DIR couplers", "dirCouplers", "",
+            "Multiplies the colour negative's DIR couplers: development inhibited by the density around, in its own "
+            "and the other layers (interimage colour and edge effects; 0 = off, the data sheet's curves per pixel)");
+    couplers.animatable = couplers.per_pixel = true;  // (a LUT holds their colour, spread 0)
+    add(number("dir-coupler-spread", [](Look& l) -> auto& { return l.settings.dir_coupler_spread; }, 0,
+               kMaxDirCouplerSpread, 0, 4),
+        kDevelopment, "Inhibitor spread", "dirCouplerSpread", "",
+        "Multiplies how far the DIR couplers' inhibitor diffuses on the film (0 = pointwise: no edge effects)")
+        .animatable = true;
 
     // Optics and format.
     add(row<bool>("mtf", ParameterType::on_off, [](Look& l) -> auto& { return l.settings.mtf; }), kOptics, "MTF",

@@ -22,9 +22,10 @@ struct Group {
     bool open;
 };
 constexpr const char* kLookGroup = "lookGroup";
-const std::array<Group, 5> kGroups{{{"Stocks", "stocksGroup", true},
+const std::array<Group, 6> kGroups{{{"Stocks", "stocksGroup", true},
                                     {"Exposure and printing", "exposureGroup", true},
                                     {"Grain", "grainGroup", true},
+                                    {"Development", "developmentGroup", false},
                                     {"Optics and format", "opticsGroup", false},
                                     {"Colour management (OCIO)", "colourGroup", false}}};
 

@@ -53,7 +53,7 @@ TEST_CASE("darkroom bench --size 64x36 --json runs and its JSON has every field"
     CHECK(doc["tiers"][0]["errors"]["print_de2000_max"] == 0.0);
     CHECK(doc["tiers"][0]["errors"]["negative_density_max"] == 0.0);
     CHECK(doc["tiers"][0]["errors"]["mtf_max"] == 0.0);
-    REQUIRE(doc["disabled_stages"].size() == 3);
+    REQUIRE(doc["disabled_stages"].size() == 4);
     for (const auto& d : doc["disabled_stages"])
         for (const char* key : {"stage_off", "seconds", "copy_ratio", "stage_seconds_when_on", "saved_seconds", "stages",
                                 "neutral_stage_kept_seconds", "identical_pixels_to_neutral_stage_kept"})

@@ -28,7 +28,7 @@ Look unusual_look() {
     s.input_units = InputUnits::lux_seconds, s.grain = false, s.mtf = false, s.halation = 2.5;
     s.grain_amount = {0.5, 1, 1.5}, s.grain_size = {2, 2, 2}, s.grain_density_exponent = {0.4, 0.3, 0.2};
     s.printer_lights = {24, 25, 27}, s.filtration_ymc = {0, 10, 20}, s.frame_width_mm = 24.89;
-    s.print_width_mm = 254, s.seed = 18446744073709551615ull;
+    s.print_width_mm = 254, s.seed = 18446744073709551615ull, s.dir_couplers = 0.5, s.dir_coupler_spread = 2;
     s.print_viewing = PrintViewing::absolute, s.print_gamut_compression = false;
     s.scan_balance = false, s.scan_aim_code = 470;
     l.colour = {"config.ocio", "ACEScg", "", {"sRGB", "Film"}};
@@ -85,6 +85,9 @@ TEST_CASE("the table's defaults and ranges are the core's", "[look]") {
     CHECK(parameter("printer-lights").default_value() == json(core.printer_lights));
     CHECK(parameter("quality").default_value() == quality_name(kDefaultQuality));
     CHECK(parameter("halation").max == kMaxHalation);
+    CHECK(parameter("dir-couplers").default_value() == core.dir_couplers);
+    CHECK(parameter("dir-couplers").max == kMaxDirCouplers);
+    CHECK(parameter("dir-coupler-spread").max == kMaxDirCouplerSpread);
     CHECK(parameter("filtration").max == kMaxFiltrationCc);
     CHECK(parameter("printer-lights").min == kPrinterLightsAuto - kMaxPrinterPoints);
 }

@@ -1,0 +1,52 @@
+// DIR couplers in colour development (docs/model/dir-couplers.md). Each receiver layer i of
+// a colour negative develops as if its log exposure were lowered by the inhibitor around it:
+//   D_i = D0_i(log10 H_i - s_i),   s_i = sum_j M_ij (G * n_j),   n_j = S_j(log10 H_j) - Dmin_j
+// M the stock's matrix times the user's amount, G a Gaussian of the inhibitor's spread, S_j
+// the data sheet's curve (the density a uniform field develops to, which releases the
+// inhibitor) and D0_i the curve before inhibition, solved so that a neutral uniform field
+// develops exactly to the sheet: D0_i(x - sum_j M_ij n_j(x)) = S_i(x).
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "core/curve.h"
+#include "core/stages/tables.h"
+#include "core/stock.h"
+
+namespace darkroom {
+
+using CouplerMatrix = std::array<std::array<double, 3>, 3>;  // [receiver][donor]
+
+// The curves before inhibition D0_i for the sheet's curves S and matrix M: through the points
+// (u_i(x), S_i(x)), u_i(x) = x - sum_j M_ij (S_j(x) - Dmin_j), at every sample x of the three
+// curves (u is linear between them, so D0_i o u_i equals S_i exactly). Throws
+// std::invalid_argument naming the layer where u_i falls as x rises (inhibition steeper
+// than the curve: no curve before it reproduces the sheet).
+std::array<Curve, 3> curves_before_inhibition(const std::array<const Curve*, 3>& sheet, const CouplerMatrix& m,
+                                              const std::array<std::string, 3>& layer_names);
+
+// The develop stage's couplers, designed for a plan.
+struct CouplerStage {
+    std::array<float, 9> matrix{};  // M_ij at [3 i + j], the stock's times the amount
+    std::vector<float> taps;        // the inhibitor's spread (pixel-integrated Gaussian)
+    std::array<Curve, 3> sheet;     // the donors' curves S_j
+    std::array<Curve, 3> before;    // the receivers' curves before inhibition D0_i
+    std::array<double, 3> d_min{};
+    std::vector<LogAxisTable> sheet_tables;  // S_j tabulated, in the tiers that tabulate curves
+    int radius() const { return int(taps.size() / 2); }
+};
+
+// The stage for a stock's couplers times `amount`, its Gaussian of diffusion_um x `spread` on
+// the film at the pixel pitch. curve_table_bits > 0: the donors' curves tabulated
+// (stages/tables.h).
+CouplerStage design_couplers(const Stock& stock, double amount, double spread, double pixel_pitch_um,
+                             int curve_table_bits);
+
+// The donors' net densities n_j of a row of layer j's exposures (lux-seconds; below 0 none).
+void coupler_donor_row(const CouplerStage& c, size_t layer, const float* exposure, float* net_density, int width);
+
+// Each layer's exposure row times 10^-s_i, s_i from the donors' spread net densities.
+void inhibit_rows(const CouplerStage& c, float* const* exposure, const float* const* spread_net_density, int width);
+
+}  // namespace darkroom
