@@ -31,7 +31,11 @@ void run_print_greys(const SensitometryCliOptions& o, bool film_given, bool pape
             throw UserError(e.what());
         }
     std::vector<Stock> films, papers;
-    for (const Stock& s : builtin_stocks()) (s.kind == StockKind::negative ? films : papers).push_back(s);
+    for (const Stock& s : builtin_stocks())
+        if (s.kind == StockKind::negative)
+            films.push_back(s);
+        else if (s.kind == StockKind::paper || s.kind == StockKind::print_film)
+            papers.push_back(s);  // (a slide is its own picture: no printed grey scale)
     if (film_given) films = {*given};
     if (paper_given) papers = {*given};
     const std::vector<double> evs{-3, -2, -1, 0, 1, 2, 3};

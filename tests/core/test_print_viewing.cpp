@@ -121,7 +121,11 @@ TEST_CASE("the grey scale printed with the automatic lights tracks neutral withi
             const std::vector<GreyPatch> greys = print_grey_scale(*film, *paper, flat_patch_settings(), {-2, -1, 0, 1, 2});
             INFO(film->id << " on " << paper->id);
             CHECK(greys[2].chroma < 1e-4);
-            for (const GreyPatch& g : greys) CHECK(g.chroma < (paper->is_colour() ? 7.0 : 1e-6));
+            // Two papers' published curves part in the print's shadows (Ultra Endura by up to
+            // 19 at -2 EV, Ektacolor Edge by up to 10, docs/reference/print-greys.md): a wider bound.
+            const bool tinted_sheet = paper->id == "kodak-ultra-endura" || paper->id == "kodak-ektacolor-edge";
+            const double bound = !paper->is_colour() ? 1e-6 : tinted_sheet ? 20.0 : 7.5;
+            for (const GreyPatch& g : greys) CHECK(g.chroma < bound);
         }
 }
 
