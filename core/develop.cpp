@@ -176,7 +176,7 @@ Plane spread_exposure(const MaterialStages& m, size_t layer, Plane exposure, con
                       int threads, StageTimes* times) {
     if (m.halation[layer]) {
         StageTimer timer(times, "halation");
-        Plane halated = Plane::unset(out.grown(m.scatter[layer].radius).intersected(frame));
+        Plane halated = Plane::unset(scatter_input_window(m.scatter[layer], out, frame));
         apply_halation(exposure, halated, *m.halation[layer], frame, threads);
         exposure = std::move(halated);
     }
@@ -199,7 +199,7 @@ std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> 
     std::vector<Plane> density;
     for (size_t i = 0; i < exposure.size(); ++i) {
         // The Boolean grain of a pixel depends on the densities around it: develop those too.
-        const Window developed = m.boolean_grain[i] ? out.grown(m.boolean_grain[i]->halo_px).intersected(frame) : out;
+        const Window developed = m.developed_window(i, out, frame);
         Plane d = spread_exposure(m, i, std::move(exposure[i]), developed, frame, threads, times);
         if (m.grain[i] && !m.curve_tables.empty()) {
             StageTimer timer(times, kDevelopAndGrainStage);
@@ -421,6 +421,20 @@ int MaterialStages::halo_px() const {
     return r;
 }
 
+Window MaterialStages::developed_window(size_t layer, const Window& out, const Window& frame) const {
+    return boolean_grain[layer] ? out.grown(boolean_grain[layer]->halo_px).intersected(frame) : out;
+}
+
+Window MaterialStages::input_window(const Window& out, const Window& frame) const {
+    Window needed = out;
+    for (size_t i = 0; i < scatter.size(); ++i) {
+        Window w = scatter_input_window(scatter[i], developed_window(i, out, frame), frame);
+        if (halation[i]) w = w.grown(halation[i]->radius).intersected(frame);
+        needed = {std::min(needed.x0, w.x0), std::min(needed.y0, w.y0), std::max(needed.x1, w.x1), std::max(needed.y1, w.y1)};
+    }
+    return needed;
+}
+
 namespace {
 
 // The image's window in the film frame's coordinates; throws for an unusable geometry.
@@ -530,11 +544,17 @@ Plan Plan::for_frame(int frame) const {
 
 int Plan::halo_px() const { return film_stages_->halo_px() + (print_ ? paper_stages_->halo_px() : 0); }
 
-Window Plan::input_window(const Window& output) const { return output.grown(halo_px()).intersected(frame_); }
+Window Plan::input_window(const Window& output) const {
+    return film_stages_->input_window(film_output_window(output), frame_);
+}
+
+Window Plan::film_output_window(const Window& output) const {
+    return print_ ? paper_stages_->input_window(output, frame_) : output;
+}
 
 std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& film_out, int threads,
                                       StageTimes* times) const {
-    const Window film_in = film_out.grown(film_stages_->halo_px()).intersected(frame_);
+    const Window film_in = film_stages_->input_window(film_out, frame_);
     std::vector<Plane> exposure;
     StageTimer expose_timer(times, "expose");
     const auto& weights = film_stages_->rgb_weights;
@@ -661,7 +681,7 @@ void Plan::result_of_negative(const double* density, double* result) const {
 // patch keeps its mean. Negative input values keep their sign.
 std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, int threads, StageTimes* times) const {
     const MaterialStages& m = *film_stages_;
-    const Window film_in = out.grown(m.halo_px()).intersected(frame_);
+    const Window film_in = m.input_window(out, frame_);
     // Where the scene's mid grey falls (with the input in lux seconds, 0.18 is no grey: the film's
     // own mid grey at its ISO speed).
     const double mid_grey_log_h = std::log10(settings_.input_units == InputUnits::lux_seconds
@@ -731,8 +751,7 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
     if (settings_.output == OutputMode::texture) {
         result = texture(in, out_window, threads, times);
     } else if (print_) {
-        const Window film_out = out_window.grown(paper_stages_->halo_px()).intersected(frame_);
-        result = print(develop_film(in, film_out, threads, times), out_window, threads, times);
+        result = print(develop_film(in, film_output_window(out_window), threads, times), out_window, threads, times);
     } else if (views_film_) {
         const std::vector<Plane> density = develop_film(in, out_window, threads, times);
         StageTimer timer(times, "view");

@@ -28,7 +28,15 @@ struct MaterialStages {
     // per layer, the reference tier's grain instead (then `grain` is none)
     std::vector<std::optional<BooleanGrain>> boolean_grain;
     std::vector<LogAxisTable> curve_tables;          // per layer, when the tier tabulates curves
+    // How far the densities of a pixel reach into the exposure, in pixels (the layers' most).
     int halo_px() const;
+    // Layer i's densities on `out` need its developed densities here: grown by the reach of
+    // its Boolean grain (which reads the densities around a pixel).
+    Window developed_window(size_t layer, const Window& out, const Window& frame) const;
+    // The exposure the layers' densities on `out` need: each layer's developed window, grown
+    // by its scatter's input (scatter_input_window: whole tiles where the scatter is summed by
+    // FFT) and its halation's reach, clipped to the frame; the union over the layers.
+    Window input_window(const Window& out, const Window& frame) const;
 };
 
 // The paper's layer densities printed from the negative's (colour on colour): the enlarger's
