@@ -85,7 +85,7 @@ void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Wi
 constexpr int kMinFftRadius = 16;
 // The window of src that scatter() reads for `out`: out grown by the radius, clipped to the
 // frame; for a kernel summed by FFT, first grown to the whole tiles it touches (tiles of
-// 4-8 kernel widths less 2r: a 16 px window of a radius-114 kernel reads 1024 x 1024 px,
+// 2-4 kernel widths less 2r: a 16 px window of a radius-114 kernel reads 512 x 512 px,
 // not 244 x 244).
 Window scatter_input_window(const ScatterKernel& kernel, const Window& out, const Window& frame);
 // The direct 2D sum itself, in double, on `region` of dst (empty: all of dst.window): the

@@ -161,26 +161,34 @@ TEST_CASE("same settings give identical pixels for any thread count and window",
 
 TEST_CASE("the reference tier's FFT-summed MTF gives any window the whole frame's bits", "[develop][determinism]") {
     // At these pitches film and paper have kernels of radius 119-122 px, summed by FFT on
-    // tiles of 780 px or so: each window below cuts the tile that holds the frame, at its
-    // edges and inside it, and must still be the whole frame's pixels, bit for bit.
+    // tiles of about 270 px: each window below cuts tiles, at the frame's edges and inside
+    // it, and must still be the whole frame's pixels, bit for bit. A bright
+    // pixel beyond the windows' reach moves every output of its tile within the FFT's
+    // rounding of it (1e10 x 1e-16 here, far more than a float's last bit): a window that
+    // summed its tile without it would show.
     Stock film = test::test_colour_film(), paper = test::test_colour_paper();
-    const Image scene = demo_scene(240, 180);
+    Image scene = demo_scene(400, 300);
+    std::fill_n(scene.at(380, 280), 3, 1e10f);
     DevelopSettings s;
     s.quality = Quality::reference;
     s.grain = false;  // (window-independent on its own: tested above)
-    s.frame_width_mm = 0.4;  // 1.7 um pixels
-    s.print_width_mm = 2.0;  // 8.3 um pixels
+    s.halation = 0;   // (its halo would reach over the frame)
+    s.frame_width_mm = 0.68;  // 1.7 um pixels
+    s.print_width_mm = 3.4;   // 8.5 um pixels
     const Window frame = scene.window;
-    const Plan plan = Plan::compile(film, &paper, s, {frame.width(), frame.height()});
-    REQUIRE(plan.halo_px() >= 2 * kMinFftRadius);
-    Image whole(frame, 3);
-    plan.run(scene.view(), whole.view(), 2);
-    for (Window w : {Window{120, 90, 121, 91}, Window{0, 0, 37, 29}, Window{200, 150, 240, 180}, Window{0, 100, 240, 101}}) {
-        Image part(w, 3);
-        plan.run(scene.view(), part.view(), 3);
-        for (int y = w.y0; y < w.y1; ++y)
-            for (int x = w.x0; x < w.x1; ++x)
-                for (int c = 0; c < 3; ++c) REQUIRE(part.at(x, y)[c] == whole.at(x, y)[c]);
+    for (OutputMode mode : {OutputMode::negative, OutputMode::print}) {
+        s.output = mode;
+        const Plan plan = Plan::compile(film, &paper, s, {frame.width(), frame.height()});
+        REQUIRE(plan.halo_px() >= 2 * kMinFftRadius);
+        Image whole(frame, 3);
+        plan.run(scene.view(), whole.view(), 2);
+        for (Window w : {Window{120, 90, 121, 91}, Window{0, 0, 37, 29}, Window{0, 100, 400, 101}}) {
+            Image part(w, 3);
+            plan.run(scene.view(), part.view(), 3);
+            for (int y = w.y0; y < w.y1; ++y)
+                for (int x = w.x0; x < w.x1; ++x)
+                    for (int c = 0; c < 3; ++c) REQUIRE(part.at(x, y)[c] == whole.at(x, y)[c]);
+        }
     }
 }
 

@@ -491,7 +491,7 @@ TEST_CASE("a kernel summed by FFT gives the direct 2D sum's pixels up to roundin
     std::mt19937 random(9);
     std::uniform_real_distribution<float> uniform(0, 1);
     for (int i = 0; i < side * side; ++i) k.taps.push_back(uniform(random) / float(side * side));
-    // A frame larger than one tile (216 px at this radius: a 256 px grid less 2r), edges clamped.
+    // A frame of several tiles (88 px at this radius: a 128 px grid less 2r), edges clamped.
     const Window frame{-30, 7, 290, 260};
     Plane src(frame), fft(frame), direct(frame);
     for (int y = frame.y0; y < frame.y1; ++y)
@@ -502,7 +502,7 @@ TEST_CASE("a kernel summed by FFT gives the direct 2D sum's pixels up to roundin
     for (size_t i = 0; i < src.pixels.size(); ++i)
         worst = std::max(worst, double(std::abs(fft.pixels[i] - direct.pixels[i])) / std::abs(direct.pixels[i]));
     CHECK(worst <= 3e-7);  // two float roundings (the outputs are about 1.5)
-    // Windows that cut tiles (of the grid [0, 216) + 216 k), at the frame's edges and inside
+    // Windows that cut tiles (of the grid [0, 88) + 88 k), at the frame's edges and inside
     // it, one pixel, rows and columns: each pixel is the frame's bits, from the input window
     // that scatter_input_window names (the tiles' whole grids), and from no less.
     for (const Window& window : {Window{-5, 7, 240, 230}, Window{100, 100, 101, 101}, Window{200, 210, 230, 260},
