@@ -213,7 +213,7 @@ std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality 
     s.halation = 0;
     s.dir_couplers = 0;  // (their edge effect raises the density's modulation: the stock's MTF is optical)
     Plan plan = Plan::compile(film, nullptr, s, {width, 1}, threads);
-    int halo = width / 2 - plan.input_window({width / 2, 0, width / 2 + 1, 1}).x0;
+    int halo = plan.halo_px();
     if (halo >= width / 4) {
         width = 4 * ((halo / 64 + 1) * 64);
         s.frame_width_mm = pitch_um * width / 1000.0;

@@ -203,7 +203,7 @@ Plane spread_exposure(const MaterialStages& m, size_t layer, Plane exposure, con
                       int threads, StageTimes* times) {
     if (m.halation[layer]) {
         StageTimer timer(times, "halation");
-        Plane halated = Plane::unset(out.grown(m.scatter[layer].radius).intersected(frame));
+        Plane halated = Plane::unset(scatter_input_window(m.scatter[layer], out, frame));
         apply_halation(exposure, halated, *m.halation[layer], frame, threads);
         exposure = std::move(halated);
     }
@@ -251,17 +251,14 @@ std::vector<Plane> inhibited_exposure(const MaterialStages& m, std::vector<Plane
 // One material: exposure planes (one per layer) on their window -> density planes on `out`.
 std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> exposure, const Window& out,
                                     const Window& frame, int threads, StageTimes* times) {
-    // The Boolean grain of a pixel depends on the densities around it: develop those too.
-    auto developed_window = [&](size_t i) {
-        return m.boolean_grain[i] ? out.grown(m.boolean_grain[i]->halo_px).intersected(frame) : out;
-    };
     int boolean_halo = 0;  // (the couplers' inhibition reaches across the layers: develop all on one window)
     for (const auto& g : m.boolean_grain) boolean_halo = std::max(boolean_halo, g ? g->halo_px : 0);
     const Window all_developed = out.grown(boolean_halo).intersected(frame);
     if (m.couplers) exposure = inhibited_exposure(m, std::move(exposure), all_developed, frame, threads, times);
     std::vector<Plane> density;
     for (size_t i = 0; i < exposure.size(); ++i) {
-        const Window developed = developed_window(i);
+        // The Boolean grain of a pixel depends on the densities around it: develop those too.
+        const Window developed = m.developed_window(i, out, frame);
         Plane d = m.couplers ? cropped(std::move(exposure[i]), developed)
                              : spread_exposure(m, i, std::move(exposure[i]), developed, frame, threads, times);
         if (m.grain[i] && !m.curve_tables.empty()) {
@@ -652,6 +649,28 @@ int MaterialStages::halo_px() const {
     return couplers ? spread + boolean + couplers->radius() : r;
 }
 
+Window MaterialStages::developed_window(size_t layer, const Window& out, const Window& frame) const {
+    return boolean_grain[layer] ? out.grown(boolean_grain[layer]->halo_px).intersected(frame) : out;
+}
+
+Window MaterialStages::input_window(const Window& out, const Window& frame) const {
+    auto united = [](const Window& a, const Window& b) {
+        return Window{std::min(a.x0, b.x0), std::min(a.y0, b.y0), std::max(a.x1, b.x1), std::max(a.y1, b.y1)};
+    };
+    // With couplers every layer is exposed onto the layers' developed windows together, grown
+    // by the inhibitor's reach (inhibited_exposure).
+    Window coupled = out;
+    for (size_t i = 0; i < scatter.size() && couplers; ++i) coupled = united(coupled, developed_window(i, out, frame));
+    if (couplers) coupled = coupled.grown(couplers->radius()).intersected(frame);
+    Window needed = out;
+    for (size_t i = 0; i < scatter.size(); ++i) {
+        Window w = scatter_input_window(scatter[i], couplers ? coupled : developed_window(i, out, frame), frame);
+        if (halation[i]) w = w.grown(halation[i]->radius).intersected(frame);
+        needed = united(needed, w);
+    }
+    return needed;
+}
+
 namespace {
 
 // The image's window in the film frame's coordinates; throws for an unusable geometry.
@@ -794,14 +813,20 @@ int Plan::halo_px() const {
 }
 
 Window Plan::input_window(const Window& output) const {
-    if (!proxy_) return output.grown(halo_px()).intersected(frame_);
-    const Window proxy_in = proxy_->input_window(proxy_window(output));
-    return Window{2 * proxy_in.x0, 2 * proxy_in.y0, 2 * proxy_in.x1, 2 * proxy_in.y1}.intersected(frame_);
+    if (proxy_) {
+        const Window proxy_in = proxy_->input_window(proxy_window(output));
+        return Window{2 * proxy_in.x0, 2 * proxy_in.y0, 2 * proxy_in.x1, 2 * proxy_in.y1}.intersected(frame_);
+    }
+    return film_stages_->input_window(film_output_window(output), frame_);
+}
+
+Window Plan::film_output_window(const Window& output) const {
+    return print_ ? paper_stages_->input_window(output, frame_) : output;
 }
 
 std::vector<Plane> Plan::develop_film(const ConstImageView& in, const Window& film_out, int threads,
                                       StageTimes* times) const {
-    const Window film_in = film_out.grown(film_stages_->halo_px()).intersected(frame_);
+    const Window film_in = film_stages_->input_window(film_out, frame_);
     std::vector<Plane> exposure;
     StageTimer expose_timer(times, "expose");
     const auto& weights = film_stages_->rgb_weights;
@@ -937,7 +962,7 @@ void Plan::result_of_negative(const double* density, double* result) const {
 // patch keeps its mean. Negative input values keep their sign.
 std::vector<Plane> Plan::texture(const ConstImageView& in, const Window& out, int threads, StageTimes* times) const {
     const MaterialStages& m = *film_stages_;
-    const Window film_in = out.grown(m.halo_px()).intersected(frame_);
+    const Window film_in = m.input_window(out, frame_);
     // Where the scene's mid grey falls (with the input in lux seconds, 0.18 is no grey: the film's
     // own mid grey at its ISO speed).
     const double mid_grey_log_h = std::log10(settings_.input_units == InputUnits::lux_seconds
@@ -1011,8 +1036,7 @@ void Plan::run(const ConstImageView& in, const ImageView& out, int threads, Stag
     if (settings_.output == OutputMode::texture) {
         result = texture(in, out_window, threads, times);
     } else if (print_) {
-        const Window film_out = out_window.grown(paper_stages_->halo_px()).intersected(frame_);
-        result = print(develop_film(in, film_out, threads, times), out_window, threads, times);
+        result = print(develop_film(in, film_output_window(out_window), threads, times), out_window, threads, times);
     } else if (views_film_) {
         const std::vector<Plane> density = develop_film(in, out_window, threads, times);
         StageTimer timer(times, "view");

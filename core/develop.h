@@ -170,7 +170,9 @@ public:
     static Plan compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
                         const FrameGeometry& frame, int threads = 0, const PlanStructure& structure = {});
 
-    // The input window needed to render `output` (grown by the halo, clipped to the frame).
+    // The input window needed to render `output`: grown by the halo and, where a kernel is
+    // summed by FFT, to the whole tiles it computes (stages/scatter.h, scatter_input_window),
+    // clipped to the frame.
     Window input_window(const Window& output) const;
     // How far the input a pixel needs reaches, in pixels (the film's and the paper's halos).
     int halo_px() const;
@@ -212,6 +214,8 @@ public:
     void result_of_negative(const double* density, double* result) const;
 
 private:
+    // The film's densities that render `output` (the paper's input window for a print).
+    Window film_output_window(const Window& output) const;
     std::vector<Plane> develop_film(const ConstImageView& in, const Window& film_out, int threads,
                                     StageTimes* times) const;
     std::vector<Plane> print(std::vector<Plane> negative, const Window& out, int threads,

@@ -35,7 +35,15 @@ struct MaterialStages {
     const Curve& develop_curve(size_t layer) const {
         return couplers ? couplers->before[layer] : stock.layers[layer].density_curve;
     }
+    // How far the densities of a pixel reach into the exposure, in pixels (the layers' most).
     int halo_px() const;
+    // Layer i's densities on `out` need its developed densities here: grown by the reach of
+    // its Boolean grain (which reads the densities around a pixel).
+    Window developed_window(size_t layer, const Window& out, const Window& frame) const;
+    // The exposure the layers' densities on `out` need: each layer's developed window, grown
+    // by its scatter's input (scatter_input_window: whole tiles where the scatter is summed by
+    // FFT) and its halation's reach, clipped to the frame; the union over the layers.
+    Window input_window(const Window& out, const Window& frame) const;
 };
 
 // The paper's layer densities printed from the negative's (colour on colour): the enlarger's

@@ -359,30 +359,50 @@ namespace {
 
 int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
-// The FFT's side for a kernel: at least four kernel widths, so that a tile's outputs are
-// most of its grid.
+// The FFT's side for a kernel: at least two kernel widths, so that a tile's outputs are at
+// least a quarter of its grid. A window computes its tiles whole, and under a print the
+// film's stages (its silver grain) over the paper's tiles: smaller grids keep a small
+// window's cost down, where four widths would make the whole frame's FFT cheaper (a 4K
+// frame's radius-114 scatter: 1.4x).
 int fft_side(int radius) {
     int n = 64;
-    while (n < 4 * (2 * radius + 1)) n *= 2;
+    while (n < 2 * (2 * radius + 1)) n *= 2;
     return n;
 }
+
+// The FFT's tiles: squares of side n - 2r on a grid of absolute coordinates.
+int fft_tile(int radius) { return fft_side(radius) - 2 * radius; }
+
+}  // namespace
+
+Window scatter_input_window(const ScatterKernel& kernel, const Window& out, const Window& frame) {
+    const int r = kernel.radius;
+    if (!kernel.separable.empty() || r < kMinFftRadius || out.empty()) return out.grown(r).intersected(frame);
+    const int tile = fft_tile(r);
+    const Window tiles{floor_div(out.x0, tile) * tile, floor_div(out.y0, tile) * tile,
+                       (floor_div(out.x1 - 1, tile) + 1) * tile, (floor_div(out.y1 - 1, tile) + 1) * tile};
+    return tiles.grown(r).intersected(frame);
+}
+
+namespace {
 
 // The direct sum by FFT: the plane in square tiles of side n - 2r on a grid of absolute
 // coordinates, each with the r pixels around it on an n x n grid, multiplied there by the
 // kernel's spectrum. The r pixels around a tile's outputs cover every tap, so the circular
 // convolution wraps nothing into them: each output is the direct sum's up to the FFT's
-// rounding, about log2(n) roundings of the largest value in its tile's grid. A tile's grid
-// holds the same values in any window that holds the whole tile (its pixels beyond the
-// window are read only if the window needs them), so its outputs are the same bits; a tile
-// the window cuts has zeros for what the window does not need, which moves its outputs
-// within that rounding. A grid with a value that is not finite (which the FFT would spread
-// over the whole tile) is summed directly.
+// rounding, about log2(n) roundings of the largest value in its tile's grid. Every output
+// depends on the whole grid through that rounding, so the grid is always read whole
+// (scatter_input_window: src covers it in every window), with the frame's clamped edges:
+// a tile's outputs are the same bits in any window. A grid with a value that is not finite
+// (which the FFT would spread over the whole tile) is summed directly.
 void scatter_by_fft(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads) {
-    const int r = kernel.radius, side = 2 * r + 1, n = fft_side(r), tile = n - 2 * r;
+    const int r = kernel.radius, side = 2 * r + 1, n = fft_side(r), tile = fft_tile(r);
+    if (!src.window.contains(scatter_input_window(kernel, dst.window, frame)))
+        throw std::invalid_argument("scatter: the source plane does not cover the FFT tiles of the window");
     const Fft fft(n);
     // out(p) = sum over d of k(d) in(p + d): a convolution with k(-d), at (-d) mod n, scaled
     // by the inverse transform's 1/n^2.
-    std::vector<std::complex<double>> spectrum(size_t(n) * n), grid;
+    std::vector<std::complex<double>> spectrum(size_t(n) * n), grid(size_t(n) * n);
     for (int dy = -r; dy <= r; ++dy)
         for (int dx = -r; dx <= r; ++dx)
             spectrum[size_t((n - dy) % n) * n + (n - dx) % n] = double(kernel.taps[size_t(dy + r) * side + (dx + r)]) / (double(n) * n);
@@ -392,16 +412,11 @@ void scatter_by_fft(const Plane& src, Plane& dst, const ScatterKernel& kernel, c
         for (int tx = floor_div(w.x0, tile); tx * tile < w.x1; ++tx) {
             const Window outputs = Window{tx * tile, ty * tile, (tx + 1) * tile, (ty + 1) * tile}.intersected(w);
             const int gx0 = tx * tile - r, gy0 = ty * tile - r;  // the grid's first pixel
-            grid.assign(size_t(n) * n, 0.0);
             bool finite = true;
             for (int j = 0; j < n; ++j) {
-                const int y = std::clamp(gy0 + j, frame.y0, frame.y1 - 1);
-                if (y < src.window.y0 || y >= src.window.y1) continue;
-                const float* in = src.row(y);
+                const float* in = src.row(std::clamp(gy0 + j, frame.y0, frame.y1 - 1));
                 for (int i = 0; i < n; ++i) {
-                    const int x = std::clamp(gx0 + i, frame.x0, frame.x1 - 1);
-                    if (x < src.window.x0 || x >= src.window.x1) continue;
-                    const float v = in[x - src.window.x0];
+                    const float v = in[std::clamp(gx0 + i, frame.x0, frame.x1 - 1) - src.window.x0];
                     finite = finite && std::isfinite(v);
                     grid[size_t(j) * n + i] = v;
                 }

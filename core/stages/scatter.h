@@ -75,12 +75,19 @@ ScatterKernel design_scatter_kernel(const Curve& mtf, double pixel_pitch_um, con
                                     int threads = 0);
 
 // dst = src convolved with the kernel (through its separable terms when it has them), for
-// dst.window. Reads src with coordinates clamped
-// to `frame`; src.window must cover (dst.window grown by the radius) intersected with frame.
+// dst.window. Reads src with coordinates clamped to `frame`; src.window must cover
+// scatter_input_window(kernel, dst.window, frame).
 // A kernel without separable terms is the direct 2D sum: computed by FFT from
-// kMinFftRadius, the same up to rounding (scatter.cpp, scatter_by_fft).
+// kMinFftRadius, the same up to rounding (scatter.cpp, scatter_by_fft), on square tiles of
+// a grid of absolute coordinates, each computed whole from its kernel's reach around it, so
+// that its pixels are the same bits in every window (the whole frame's).
 void scatter(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads);
 constexpr int kMinFftRadius = 16;
+// The window of src that scatter() reads for `out`: out grown by the radius, clipped to the
+// frame; for a kernel summed by FFT, first grown to the whole tiles it touches (tiles of
+// 2-4 kernel widths less 2r: a 16 px window of a radius-114 kernel reads 512 x 512 px,
+// not 244 x 244).
+Window scatter_input_window(const ScatterKernel& kernel, const Window& out, const Window& frame);
 // The direct 2D sum itself, in double, on `region` of dst (empty: all of dst.window): the
 // definition the FFT is tested against.
 void scatter_direct(const Plane& src, Plane& dst, const ScatterKernel& kernel, const Window& frame, int threads,

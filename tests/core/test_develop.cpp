@@ -166,6 +166,39 @@ TEST_CASE("same settings give identical pixels for any thread count and window",
     CHECK(render(film, &paper, s, scene).pixels != frame3.pixels);
 }
 
+TEST_CASE("the reference tier's FFT-summed MTF gives any window the whole frame's bits", "[develop][determinism]") {
+    // At these pitches film and paper have kernels of radius 119-122 px, summed by FFT on
+    // tiles of about 270 px: each window below cuts tiles, at the frame's edges and inside
+    // it, and must still be the whole frame's pixels, bit for bit. A bright
+    // pixel beyond the windows' reach moves every output of its tile within the FFT's
+    // rounding of it (1e10 x 1e-16 here, far more than a float's last bit): a window that
+    // summed its tile without it would show.
+    Stock film = test::test_colour_film(), paper = test::test_colour_paper();
+    Image scene = demo_scene(400, 300);
+    std::fill_n(scene.at(380, 280), 3, 1e10f);
+    DevelopSettings s;
+    s.quality = Quality::reference;
+    s.grain = false;  // (window-independent on its own: tested above)
+    s.halation = 0;   // (its halo would reach over the frame)
+    s.frame_width_mm = 0.68;  // 1.7 um pixels
+    s.print_width_mm = 3.4;   // 8.5 um pixels
+    const Window frame = scene.window;
+    for (OutputMode mode : {OutputMode::negative, OutputMode::print}) {
+        s.output = mode;
+        const Plan plan = Plan::compile(film, &paper, s, {frame.width(), frame.height()});
+        REQUIRE(plan.halo_px() >= 2 * kMinFftRadius);
+        Image whole(frame, 3);
+        plan.run(scene.view(), whole.view(), 2);
+        for (Window w : {Window{120, 90, 121, 91}, Window{0, 0, 37, 29}, Window{0, 100, 400, 101}}) {
+            Image part(w, 3);
+            plan.run(scene.view(), part.view(), 3);
+            for (int y = w.y0; y < w.y1; ++y)
+                for (int x = w.x0; x < w.x1; ++x)
+                    for (int c = 0; c < 3; ++c) REQUIRE(part.at(x, y)[c] == whole.at(x, y)[c]);
+        }
+    }
+}
+
 TEST_CASE("an image that is part of the film frame develops as that part of the whole frame", "[develop][determinism]") {
     // A CG element's bounding box inside the frame, and overscan around it: the plan takes
     // the pitch from the film frame's width and the pixels' coordinates from the frame's origin.

@@ -482,8 +482,7 @@ TEST_CASE("the radix-2 FFT is the DFT up to rounding, and its inverse undoes it"
     CHECK_THROWS_WITH(Fft(96), Catch::Contains("not a power of two"));
 }
 
-TEST_CASE("a kernel summed by FFT gives the direct 2D sum's pixels up to rounding, the same in any window that "
-          "holds a tile",
+TEST_CASE("a kernel summed by FFT gives the direct 2D sum's pixels up to rounding, the frame's bits in any window",
           "[scatter][fft]") {
     // An asymmetric kernel, so that a flipped or shifted tap would show; wide enough for the FFT.
     const int r = kMinFftRadius + 4, side = 2 * r + 1;
@@ -492,7 +491,7 @@ TEST_CASE("a kernel summed by FFT gives the direct 2D sum's pixels up to roundin
     std::mt19937 random(9);
     std::uniform_real_distribution<float> uniform(0, 1);
     for (int i = 0; i < side * side; ++i) k.taps.push_back(uniform(random) / float(side * side));
-    // A frame larger than one tile (216 px at this radius: a 256 px grid less 2r), edges clamped.
+    // A frame of several tiles (88 px at this radius: a 128 px grid less 2r), edges clamped.
     const Window frame{-30, 7, 290, 260};
     Plane src(frame), fft(frame), direct(frame);
     for (int y = frame.y0; y < frame.y1; ++y)
@@ -503,20 +502,23 @@ TEST_CASE("a kernel summed by FFT gives the direct 2D sum's pixels up to roundin
     for (size_t i = 0; i < src.pixels.size(); ++i)
         worst = std::max(worst, double(std::abs(fft.pixels[i] - direct.pixels[i])) / std::abs(direct.pixels[i]));
     CHECK(worst <= 3e-7);  // two float roundings (the outputs are about 1.5)
-    // A window holding the tile [0, 216)^2 of the frame: its pixels there are the frame's bits.
-    const Window window{-5, 0, 240, 230};
-    Plane part(window);
-    const Plane needed = [&] {
-        Plane p(window.grown(r).intersected(frame));
-        for (int y = p.window.y0; y < p.window.y1; ++y)
-            for (int x = p.window.x0; x < p.window.x1; ++x) p.at(x, y) = src.at(x, y);
-        return p;
-    }();
-    scatter(needed, part, k, frame, 3);
-    for (int y = 7; y < 216; ++y)
-        for (int x = 0; x < 216; ++x) REQUIRE(part.at(x, y) == fft.at(x, y));
-    for (int y = window.y0 + 7; y < window.y1; ++y)
-        for (int x = window.x0; x < window.x1; ++x) REQUIRE(part.at(x, y) == Approx(direct.at(x, y)).epsilon(3e-7));
+    // Windows that cut tiles (of the grid [0, 88) + 88 k), at the frame's edges and inside
+    // it, one pixel, rows and columns: each pixel is the frame's bits, from the input window
+    // that scatter_input_window names (the tiles' whole grids), and from no less.
+    for (const Window& window : {Window{-5, 7, 240, 230}, Window{100, 100, 101, 101}, Window{200, 210, 230, 260},
+                                 Window{-30, 150, 290, 151}, Window{215, 7, 217, 260}}) {
+        const Window input = scatter_input_window(k, window, frame);
+        CHECK(input.contains(window.grown(r).intersected(frame)));
+        Plane needed(input), part(window);
+        for (int y = input.y0; y < input.y1; ++y)
+            for (int x = input.x0; x < input.x1; ++x) needed.at(x, y) = src.at(x, y);
+        scatter(needed, part, k, frame, 3);
+        for (int y = window.y0; y < window.y1; ++y)
+            for (int x = window.x0; x < window.x1; ++x) REQUIRE(part.at(x, y) == fft.at(x, y));
+        // Each cuts a tile: only the kernel's reach around it would cut the tile's grid.
+        const Plane reach(window.grown(r).intersected(frame));
+        CHECK_THROWS_WITH(scatter(reach, part, k, frame, 1), Catch::Contains("does not cover the FFT tiles"));
+    }
     // A value that is not finite stays where the direct sum puts it (the FFT would spread it).
     src.at(100, 100) = NAN;
     scatter(src, fft, k, frame, 2);
