@@ -346,6 +346,9 @@ struct PredictOptions {
     std::string stock, output;
     int width_px = 0;
     double frame_width_mm = 0;
+    // The scan's balance, as the look's scan settings (look/parameters.cpp) spell them.
+    std::string scan_balance = parameter("scan-balance").default_value().get<std::string>();
+    double scan_aim = parameter("scan-aim").default_value().get<double>();
 };
 
 void run_predict(const PredictOptions& o) {
@@ -355,7 +358,16 @@ void run_predict(const PredictOptions& o) {
     } catch (const StockError& e) {
         throw UserError(e.what());
     }
-    GrainProfile profile = predict_grain_profile(stock, ScanGeometry{o.width_px, o.frame_width_mm});
+    Look scan;
+    for (const auto& [key, value] : {std::pair<std::string, nlohmann::json>{"scan-balance", o.scan_balance},
+                                     {"scan-aim", o.scan_aim}})
+        try {
+            set_value(scan, parameter(key), value);
+        } catch (const UserError& e) {
+            throw UserError("--" + key + " " + e.what());
+        }
+    const ScanGeometry geometry{o.width_px, o.frame_width_mm, scan.settings.scan_balance, scan.settings.scan_aim_code};
+    GrainProfile profile = predict_grain_profile(stock, geometry);
     write_text_atomically(o.output, grain_profile_to_json(profile) + "\n");
     std::printf("%s\n", profile.sources.front().c_str());
     print_profile(profile);
@@ -435,6 +447,8 @@ void add_grain_command(CLI::App& app) {
     predict->add_option("--width", d->width_px, "Scan width in pixels (e.g. 4096)")->required()->check(CLI::Range(1, 1 << 20));
     predict->add_option("--frame-width-mm", d->frame_width_mm, "Scanned frame width (default: the stock's format)")
         ->check(CLI::PositiveNumber);
+    predict->add_option("--scan-balance", d->scan_balance, parameter("scan-balance").help)->capture_default_str();
+    predict->add_option("--scan-aim", d->scan_aim, parameter("scan-aim").help)->capture_default_str();
     predict->add_option("-o,--out", d->output, "Grain profile (.json)")->required();
     predict->callback([d] { run_predict(*d); });
 }

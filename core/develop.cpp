@@ -749,12 +749,8 @@ Plan Plan::compile_pixels(const Stock& film, const Stock* paper, const DevelopSe
                                  ? 1.0
                                  : mid_grey_exposure_lux_s(film.iso_speed) / 0.18 * std::exp2(settings.exposure_ev);
 
-    for (size_t l = 0; l < film.layers.size(); ++l) {
-        const Curve& curve = film.layers[l].density_curve;
-        p.scan_base_density_[l] = settings.scan_balance ? curve(std::log10(mid_grey_exposure_lux_s(film.iso_speed))) -
-                                                              (settings.scan_aim_code - kScanBaseCode) * kScanDensityPerCode
-                                                        : curve.y_min();
-    }
+    for (size_t l = 0; l < film.layers.size(); ++l)
+        p.scan_base_density_[l] = scan_base_density(film, l, settings.scan_balance, settings.scan_aim_code);
     if (printing) {
         *paper_stages = build_stages(*paper, print_width_mm, p.film_width_px_, frame.height, settings, structure, 16,
                                      "paper", p.skipped_, threads);
@@ -777,6 +773,12 @@ Plan Plan::compile_pixels(const Stock& film, const Stock* paper, const DevelopSe
     p.film_stages_ = std::move(film_stages);
     p.paper_stages_ = std::move(paper_stages);
     return p;
+}
+
+double scan_base_density(const Stock& film, size_t layer, bool balance, double aim_code) {
+    const Curve& curve = film.layers[layer].density_curve;
+    if (!balance) return curve.y_min();
+    return curve(std::log10(mid_grey_exposure_lux_s(film.iso_speed))) - (aim_code - kScanBaseCode) * kScanDensityPerCode;
 }
 
 Plan Plan::in_image(const FrameGeometry& image) const {

@@ -67,6 +67,13 @@ inline constexpr double kMaxDirCouplerSpread = 10;  // multiplier of their inhib
 // density per code value, base+fog at code 95), written as code / 1023.
 inline constexpr double kScanBaseCode = 95, kScanDensityPerCode = 0.002, kMaxScanCode = 1023;
 inline constexpr double kLadAimCode = 445;  // the scan's mid-grey aim (Kodak's LAD)
+// A layer density as the scan writes it, code value / 1023: code 95 at base_density.
+inline double scan_level(double density, double base_density) {
+    return (kScanBaseCode + (density - base_density) / kScanDensityPerCode) / kMaxScanCode;
+}
+// The density film layer `layer` scans at code 95: its base+fog, or balanced, the density
+// that puts a normally exposed mid grey (0 EV at the stock's speed) at `aim_code`.
+double scan_base_density(const Stock& film, size_t layer, bool balance, double aim_code);
 
 struct DevelopSettings {
     double exposure_ev = 0.0;        // stops relative to the exposure the ISO speed implies

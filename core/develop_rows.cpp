@@ -268,7 +268,7 @@ void convert_row(OutputMode output, double base_density, float* row, int width) 
         if (output == OutputMode::negative)
             row[x] = float(std::pow(10.0, -double(row[x])));
         else if (output == OutputMode::scan)
-            row[x] = float((kScanBaseCode + (double(row[x]) - base_density) / kScanDensityPerCode) / kMaxScanCode);
+            row[x] = float(scan_level(double(row[x]), base_density));
     }
 }
 

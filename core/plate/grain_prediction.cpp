@@ -15,10 +15,6 @@ constexpr int kMaxPredictedAcfRadius = 32;
 
 }  // namespace
 
-double cineon_level_from_net_density(double net_density) {
-    return (kCineonBlackCode + net_density / kCineonDensityPerCode) / kCineonMaxCode;
-}
-
 GrainProfile predict_grain_profile(const Stock& stock, const ScanGeometry& scan) {
     if (scan.width_px < 1) throw std::invalid_argument("the scan width must be at least 1 pixel");
     if (stock.layers.empty()) throw std::invalid_argument("stock '" + stock.id + "' has no layers");
@@ -29,21 +25,32 @@ GrainProfile predict_grain_profile(const Stock& stock, const ScanGeometry& scan)
     profile.colorspace = "Cineon log";
     profile.encoding = SignalEncoding::log;
     std::ostringstream source;
-    source << stock.id << " scanned at " << scan.width_px << " px across " << frame_mm << " mm";
+    source << stock.id << " scanned at " << scan.width_px << " px across " << frame_mm << " mm, ";
+    if (scan.balance)
+        source << "balanced: a normally exposed mid grey at code " << scan.aim_code;
+    else
+        source << "unbalanced: each layer's base+fog at code " << kScanBaseCode;
     profile.sources.push_back(source.str());
-    for (const Layer& layer : stock.layers) {
+    for (size_t l = 0; l < stock.layers.size(); ++l) {
+        const Layer& layer = stock.layers[l];
         const double d_min = layer.density_curve.y_min();
+        const double base = scan_base_density(stock, l, scan.balance, scan.aim_code);
         GrainModel model = design_grain(layer.grain, d_min, pitch_um, NoiseKey{});
         GrainChannel ch;
         ch.name = layer.name;
-        // Top of the curve (less a margin), but never past the Cineon white (code 1023).
-        double net_max = std::min(layer.density_curve.y_max() - d_min,
-                                  (kCineonMaxCode - kCineonBlackCode) * kCineonDensityPerCode);
+        // From D-min (or code 0, where a low aim puts D-min below it) to the top of the curve,
+        // but never past code 1023.
+        const double net_min = std::max(0.0, base - kScanBaseCode * kScanDensityPerCode - d_min);
+        const double net_max = std::min(layer.density_curve.y_max() - d_min,
+                                        base + (kMaxScanCode - kScanBaseCode) * kScanDensityPerCode - d_min);
+        if (!(net_max > net_min))
+            throw std::invalid_argument("a scan aim of code " + std::to_string(scan.aim_code) + " puts stock '" +
+                                        stock.id + "' outside codes 0-1023");
         for (int i = 0; i < kPredictedLevels; ++i) {
-            double net = net_max * i / (kPredictedLevels - 1);
-            ch.level.push_back(cineon_level_from_net_density(net));
+            const double net = net_min + (net_max - net_min) * i / (kPredictedLevels - 1);
+            ch.level.push_back(scan_level(d_min + net, base));
             double density_sigma = model.pixel_sigma_at_unit_density() * std::pow(net, model.density_exponent);
-            ch.sigma.push_back(density_sigma / (kCineonDensityPerCode * kCineonMaxCode));
+            ch.sigma.push_back(density_sigma / (kScanDensityPerCode * kMaxScanCode));
         }
         // Autocorrelation of the separable kernel: a(dx) a(dy) / a(0)^2.
         const int kr = model.radius;

@@ -15,9 +15,10 @@ TEST_CASE("a predicted profile's grain reads back the stock's RMS granularity th
     // a 48 um circular aperture has standard deviation rms_granularity.
     const Stock film = find_stock("kodak-tri-x-400");
     const double pitch_um = 3.0, frame_mm = 36.0;
-    GrainProfile p = predict_grain_profile(film, ScanGeometry{int(frame_mm * 1000 / pitch_um), frame_mm});
+    GrainProfile p = predict_grain_profile(film, ScanGeometry{int(frame_mm * 1000 / pitch_um), frame_mm, false});
     CHECK(p.encoding == SignalEncoding::log);
-    const double level = cineon_level_from_net_density(1.0);
+    const double d_min = film.layers[0].density_curve.y_min();
+    const double level = scan_level(d_min + 1.0, d_min);
     Image scan(1024, 1024, 3, float(level));
     apply_grain_profile(p, scan.view(), 4, 0, 0);
     const int radius = int(std::lround(kGranularityApertureUm / 2 / pitch_um));  // 8 px
@@ -30,7 +31,7 @@ TEST_CASE("a predicted profile's grain reads back the stock's RMS granularity th
                 for (int x = cx - radius; x <= cx + radius; ++x)
                     if (std::hypot(x - cx, y - cy) <= radius) sum += scan.at(x, y)[1], ++n;
             // Code value back to density: 0.002 D per code value of 1023.
-            readings.push_back((sum / n - level) * kCineonMaxCode * kCineonDensityPerCode);
+            readings.push_back((sum / n - level) * kMaxScanCode * kScanDensityPerCode);
         }
     double mean = 0, square = 0;
     for (double r : readings) mean += r / readings.size();
@@ -43,13 +44,13 @@ TEST_CASE("a predicted profile follows the film model: D^exponent, Cineon levels
     const Stock film = test::test_film();  // rms 0.012, grain 1.5 um, 36 mm
     const GrainSpec& grain = film.layers[0].grain;
     for (int width : {2048, 4096}) {
-        GrainProfile p = predict_grain_profile(film, ScanGeometry{width, 0});
+        GrainProfile p = predict_grain_profile(film, ScanGeometry{width, 0, false});
         const double pitch_um = 36000.0 / width;
         GrainModel model = design_grain(grain, 0.25, pitch_um, NoiseKey{});
         const GrainChannel& ch = p.channels[0];
         CHECK(ch.level.front() == Approx(95.0 / 1023));
         for (double net : {0.3, 1.0, 1.8}) {
-            double code_sigma = ch.sigma_at(cineon_level_from_net_density(net));
+            double code_sigma = ch.sigma_at(scan_level(0.25 + net, 0.25));
             CHECK(code_sigma * 1023 * 0.002 ==
                   Approx(model.pixel_sigma_at_unit_density() * std::pow(net, grain.density_exponent)).epsilon(0.02));
         }
@@ -76,4 +77,34 @@ TEST_CASE("black-and-white stocks predict identical, fully correlated channels, 
     CHECK(c.correlation(0, 1) == 0.0);
     CHECK(c.channels[2].sigma.back() == Approx(2 * c.channels[1].sigma.back()));
     CHECK_THROWS_AS(predict_grain_profile(colour, ScanGeometry{0, 0}), std::invalid_argument);
+}
+
+TEST_CASE("a predicted profile's levels are the scan output's: balanced, a mid grey at the aim", "[plate][prediction]") {
+    // The develop command's scan of a normally exposed mid grey (no grain) and the profile of
+    // the same stock and scan settings agree on where that grey sits, and the profile's
+    // grain there is the film model's at the grey's net density.
+    const Stock film = find_stock("kodak-vision3-500t");
+    for (const double aim : {445.0, 520.0}) {
+        DevelopSettings s;
+        s.output = OutputMode::scan;
+        s.grain = s.mtf = false;
+        s.halation = 0;
+        s.scan_aim_code = aim;
+        Image grey(4, 4, 3, 0.18f), scan(grey.window, 3);
+        Plan::compile(film, nullptr, s, {4, 4}).run(grey.view(), scan.view(), 1);
+        const GrainProfile p = predict_grain_profile(film, ScanGeometry{4096, 0, true, aim});
+        const double grey_log_h = std::log10(mid_grey_exposure_lux_s(film.iso_speed));
+        for (size_t l = 0; l < 3; ++l) {
+            INFO("layer " << l << ", aim " << aim);
+            const GrainChannel& ch = p.channels[l];
+            CHECK(scan.at(1, 1)[l] * 1023 == Approx(aim).margin(2));
+            CHECK(ch.level.front() <= aim / 1023);
+            CHECK(ch.level.back() >= aim / 1023);
+            const Curve& curve = film.layers[l].density_curve;
+            const GrainModel model = design_grain(film.layers[l].grain, curve.y_min(), film.frame_width_mm * 1000 / 4096, NoiseKey{});
+            const double net = curve(grey_log_h) - curve.y_min();
+            CHECK(ch.sigma_at(aim / 1023) * 1023 * kScanDensityPerCode ==
+                  Approx(model.pixel_sigma_at_unit_density() * std::pow(net, model.density_exponent)).epsilon(0.02));
+        }
+    }
 }
