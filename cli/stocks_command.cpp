@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "look/parameters.h"
 #include "core/stock.h"
 
 namespace darkroom::cli {
@@ -13,8 +14,11 @@ void add_stocks_command(CLI::App& app) {
     cmd->add_flag("--json", *json_output, "Machine-readable output");
     cmd->callback([json_output] {
         nlohmann::json list = nlohmann::json::array();
-        // By role: the camera films (negative, reversal), then what negatives print on.
-        for (StockKind role : {StockKind::negative, StockKind::reversal, StockKind::print_film, StockKind::paper})
+        // By role, as the look's film and paper settings (and so the plugin's menus) take them:
+        // the camera films, then what negatives print on.
+        std::vector<StockKind> roles = parameter("film").stock_kinds;
+        for (StockKind kind : parameter("paper").stock_kinds) roles.push_back(kind);
+        for (StockKind role : roles)
             for (const Stock& s : builtin_stocks()) {
                 if (s.kind != role) continue;
                 std::string kind = stock_kind_name(s.kind);

@@ -251,10 +251,8 @@ std::vector<Plane> inhibited_exposure(const MaterialStages& m, std::vector<Plane
 // One material: exposure planes (one per layer) on their window -> density planes on `out`.
 std::vector<Plane> develop_material(const MaterialStages& m, std::vector<Plane> exposure, const Window& out,
                                     const Window& frame, int threads, StageTimes* times) {
-    int boolean_halo = 0;  // (the couplers' inhibition reaches across the layers: develop all on one window)
-    for (const auto& g : m.boolean_grain) boolean_halo = std::max(boolean_halo, g ? g->halo_px : 0);
-    const Window all_developed = out.grown(boolean_halo).intersected(frame);
-    if (m.couplers) exposure = inhibited_exposure(m, std::move(exposure), all_developed, frame, threads, times);
+    if (m.couplers)
+        exposure = inhibited_exposure(m, std::move(exposure), m.layers_developed_window(out, frame), frame, threads, times);
     std::vector<Plane> density;
     for (size_t i = 0; i < exposure.size(); ++i) {
         // The Boolean grain of a pixel depends on the densities around it: develop those too.
@@ -653,18 +651,29 @@ Window MaterialStages::developed_window(size_t layer, const Window& out, const W
     return boolean_grain[layer] ? out.grown(boolean_grain[layer]->halo_px).intersected(frame) : out;
 }
 
+namespace {
+
+Window united(const Window& a, const Window& b) {
+    return Window{std::min(a.x0, b.x0), std::min(a.y0, b.y0), std::max(a.x1, b.x1), std::max(a.y1, b.y1)};
+}
+
+}  // namespace
+
+Window MaterialStages::layers_developed_window(const Window& out, const Window& frame) const {
+    Window all = out;
+    for (size_t i = 0; i < boolean_grain.size(); ++i) all = united(all, developed_window(i, out, frame));
+    return all;
+}
+
 Window MaterialStages::input_window(const Window& out, const Window& frame) const {
-    auto united = [](const Window& a, const Window& b) {
-        return Window{std::min(a.x0, b.x0), std::min(a.y0, b.y0), std::max(a.x1, b.x1), std::max(a.y1, b.y1)};
-    };
     // With couplers every layer is exposed onto the layers' developed windows together, grown
     // by the inhibitor's reach (inhibited_exposure).
-    Window coupled = out;
-    for (size_t i = 0; i < scatter.size() && couplers; ++i) coupled = united(coupled, developed_window(i, out, frame));
-    if (couplers) coupled = coupled.grown(couplers->radius()).intersected(frame);
+    const std::optional<Window> coupled =
+        couplers ? std::optional(layers_developed_window(out, frame).grown(couplers->radius()).intersected(frame))
+                 : std::nullopt;
     Window needed = out;
     for (size_t i = 0; i < scatter.size(); ++i) {
-        Window w = scatter_input_window(scatter[i], couplers ? coupled : developed_window(i, out, frame), frame);
+        Window w = scatter_input_window(scatter[i], coupled ? *coupled : developed_window(i, out, frame), frame);
         if (halation[i]) w = w.grown(halation[i]->radius).intersected(frame);
         needed = united(needed, w);
     }

@@ -40,6 +40,9 @@ struct MaterialStages {
     // Layer i's densities on `out` need its developed densities here: grown by the reach of
     // its Boolean grain (which reads the densities around a pixel).
     Window developed_window(size_t layer, const Window& out, const Window& frame) const;
+    // Every layer's developed window together: where the couplers, whose inhibition reaches
+    // across the layers, develop them all.
+    Window layers_developed_window(const Window& out, const Window& frame) const;
     // The exposure the layers' densities on `out` need: each layer's developed window, grown
     // by its scatter's input (scatter_input_window: whole tiles where the scatter is summed by
     // FFT) and its halation's reach, clipped to the frame; the union over the layers.

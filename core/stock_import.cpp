@@ -143,7 +143,7 @@ Stock stock_json::stock_from_spektrafilm(const json& doc, const std::string& ori
                  " (unmixed data-sheet curves; the profile has no MTF and no granularity: flat MTF, no grain)"};
     // Print materials are exposed by the printer lights, which find their own exposure: their
     // speed is unused, 100 as the built-in papers and print films declare.
-    const bool camera_film = s.kind == StockKind::negative || s.kind == StockKind::reversal;
+    const bool camera_film = is_camera_film(s.kind);
     const int named_speed = camera_film ? box_speed_in_name(s.name) : 0;
     s.iso_speed = named_speed > 0 ? named_speed : 100;
     s.sources.push_back(
