@@ -1,10 +1,9 @@
 // Plate matching on real film scans (the Kodak Photo CD plates of the reference data) and on
 // bad plates and profiles, through the program and the core.
 //
-// Only what must hold is asserted here. How closely grain analysed from the real plates
-// resynthesises (response, lag-1 and channel correlation against an independent estimator)
-// is a measurement, not a property: tools/plate_report prints it and
-// docs/guides/plate-matching.md records it.
+// How closely grain analysed from the real plates resynthesises (response, lag-1 and channel
+// correlation against an independent estimator) is printed by tools/plate_report and recorded
+// in docs/guides/plate-matching.md; the bounds here hold those figures with a stated margin.
 #include <OpenImageIO/imagebuf.h>
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -100,30 +99,79 @@ TEST_CASE("known grain put on the real pictures analyses back to the known grain
         WARN("reference plates in " << kPlates << " not found: skipped");
         return;
     }
-    // Grain 3-5x the plates' own (about 8-14 code values of 255); theirs adds in quadrature,
-    // so the expected response is sqrt(known^2 + plate^2), the plate's as analysed alone. The
-    // pictures' content is what the analysis must see past.
-    const GrainProfile known = known_profile({{0.03, 0.02, 1.0, 1.0}, {0.03, 0.015, 1.0, 0.8}, {0.035, 0.02, 1.0, 1.2}},
-                                             {1, 0.5, 0.3, 0.5, 1, 0.4, 0.3, 0.4, 1}, SignalEncoding::display, 0, 1);
-    for (const char* name : {"kodim10", "kodim23"}) {
-        Image plate = independent::read_rgb(kPlates / (std::string(name) + ".png"));
-        const GrainProfile own = analyse(plate);
-        GrainProfile expected = known;
-        for (size_t c = 0; c < 3; ++c)
-            for (size_t i = 0; i < expected.channels[c].level.size(); ++i)
-                expected.channels[c].sigma[i] =
-                    std::hypot(known.channels[c].sigma[i], own.channels[c].sigma_at(known.channels[c].level[i]));
-        apply_grain_profile(known, plate.view(), 11, 0, 0);
-        const GrainMatch m = compare_grain_profiles(expected, analyse(plate));
-        for (const ChannelMatch& c : m.channels) {
-            INFO(name << " " << c.name << ": response " << c.response_error_percent << " %, NPS " << c.nps_distance_db
-                      << " dB, correlation " << m.max_correlation_difference);
-            // Measured 10-15 % (kodim10), 4-22 % (kodim23, B the worst): the pictures' content
-            // still adds to some levels. Before the texture rejection it was several times.
-            CHECK(c.response_error_percent < 25);
-            CHECK(c.nps_distance_db < 1.5);
+    // The plate's own grain adds to the known: the expected grain is their sum (sum_of_grains),
+    // the plate's as analysed alone. The pictures' content is what the analysis must see past;
+    // texture of the grain's own correlation it cannot (the guide's Limits), so the bounds
+    // depend on the grain's size.
+    struct Case {
+        const char* what;
+        GrainProfile known;
+        double response_percent, nps_db, correlation;
+    };
+    const std::vector<double> correlation = {1, 0.5, 0.3, 0.5, 1, 0.4, 0.3, 0.4, 1};
+    const Case cases[] = {
+        // White grain about the plates' own amount (2-4 code values of 255). Measured (seed
+        // 11): 2.4-5.0 % (2.4-7.5 % over seeds 11-13), 0.28-0.91 dB, correlation 0.006-0.015.
+        {"fine grain, the plates' amount",
+         known_profile({{0.0075, 0.005, 1.0, 0}, {0.0075, 0.00375, 1.0, 0}, {0.00875, 0.005, 1.0, 0}}, correlation,
+                       SignalEncoding::display, 0, 1),
+         8, 1.2, 0.05},
+        // Grain 3-5x the plates' own, of 1 px (lag-1 0.7-0.8). Measured 9.0-22.4 % (kodim23's B
+        // the worst: its parrots' feathers, levels shown only in texture of that size, pass
+        // as grain), 0.36-1.18 dB, correlation 0.008-0.036.
+        {"coarse grain, 3-5x the plates'",
+         known_profile({{0.03, 0.02, 1.0, 1.0}, {0.03, 0.015, 1.0, 0.8}, {0.035, 0.02, 1.0, 1.2}}, correlation,
+                       SignalEncoding::display, 0, 1),
+         25, 1.5, 0.05},
+    };
+    for (const Case& k : cases)
+        for (const char* name : {"kodim10", "kodim23"}) {
+            Image plate = independent::read_rgb(kPlates / (std::string(name) + ".png"));
+            const GrainProfile expected = sum_of_grains(k.known, analyse(plate));
+            apply_grain_profile(k.known, plate.view(), 11, 0, 0);
+            const GrainMatch m = compare_grain_profiles(expected, analyse(plate));
+            for (const ChannelMatch& c : m.channels) {
+                INFO(k.what << ", " << name << " " << c.name << ": response " << c.response_error_percent << " %, NPS "
+                            << c.nps_distance_db << " dB, correlation " << m.max_correlation_difference);
+                CHECK(c.response_error_percent < k.response_percent);
+                CHECK(c.nps_distance_db < k.nps_db);
+            }
+            CHECK(m.max_correlation_difference < k.correlation);
         }
-        CHECK(m.max_correlation_difference < 0.1);
+}
+
+TEST_CASE("grain analysed from the real plates resynthesises to the plate's by an independent estimator",
+          "[plate][reference]") {
+    if (!fs::exists(kPlates / "kodim23.png")) {
+        WARN("reference plates in " << kPlates << " not found: skipped");
+        return;
+    }
+    // The figures of the guide's table (tools/plate_report: seed 7, 64 px patches). Bounds:
+    // kodim10 within the targets of a match by eye (15 %, 0.1, 0.1; measured 2.4-5.2 %, lag-1
+    // 0.00-0.03 apart, correlation 0.05 apart); kodim23, whose quiet areas hold more power at
+    // low frequencies than its analysed grain (see the guide), within its measured figures
+    // plus a margin (measured 14.5-20.0 %, lag-1 0.09-0.14 apart, correlation 0.07 apart).
+    struct Bound {
+        const char* name;
+        double response, lag1, correlation;
+    };
+    for (const Bound& bound : {Bound{"kodim10", 0.15, 0.1, 0.1}, Bound{"kodim23", 0.25, 0.18, 0.1}}) {
+        const Image plate = independent::read_rgb(kPlates / (std::string(bound.name) + ".png"));
+        const GrainProfile profile = analyse(plate);
+        const independent::Estimate on_plate = independent::estimate(plate);
+        Image patches = flat_patches(512, 512, 3, on_plate.lo, on_plate.hi, 64);
+        apply_grain_profile(profile, patches.view(), 7, 0, 0);
+        const independent::Estimate synthetic = independent::estimate(patches, on_plate.lo, on_plate.hi);
+        for (int c = 0; c < 3; ++c) {
+            const GrainChannel& ch = profile.channels[c];
+            const double response = independent::response_error(on_plate, synthetic, c, ch.level.front(), ch.level.back());
+            INFO(bound.name << " " << "RGB"[c] << ": response " << 100 * response << " %, lag-1 plate " << on_plate.lag1[c]
+                            << " vs " << synthetic.lag1[c]);
+            CHECK(response < bound.response);
+            CHECK(std::abs(synthetic.lag1[c] - on_plate.lag1[c]) < bound.lag1);
+        }
+        INFO(bound.name << ": R-G correlation plate " << on_plate.rg << " vs " << synthetic.rg);
+        CHECK(std::abs(synthetic.rg - on_plate.rg) < bound.correlation);
     }
 }
 

@@ -2,6 +2,7 @@
 // (flat patches, ramps, pictures with edges and texture) to put their grain on.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -42,6 +43,38 @@ inline GrainProfile known_profile(const std::vector<KnownChannel>& channels, con
     }
     p.channel_correlation = correlation;
     return p;
+}
+
+// The grain of the sum of two independent grains, as analysed: per channel the variances add
+// at each of a's levels; the autocorrelation and channel correlation are the variance-weighted
+// mix of the two, with each channel's weight of a averaged over b's levels (the analysis pools
+// blocks of every level into one autocorrelation).
+inline GrainProfile sum_of_grains(const GrainProfile& a, const GrainProfile& b) {
+    GrainProfile out = a;
+    const size_t n = a.channels.size();
+    std::vector<double> weight_a(n);
+    for (size_t c = 0; c < n; ++c) {
+        GrainChannel& ch = out.channels[c];
+        const GrainChannel &ca = a.channels[c], &cb = b.channels[c];
+        for (size_t i = 0; i < ch.level.size(); ++i) ch.sigma[i] = std::hypot(ca.sigma[i], cb.sigma_at(ca.level[i]));
+        double sum = 0;
+        for (double level : cb.level) {
+            const double va = std::pow(ca.sigma_at(level), 2), vb = std::pow(cb.sigma_at(level), 2);
+            sum += va / (va + vb);
+        }
+        weight_a[c] = sum / cb.level.size();
+        ch.acf_radius = std::max(ca.acf_radius, cb.acf_radius);
+        ch.autocorrelation.clear();
+        for (int dy = -ch.acf_radius; dy <= ch.acf_radius; ++dy)
+            for (int dx = -ch.acf_radius; dx <= ch.acf_radius; ++dx)
+                ch.autocorrelation.push_back(weight_a[c] * ca.acf(dx, dy) + (1 - weight_a[c]) * cb.acf(dx, dy));
+    }
+    for (size_t x = 0; x < n; ++x)
+        for (size_t y = 0; y < n; ++y)
+            if (x != y)
+                out.channel_correlation[x * n + y] = std::sqrt(weight_a[x] * weight_a[y]) * a.correlation(x, y) +
+                                                     std::sqrt((1 - weight_a[x]) * (1 - weight_a[y])) * b.correlation(x, y);
+    return out;
 }
 
 // Square patches of levels spread over [lo, hi], each `patch` px wide.
