@@ -37,6 +37,14 @@ constexpr double kStationarityLimit = 16.27;
 constexpr int kShapeLags[][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}, {2, 0}, {0, 2}, {4, 0}, {0, 4}};
 constexpr int kShapeLagCount = sizeof(kShapeLags) / sizeof(kShapeLags[0]);
 constexpr double kShapeOutlierMads = 5.0;
+// Weak texture (Liu, Tanaka and Okutomi, IEEE TIP 2013): a block of grain alone has a
+// gradient covariance whose largest eigenvalue is about Gamma distributed around that of the
+// grain's expected gradient covariance (from sigma at its level and the autocorrelation at
+// lags 1); a block above its 0.99 quantile holds texture.
+constexpr double kWeakTextureZ = 2.3263478740408408;  // standard normal quantile of 0.99
+// The curve and the weak-texture selection are iterated until the curve's variances settle.
+constexpr int kWeakTextureIterations = 8;
+constexpr double kWeakTextureSettled = 1e-3;
 
 // Lags |dx|, |dy| <= radius, row-major from (-radius, -radius).
 struct LagGrid {
@@ -162,7 +170,11 @@ struct Block {
     std::vector<double> squares;   // residual sum of squares per channel
     std::vector<double> quadrant_squares;  // per channel, that of each quadrant
     std::vector<double> shape;     // per channel, the block's autocorrelation at kShapeLags
+    std::vector<double> gradient;  // per channel, mean gh^2, gv^2, gh gv (forward differences)
 };
+
+// The largest eigenvalue of the symmetric 2x2 matrix [[a, b], [b, c]].
+double largest_eigenvalue(double a, double b, double c) { return 0.5 * (a + c) + std::hypot(0.5 * (a - c), b); }
 
 double median_of(std::vector<double> v) {
     if (v.empty()) return 0;
@@ -374,6 +386,14 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                     quadrant[2 * ((p / bs) >= half) + ((p % bs) >= half)] += r[p] * r[p];
                 }
                 b.squares.push_back(squares);
+                double gh2 = 0, gv2 = 0, ghv = 0;
+                for (int y = 0; y + 1 < bs; ++y)
+                    for (int x = 0; x + 1 < bs; ++x) {
+                        const double gh = r[y * bs + x + 1] - r[y * bs + x], gv = r[(y + 1) * bs + x] - r[y * bs + x];
+                        gh2 += gh * gh, gv2 += gv * gv, ghv += gh * gv;
+                    }
+                const double gradient_px = double(bs - 1) * (bs - 1);
+                b.gradient.insert(b.gradient.end(), {gh2 / gradient_px, gv2 / gradient_px, ghv / gradient_px});
                 b.quadrant_squares.insert(b.quadrant_squares.end(), quadrant, quadrant + 4);
                 for (const auto& lag : kShapeLags) {
                     const int dx = lag[0], dy = lag[1];
@@ -457,6 +477,43 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
         return stationary;
     };
 
+    // Whether each block's largest gradient-covariance eigenvalue is within what grain of the
+    // curve's sigma at its level gives (its 0.99 quantile); every block while no curve.
+    auto weak_textured_blocks = [&](int c) {
+        const ChannelState& s = state[c];
+        std::vector<char> weak(nblocks, 1);
+        if (s.curve.level.empty()) return weak;
+        auto rho = [&](int dx, int dy) {
+            return std::abs(dx) <= lags.radius && std::abs(dy) <= lags.radius ? s.rho[lags.index(dx, dy)] : 0.0;
+        };
+        // Expected gradient covariance per unit variance: E[gh^2] = 2 (1 - rho(1,0)), and so on.
+        const double hh = 2 * (1 - rho(1, 0)), vv = 2 * (1 - rho(0, 1)), hv = 1 - rho(1, 0) - rho(0, 1) + rho(-1, 1);
+        const double expected = largest_eigenvalue(hh, hv, vv);
+        // Gamma shape of a block's mean squared gradient along x and y: mean^2 / variance, the
+        // variance from the gradient's own autocorrelation (second differences of rho).
+        const int m = bs - 1;
+        double shape = INFINITY;
+        for (int axis = 0; axis < 2; ++axis) {
+            const int ex = axis == 0, ey = axis == 1;
+            const double g0 = 2 * (1 - rho(ex, ey));
+            if (!(g0 > 0)) continue;
+            double sum = 0;
+            for (int dy = -lags.radius; dy <= lags.radius; ++dy)
+                for (int dx = -lags.radius; dx <= lags.radius; ++dx) {
+                    const double g = (2 * rho(dx, dy) - rho(dx + ex, dy + ey) - rho(dx - ex, dy - ey)) / g0;
+                    sum += pair_count(m, dx, dy) * g * g;
+                }
+            shape = std::min(shape, double(m) * m * m * m / (2 * sum));
+        }
+        // Its 0.99 quantile over its mean (Wilson-Hilferty).
+        const double h = 1.0 / (9 * shape), quantile = std::pow(1 - h + kWeakTextureZ * std::sqrt(h), 3.0);
+        for (int i = 0; i < nblocks; ++i) {
+            const double* g = &blocks[i].gradient[(size_t)c * 3];
+            weak[i] = largest_eigenvalue(g[0], g[2], g[1]) <= quantile * expected * s.curve.at(blocks[i].level[c]);
+        }
+        return weak;
+    };
+
     // The response through the candidates of each bin that has enough of them.
     auto fit_curve = [&](int c) {
         ChannelState& s = state[c];
@@ -504,8 +561,17 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                     }
                 }
                 const std::vector<char> typical = typical_blocks(c, reference), stationary = stationary_blocks(c);
-                for (int i = 0; i < nblocks; ++i) s.candidate[i] = typical[i] && stationary[i];
-                s.curve = fit_curve(c);
+                // The curve and the weak-texture selection, each from the other until the curve settles.
+                for (int iteration = 0; iteration < kWeakTextureIterations; ++iteration) {
+                    const std::vector<char> weak = weak_textured_blocks(c);
+                    for (int i = 0; i < nblocks; ++i) s.candidate[i] = typical[i] && stationary[i] && weak[i];
+                    LevelCurve next = fit_curve(c);
+                    bool settled = next.bin == s.curve.bin;
+                    for (size_t k = 0; settled && k < next.variance.size(); ++k)
+                        settled = std::abs(next.variance[k] / s.curve.variance[k] - 1) < kWeakTextureSettled;
+                    s.curve = std::move(next);
+                    if (settled) break;
+                }
                 for (int i = 0; i < nblocks; ++i) {
                     const double expected = s.curve.at(blocks[i].level[c]), variance = blocks[i].squares[c] / s.dof;
                     s.accepted[i] = s.candidate[i] && expected > 0 &&

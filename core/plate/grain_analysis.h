@@ -5,8 +5,12 @@
 // whatever the surface cannot follow (edges, texture). Blocks are binned by their level;
 // a block is kept only while it looks like grain alone:
 // - its residual variance is within 3.5 standard deviations (those of a sample variance
-//   of that many correlated pixels) of the response curve at its level, and
-// - its own autocorrelation at a few short lags is typical of the kept blocks.
+//   of that many correlated pixels) of the response curve at its level,
+// - its own autocorrelation at a few short lags is typical of the kept blocks,
+// - its four quadrants' variances agree (stationary), and
+// - its gradient covariance's largest eigenvalue is within what grain of the curve's sigma
+//   and the measured autocorrelation gives (weak texture, after Liu, Tanaka and Okutomi);
+//   the curve and this selection are iterated until the curve settles.
 // From the kept blocks:
 // - sigma per level: residual sum of squares / (N - tr(P R)), the exact expectation of a
 //   fit residual for grain with autocorrelation R (P projects onto the surface);
