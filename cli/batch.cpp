@@ -82,8 +82,10 @@ FrameWrite start_frame(const RunOptions& run, const FrameWork& work, const DryRu
         report.status = FrameReport::Status::dry_run;
         // The header alone: what the run would refuse or warn of, without reading the pixels.
         try {
-            const OIIO::ImageSpec spec = read_image_spec(job.input);
-            if (dry_run_check) dry_run_check(job, spec, report, progress);
+            if (dry_run_check)
+                dry_run_check(job, report, progress);
+            else
+                read_image_header(job.input);
         } catch (const UserError& e) {
             progress.warn(report, e.what());
         }
@@ -244,6 +246,14 @@ void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_he
         "Read, develop and write each frame in turn (by default a frame is written while the next is read and "
         "developed)"));
     run_option(cmd.add_option("--log", o.run.log_path, "Write per-frame timings, warnings and errors to this JSON file"));
+}
+
+void add_layer_flag(CLI::App& cmd, std::optional<std::string>& layer, const std::string& verb) {
+    cmd.add_option("--layer", layer,
+                   "The layer or part of a layered or multi-part input (a render's AOVs) to " + verb +
+                       ", e.g. 'diffuse' (default: the channels without a layer name, of whichever part has "
+                       "them, else the only layer with colour); the others pass through")
+        ->configurable(false);
 }
 
 std::string output_flag_hint(const CLI::App& cmd) {
