@@ -108,10 +108,10 @@ void run_frames(const RunOptions& run, const std::vector<FrameJob>& jobs, int th
                 const PrepareFrames& prepare, const DryRunCheck& dry_run_check, Progress& progress) {
     int most = run.frames_at_once > 0 ? run.frames_at_once : std::min(threads, kDefaultMaxFramesAtOnce);
     bool overlap = run.overlap;
-    // No more frames in flight than the memory holds, by the first frame's header.
+    // No more frames in flight than the memory holds, by the first frame's headers.
     try {
         const double memory = double(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
-        const int fit = int(std::min(1024.0, memory / frame_memory_bytes(read_image_spec(jobs.front().input))));
+        const int fit = int(std::min(1024.0, memory / file_memory_bytes(jobs.front().input)));
         overlap = overlap && fit >= 2;
         const int frames_per_worker = overlap ? 2 : 1;
         if (!run.dry_run && fit >= 1 && fit < most * frames_per_worker) {

@@ -265,10 +265,11 @@ struct ApplyOptions {
 
 // Puts the grain on one frame; returns how to write it.
 FrameWrite apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const FrameJob& job, int threads,
-                       FrameReport& report) {
+                       FrameReport& report, Progress& progress) {
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_plate(job.input, o.layer, true);
     require_holds_parts(job.output, job.input, in);
+    if (const std::string w = uint32_channels_warning(job.output, in); !w.empty()) progress.warn_once("uint32", report, w);
     report.read_seconds = seconds_since(start);
     // Grain levels are code values of the profile's encoding: another encoding's pixels would
     // get grain of the wrong amount at the wrong levels.
@@ -306,8 +307,8 @@ void run_apply(ApplyOptions& o, const CLI::App& cmd) {
         throw UserError("'" + o.profile + "' was measured in " + measured_in + ", the input is " + o.colorspace +
                         ": convert the input to " + measured_in + " first (grain levels are in its encoding)");
     run_batch(o.batch, o.frame, cmd.get_option("--frame")->count() > 0, o.threads, false, [&](int) -> FrameWork {
-        return [&](const FrameJob& job, int threads, bool, FrameReport& report, Progress&) {
-            return apply_frame(o, grain, job, threads, report);
+        return [&](const FrameJob& job, int threads, bool, FrameReport& report, Progress& progress) {
+            return apply_frame(o, grain, job, threads, report, progress);
         };
     }, [&](const FrameJob& job, FrameReport&, Progress&) {
         require_holds_parts(job.output, job.input, read_image_header(job.input, o.layer));

@@ -232,7 +232,15 @@ LoadedImage read_header(OIIO::ImageInput& in, const std::string& path, const std
 
 }  // namespace
 
-OIIO::ImageSpec read_image_spec(const std::string& path) { return open_image(path)->spec(); }
+double file_memory_bytes(const std::string& path) {
+    const auto in = open_image(path);
+    double largest = 0, stored = 0;
+    for (const OIIO::ImageSpec& part : part_specs(*in, path)) {
+        largest = std::max(largest, frame_memory_bytes(part));
+        stored += double(part.image_bytes(true));
+    }
+    return largest + stored;
+}
 
 LoadedImage read_image_header(const std::string& path, const std::optional<std::string>& layer) {
     LayerOrder order;
@@ -271,6 +279,17 @@ void require_holds_parts(const std::string& output, const std::string& input, co
     throw UserError("'" + input + "' has " + std::to_string(image.subimages) + " parts, and '" + output +
                     "' is not OpenEXR, the one format that holds several: write an .exr output, which keeps every "
                     "part (choose the part or layer to develop with --layer)");
+}
+
+std::string uint32_channels_warning(const std::string& output, const LoadedImage& image) {
+    if (lower_extension(output) == ".exr") return "";
+    std::vector<std::string> ids;
+    for (int c = 0; c < image.spec.nchannels; ++c)
+        if (image.spec.channelformat(c) == OIIO::TypeDesc::UINT) ids.push_back("'" + image.spec.channelnames[c] + "'");
+    if (ids.empty()) return "";
+    return "the uint32 channel" + std::string(ids.size() > 1 ? "s " : " ") + OIIO::Strutil::join(ids, ", ") +
+           " (object IDs) cannot be kept exactly in '" + output + "': they are written in its one data type, scaled "
+           "to 0-1; write an .exr output to keep them";
 }
 
 Window window_flag(const std::vector<int>& xywh, const Window& image, const std::string& flag) {

@@ -48,10 +48,12 @@ struct LoadedImage {
 // empty; a UserError naming `flag` when it has no pixels or is not inside `image`.
 Window window_flag(const std::vector<int>& xywh, const Window& image, const std::string& flag);
 
-// About the memory developing an image of this header takes (its pixels read and written as
-// float, and the working planes): read_image refuses a file past the machine's memory, and a
-// batch runs no more frames at once than fit.
+// About the memory developing a part of this header takes (its pixels read and written as
+// float, and the working planes): read_image refuses a file past the machine's memory.
 double frame_memory_bytes(const OIIO::ImageSpec& spec);
+// The same for a whole file, from its headers: its largest part developed and the others held
+// as stored to pass through; a batch runs no more frames at once than fit.
+double file_memory_bytes(const std::string& path);
 
 // The layer to develop, chosen among all the file's parts (a multi-part EXR) and the channel
 // layers in each, read as float with its colour first: its colour (R, G, B or Y), then its
@@ -75,8 +77,9 @@ LoadedImage read_image_header(const std::string& path, const std::optional<std::
 // only OpenEXR holds several.
 void require_holds_parts(const std::string& output, const std::string& input, const LoadedImage& image);
 
-// The header of its first part alone (a batch's look at its first frame's size).
-OIIO::ImageSpec read_image_spec(const std::string& path);
+// What to warn of where the output cannot keep the developed part's uint32 channels (object
+// IDs) exactly: any format but OpenEXR gets them as its one type, scaled to 0-1. Empty otherwise.
+std::string uint32_channels_warning(const std::string& output, const LoadedImage& image);
 
 // How many of a file's first channels are colour: one (grey) where the first is named
 // luminance, "Y" or a layer's "<layer>.Y" (a grey plate with alpha and depth: Y, A, Z),

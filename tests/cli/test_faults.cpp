@@ -155,7 +155,7 @@ std::string multi_part_file(const fs::path& dir, const std::string& name, const 
         spec.channelnames = p.channels;
         spec.channelformats = p.types;
         spec.alpha_channel = spec.z_channel = -1;
-        spec.attribute("oiio:subimagename", p.name);
+        if (!p.name.empty()) spec.attribute("oiio:subimagename", p.name);
         spec.attribute("compression", p.compression);
         specs.push_back(spec);
     }
@@ -187,7 +187,8 @@ std::string multi_part_file(const fs::path& dir, const std::string& name, const 
     return path;
 }
 
-// A channel of a part as the file stores it: its bytes, type, data window and compression.
+// A channel of a part ("": the first) as the file stores it: its bytes, type, data window and
+// compression.
 struct StoredChannel {
     std::vector<unsigned char> bytes;
     std::string type, window, compression;
@@ -201,7 +202,7 @@ StoredChannel stored_channel(const std::string& path, const std::string& part, c
     REQUIRE(in);
     for (int p = 0; in->seek_subimage(p, 0); ++p) {
         const OIIO::ImageSpec s = in->spec();
-        if (s.get_string_attribute("oiio:subimagename") != part) continue;
+        if (!part.empty() && s.get_string_attribute("oiio:subimagename") != part) continue;
         const auto at = std::find(s.channelnames.begin(), s.channelnames.end(), name);
         REQUIRE(at != s.channelnames.end());
         const int c = int(at - s.channelnames.begin());
@@ -304,6 +305,37 @@ TEST_CASE("faults: a multi-part EXR develops its layer in its part and passes th
     passes_through(out, parts[0]);
     passes_through(out, parts[2]);
     CHECK(stored_channel(out, "diffuse", "diffuse.G").bytes != stored_channel(in, "diffuse", "diffuse.G").bytes);
+
+    // grain analyze measures the chosen layer: the diffuse part is 8x6, the beauty 16x12 (both
+    // too small to measure, which says which was read).
+    r = darkroom("grain analyze " + in + " --layer diffuse --block-size 8 -o " + (dir / "plate.json").string());
+    CHECK_THAT(r.output, Catch::Contains("8x6 pixels"));
+    r = darkroom("grain analyze " + in + " --block-size 8 -o " + (dir / "plate.json").string());
+    CHECK_THAT(r.output, Catch::Contains("16x12 pixels"));
+    r = darkroom("grain analyze " + in + " --layer crypto --block-size 8 -o " + (dir / "plate.json").string());
+    CHECK_THAT(r.output, Catch::Contains("--layer 'crypto'") && Catch::Contains("has no colour channels"));
+}
+
+// uint32 channels (object IDs) in a file of one part: kept exactly in OpenEXR; any other format
+// holds one type for all its channels, and the run says the IDs are not kept.
+TEST_CASE("faults: uint32 channels pass through exactly, or are named where the format cannot keep them",
+          "[cli][faults][layers]") {
+    const fs::path dir = fresh_dir("uint32");
+    const std::string in = multi_part_file(dir, "ids.exr", {{"", {"R", "G", "B", "id"}, {kHalf, kHalf, kHalf, kUint}}});
+    const std::string out = (dir / "out.exr").string();
+    Result r = darkroom("develop " + in + " -o " + out + kLook);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(stored_channel(out, "", "id") == stored_channel(in, "", "id"));
+    CHECK(stored_channel(out, "", "id").type == "uint");
+    for (const std::string flags : {"", " -n"}) {
+        r = darkroom("develop " + in + " -o " + (dir / "out.tif").string() + kLook + flags);
+        INFO(flags << "\n" << r.output);
+        CHECK(r.exit_code == 0);
+        CHECK_THAT(r.output, Catch::Contains("uint32 channel 'id'") && Catch::Contains(".exr"));
+    }
+    r = darkroom("develop " + in + " -o " + out + kLook);
+    CHECK(r.output.find("uint32") == std::string::npos);
 }
 
 TEST_CASE("faults: a layer that several parts could give is named, and a single-part format refused",
