@@ -49,7 +49,8 @@ FrameWrite develop_frame(const DevelopOptions& o, const Renderer& renderer, Plan
         !w.empty())
         progress.warn_once("input tag", report, w);
     require_holds_parts(job.output, job.input, in);
-    if (const std::string w = uint32_channels_warning(job.output, in); !w.empty()) progress.warn_once("uint32", report, w);
+    if (const std::string w = uint32_channels_warning(job.output, in); !w.empty())
+        progress.warn_once("uint32", report, w);
     const int premultiplied_alpha = premultiplied_alpha_channel(in.spec);
 
     start = std::chrono::steady_clock::now();

@@ -269,7 +269,8 @@ FrameWrite apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, c
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_plate(job.input, o.layer, true);
     require_holds_parts(job.output, job.input, in);
-    if (const std::string w = uint32_channels_warning(job.output, in); !w.empty()) progress.warn_once("uint32", report, w);
+    if (const std::string w = uint32_channels_warning(job.output, in); !w.empty())
+        progress.warn_once("uint32", report, w);
     report.read_seconds = seconds_since(start);
     // Grain levels are code values of the profile's encoding: another encoding's pixels would
     // get grain of the wrong amount at the wrong levels.

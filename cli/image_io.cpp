@@ -582,9 +582,10 @@ std::unique_ptr<TempFile> write_image_to_temp(const std::string& path, const Ima
                                    [](OIIO::TypeDesc t) { return t == OIIO::TypeDesc::UINT; }) &&
                        !through.exact_channels.empty();
     auto write_part = [&](int p) {
-        if (p != developed) return out->write_image(OIIO::TypeDesc::UNKNOWN, through.parts[p - (p > developed)].pixels.data());
+        const OIIO::TypeDesc stored = OIIO::TypeDesc::UNKNOWN;  // (each channel in its own type)
+        if (p != developed) return out->write_image(stored, through.parts[p - (p > developed)].pixels.data());
         if (!exact) return out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
-        return out->write_image(OIIO::TypeDesc::UNKNOWN, stored_pixels(image, spec, like, through.exact_channels).data());
+        return out->write_image(stored, stored_pixels(image, spec, like, through.exact_channels).data());
     };
     auto temp = std::make_unique<TempFile>(fs::path(path));
     bool written = temp->create([&] { return out->open(temp->path().string(), int(specs.size()), specs.data()); });

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "look/look.h"
 #include "look/parameters.h"
@@ -29,8 +30,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     darkroom::apply_look_json(reloaded, saved, "the fuzz input's look, saved");
     fuzz_require(reloaded.to_json() == saved);
     using darkroom::Quality;
-    for (Quality quality : {Quality::fast, look.settings.quality}) {
-        if (quality == Quality::reference) continue;
+    std::vector<Quality> tiers{Quality::fast};
+    if (look.settings.quality != Quality::fast && look.settings.quality != Quality::reference)
+        tiers.push_back(look.settings.quality);
+    for (Quality quality : tiers) {
         try {
             fuzz_require(darkroom::fuzz::develops_finite(look, quality).value_or(true));
         } catch (const darkroom::UserError&) {

@@ -112,10 +112,11 @@ TEST_CASE("grain profiles at their extremes, with the controls at theirs, grain 
     REQUIRE(files.size() >= 3);
     for (const fs::path& file : files) {
         const GrainProfile profile = parse_grain_profile_json(text_of(file), file.filename().string());
-        for (const GrainControls& controls :
-             {GrainControls{}, GrainControls{{0, 0, 0}, {kMinGrainSizeScale, kMinGrainSizeScale, kMinGrainSizeScale}, -kMaxResponseTilt},
-              GrainControls{{kMaxGrainScale, kMaxGrainScale, kMaxGrainScale},
-                            {kMaxGrainSizeScale, kMaxGrainSizeScale, kMaxGrainSizeScale}, kMaxResponseTilt}}) {
+        const double small = kMinGrainSizeScale, large = kMaxGrainSizeScale, most = kMaxGrainScale;
+        const std::vector<GrainControls> ends{
+            GrainControls{}, GrainControls{{0, 0, 0}, {small, small, small}, -kMaxResponseTilt},
+            GrainControls{{most, most, most}, {large, large, large}, kMaxResponseTilt}};
+        for (const GrainControls& controls : ends) {
             INFO(file.filename().string() << " gain " << controls.gain[0] << " size " << controls.size[0] << " tilt "
                                           << controls.tilt);
             CHECK(fuzz::grains_finite(plan_grain_synthesis(profile, controls)));
