@@ -90,7 +90,9 @@ case "${1:-}" in
       # New inputs go to a scratch folder; the kept corpus changes only by hand (see tests/fuzz/README.md).
       rm -rf "build-sanitize/new-corpus/$target" && mkdir -p "build-sanitize/new-corpus/$target"
       echo "== $target: ${seconds} s from $corpus"
-      "build-sanitize/tests/fuzz/$target" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+      # (-timeout: an accepted input is rendered, which a look of a film frame a few um wide
+      # makes slow under the sanitizers, with halation kernels of thousands of pixels)
+      "build-sanitize/tests/fuzz/$target" -max_total_time="$seconds" -timeout=60 -rss_limit_mb=2048 \
         -dict=tests/fuzz/json.dict -artifact_prefix="build-sanitize/$target-" -print_final_stats=1 \
         "build-sanitize/new-corpus/$target" "$corpus"
     done

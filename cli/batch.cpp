@@ -82,8 +82,10 @@ FrameWrite start_frame(const RunOptions& run, const FrameWork& work, const DryRu
         report.status = FrameReport::Status::dry_run;
         // The header alone: what the run would refuse or warn of, without reading the pixels.
         try {
-            const OIIO::ImageSpec spec = read_image_spec(job.input);
-            if (dry_run_check) dry_run_check(job, spec, report, progress);
+            if (dry_run_check)
+                dry_run_check(job, report, progress);
+            else
+                read_image_header(job.input);
         } catch (const UserError& e) {
             progress.warn(report, e.what());
         }
@@ -106,10 +108,10 @@ void run_frames(const RunOptions& run, const std::vector<FrameJob>& jobs, int th
                 const PrepareFrames& prepare, const DryRunCheck& dry_run_check, Progress& progress) {
     int most = run.frames_at_once > 0 ? run.frames_at_once : std::min(threads, kDefaultMaxFramesAtOnce);
     bool overlap = run.overlap;
-    // No more frames in flight than the memory holds, by the first frame's header.
+    // No more frames in flight than the memory holds, by the first frame's headers.
     try {
         const double memory = double(sysconf(_SC_PHYS_PAGES)) * sysconf(_SC_PAGE_SIZE);
-        const int fit = int(std::min(1024.0, memory / frame_memory_bytes(read_image_spec(jobs.front().input))));
+        const int fit = int(std::min(1024.0, memory / file_memory_bytes(jobs.front().input)));
         overlap = overlap && fit >= 2;
         const int frames_per_worker = overlap ? 2 : 1;
         if (!run.dry_run && fit >= 1 && fit < most * frames_per_worker) {
@@ -244,6 +246,14 @@ void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_he
         "Read, develop and write each frame in turn (by default a frame is written while the next is read and "
         "developed)"));
     run_option(cmd.add_option("--log", o.run.log_path, "Write per-frame timings, warnings and errors to this JSON file"));
+}
+
+void add_layer_flag(CLI::App& cmd, std::optional<std::string>& layer, const std::string& verb) {
+    cmd.add_option("--layer", layer,
+                   "The layer or part of a layered or multi-part input (a render's AOVs) to " + verb +
+                       ", e.g. 'diffuse' (default: the channels without a layer name, of whichever part has "
+                       "them, else the only layer with colour); the others pass through")
+        ->configurable(false);
 }
 
 std::string output_flag_hint(const CLI::App& cmd) {

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "cli/atomic_file.h"
@@ -37,6 +38,9 @@ struct BatchOptions {
 // The flags above on `cmd` (not read from look files: they are the run's, not the look's).
 void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_help, const std::string& output_help);
 
+// --layer on `cmd`: the layer or part of a layered or multi-part input that `verb` reads.
+void add_layer_flag(CLI::App& cmd, std::optional<std::string>& layer, const std::string& verb);
+
 // For a command line CLI11 refused, when `cmd` (with the flags above) was given a second
 // name and no -o, as oiiotool's habit `develop in.exr out.exr` does: how to name the output.
 // Empty otherwise.
@@ -54,17 +58,16 @@ using FrameWork =
     std::function<FrameWrite(const FrameJob& job, int threads, bool first, FrameReport& report, Progress& progress)>;
 // What the frames share, made once the threads each frame gets are known.
 using PrepareFrames = std::function<FrameWork(int threads_per_frame)>;
-// A dry run's look at a frame whose input header (`input`) was read: the warnings the run
-// would give before its pixels.
-using DryRunCheck =
-    std::function<void(const FrameJob& job, const OIIO::ImageSpec& input, FrameReport& report, Progress& progress)>;
+// A dry run's look at a frame: the warnings and refusals the run would give from its input's
+// header (read_image_header), before its pixels.
+using DryRunCheck = std::function<void(const FrameJob& job, FrameReport& report, Progress& progress)>;
 
 // Expands o's names into frames (a single image is frame `single_frame`; `frame_flag_given`:
 // --frame was given, which a sequence refuses), checks every output can be written before any
 // frame is read, runs the frames (in parallel, sharing `threads`, 0 = all cores; each frame's
 // write overlapping the next frame's read and develop) and throws UserError naming each frame
 // that failed. Frames are reported, and their outputs take their names, in frame order. `verbose` prints how the threads are split. A dry
-// run (-n) reads each input's header, warns where it cannot, and gives it to `dry_run_check`.
+// run (-n) runs `dry_run_check` on each frame (else reads its input's header), and warns of what it refuses.
 void run_batch(BatchOptions& o, int single_frame, bool frame_flag_given, int threads, bool verbose,
                const PrepareFrames& prepare, const DryRunCheck& dry_run_check = {});
 

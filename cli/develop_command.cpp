@@ -44,11 +44,13 @@ FrameWrite develop_frame(const DevelopOptions& o, const Renderer& renderer, Plan
     LoadedImage in = read_image(job.input, o.layer);
     report.read_seconds = seconds_since(start);
     // An input read in another space than its tag names (an sRGB PNG taken as scene-linear
-    // without --iscolorspace), and parts left out: said once, for a sequence's frames share them.
+    // without --iscolorspace): said once, for a sequence's frames share it.
     if (const std::string w = colour.input_tag_warning(job.input, in.spec.get_string_attribute("oiio:ColorSpace"));
         !w.empty())
         progress.warn_once("input tag", report, w);
-    if (const std::string w = other_subimages_warning(job.input, in); !w.empty()) progress.warn_once("parts", report, w);
+    require_holds_parts(job.output, job.input, in);
+    if (const std::string w = uint32_channels_warning(job.output, in); !w.empty())
+        progress.warn_once("uint32", report, w);
     const int premultiplied_alpha = premultiplied_alpha_channel(in.spec);
 
     start = std::chrono::steady_clock::now();
@@ -74,9 +76,9 @@ FrameWrite develop_frame(const DevelopOptions& o, const Renderer& renderer, Plan
 
     const WriteOptions write =
         frame_write_options(o, colour, renderer.look().settings.output, in.spec, job, report, progress);
-    return [out = std::move(out), spec = std::move(in.spec), output = job.output,
+    return [out = std::move(out), spec = std::move(in.spec), through = std::move(in.through), output = job.output,
             protected_input = o.batch.run.in_place ? "" : job.input, write] {
-        return write_image_to_temp(output, out, spec, protected_input, write);
+        return write_image_to_temp(output, out, spec, protected_input, write, through);
     };
 }
 
@@ -114,9 +116,13 @@ void run_develop(DevelopOptions& o) {
                       return develop_frame(o, renderer, *plans, job, threads, report, progress);
                   };
               },
-              [&](const FrameJob& job, const OIIO::ImageSpec& input, FrameReport& report, Progress& progress) {
-                  require_format_holds(job.output, "", 3 + input.nchannels - colour_channel_count(input));
-                  frame_write_options(o, renderer.colour(), output, input, job, report, progress);
+              [&](const FrameJob& job, FrameReport& report, Progress& progress) {
+                  const LoadedImage input = read_image_header(job.input, o.layer);
+                  require_holds_parts(job.output, job.input, input);
+                  if (const std::string w = uint32_channels_warning(job.output, input); !w.empty())
+                      progress.warn_once("uint32", report, w);
+                  require_format_holds(job.output, "", 3 + input.spec.nchannels - colour_channel_count(input.spec));
+                  frame_write_options(o, renderer.colour(), output, input.spec, job, report, progress);
               });
 }
 
@@ -125,9 +131,7 @@ void add_run_flags(CLI::App& cmd, DevelopOptions& o) {
     cmd.add_option("--window", o.window, "Render only this window X,Y,W,H of the input (from its first pixel)")
         ->delimiter(',')
         ->expected(4);
-    cmd.add_option("--layer", o.layer,
-                   "The layer of a layered input (a render's AOVs) to develop, e.g. 'diffuse' (default: the "
-                   "channels without a layer name, else the only layer with colour); the others pass through");
+    add_layer_flag(cmd, o.layer, "develop");
 }
 
 }  // namespace

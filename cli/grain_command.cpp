@@ -94,9 +94,10 @@ std::vector<std::string> expand_frames(const std::vector<std::string>& plates, c
     return out;
 }
 
-// Pixels in absolute frame coordinates (the file's data window).
-LoadedImage read_plate(const std::string& path) {
-    LoadedImage in = read_image(path);
+// Pixels in absolute frame coordinates (the file's data window), of `layer` (read_image);
+// the rest of the file with them where `other_parts`.
+LoadedImage read_plate(const std::string& path, const std::optional<std::string>& layer, bool other_parts = false) {
+    LoadedImage in = read_image(path, layer, other_parts);
     const int w = in.pixels.window.width(), h = in.pixels.window.height();
     in.pixels.window = {in.spec.x, in.spec.y, in.spec.x + w, in.spec.y + h};
     return in;
@@ -113,6 +114,7 @@ SignalEncoding file_encoding(const std::string& colorspace_flag, const OIIO::Ima
 struct AnalyzeOptions {
     std::vector<std::string> plates;
     std::string output, colorspace, encoding, frames, plot;
+    std::optional<std::string> layer;  // --layer
     std::vector<int> region;
     int block_size = 0, levels = 16, min_blocks = 4, threads = 0;
 };
@@ -127,7 +129,7 @@ GrainProfile analyze_files(const std::vector<std::string>& paths, const AnalyzeO
     settings.min_blocks_per_level = o.min_blocks;
     settings.threads = o.threads;
     settings.colorspace = o.colorspace;
-    for (const std::string& p : paths) images.push_back(read_plate(p));
+    for (const std::string& p : paths) images.push_back(read_plate(p, o.layer));
     const OIIO::ImageSpec& first = images.front().spec;
     // The colour channels only (as develop reads them): alpha and depth carry no grain.
     settings.channels = colour_channel_count(first);
@@ -258,13 +260,17 @@ struct ApplyOptions {
     double tilt = 0;
     uint64_t seed = 0;
     int frame = 0, threads = 0;
+    std::optional<std::string> layer;  // --layer
 };
 
 // Puts the grain on one frame; returns how to write it.
 FrameWrite apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, const FrameJob& job, int threads,
                        FrameReport& report, Progress& progress) {
     auto start = std::chrono::steady_clock::now();
-    LoadedImage in = read_plate(job.input);
+    LoadedImage in = read_plate(job.input, o.layer, true);
+    require_holds_parts(job.output, job.input, in);
+    if (const std::string w = uint32_channels_warning(job.output, in); !w.empty())
+        progress.warn_once("uint32", report, w);
     report.read_seconds = seconds_since(start);
     // Grain levels are code values of the profile's encoding: another encoding's pixels would
     // get grain of the wrong amount at the wrong levels.
@@ -280,7 +286,6 @@ FrameWrite apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, c
                         (profile.colorspace.empty() ? encoding_name(profile.encoding) : profile.colorspace) +
                         " first, or give its colour space with --iscolorspace if the file says wrong");
     }
-    if (const std::string w = other_subimages_warning(job.input, in); !w.empty()) progress.warn_once("parts", report, w);
     start = std::chrono::steady_clock::now();
     ImageView view = in.pixels.view();
     view.colour_channels = colour_channel_count(in.spec);
@@ -288,7 +293,7 @@ FrameWrite apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, c
     report.develop_seconds = seconds_since(start);
     const WriteOptions write = with_input_data_type(o.batch.write, in.spec, job.output);
     return [in = std::move(in), output = job.output, protected_input = o.batch.run.in_place ? "" : job.input, write] {
-        return write_image_to_temp(output, in.pixels, in.spec, protected_input, write);
+        return write_image_to_temp(output, in.pixels, in.spec, protected_input, write, in.through);
     };
 }
 
@@ -306,6 +311,8 @@ void run_apply(ApplyOptions& o, const CLI::App& cmd) {
         return [&](const FrameJob& job, int threads, bool, FrameReport& report, Progress& progress) {
             return apply_frame(o, grain, job, threads, report, progress);
         };
+    }, [&](const FrameJob& job, FrameReport&, Progress&) {
+        require_holds_parts(job.output, job.input, read_image_header(job.input, o.layer));
     });
 }
 
@@ -383,6 +390,7 @@ void add_analysis_flags(CLI::App& cmd, AnalyzeOptions& o) {
     cmd.add_option("--min-blocks", o.min_blocks, "Grain-only blocks a level needs to be estimated")
         ->check(CLI::Range(1, 100000));
     cmd.add_option("--threads", o.threads, "Worker threads, 0 = all cores");
+    add_layer_flag(cmd, o.layer, "measure");
 }
 
 }  // namespace
@@ -425,6 +433,7 @@ void add_grain_command(CLI::App& app) {
                                          "its lowest")
         ->check(CLI::Range(-kMaxResponseTilt, kMaxResponseTilt));
     apply->add_option("--threads", p->threads, "Worker threads, 0 = all cores; the result does not depend on it");
+    add_layer_flag(*apply, p->layer, "put the grain on");
     apply->callback([p, apply] { run_apply(*p, *apply); });
 
     auto c = std::make_shared<CompareOptions>();

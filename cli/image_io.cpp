@@ -4,6 +4,7 @@
 #include <OpenImageIO/strutil.h>
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <unistd.h>
@@ -16,6 +17,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
+std::string lower_extension(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower((unsigned char)c));
+    return ext;
+}
+
 }  // namespace
 
 double frame_memory_bytes(const OIIO::ImageSpec& spec) {
@@ -26,12 +33,9 @@ double frame_memory_bytes(const OIIO::ImageSpec& spec) {
 
 namespace {
 
-// The file opened at its first subimage, its header checked for pixels we can hold.
-std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
-    if (!fs::exists(path)) throw UserError("input '" + path + "' does not exist");
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw UserError("cannot read '" + path + "': " + OIIO::geterror());
-    const OIIO::ImageSpec& s = in->spec();
+// A part's header checked for pixels we can hold.
+void check_part(const OIIO::ImageSpec& s, const std::string& path) {
+    if (s.deep) throw UserError("'" + path + "' has deep pixels, which darkroom neither develops nor passes through");
     if (s.width <= 0 || s.height <= 0 || s.nchannels <= 0) throw UserError("'" + path + "' has no pixels");
     if ((long long)s.width * s.height * s.nchannels > (1LL << 32))
         throw UserError("'" + path + "' is too large (" + std::to_string(s.width) + "x" + std::to_string(s.height) + ")");
@@ -42,7 +46,25 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
                         std::to_string(s.nchannels) + " channels: developing it takes some " +
                         std::to_string(int(bytes / 1e9 + 0.5)) + " GB, more than this machine's " +
                         std::to_string(int(memory / 1e9)) + " GB of memory");
+}
+
+// The file opened at its first subimage (part), its header checked.
+std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
+    if (!fs::exists(path)) throw UserError("input '" + path + "' does not exist");
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throw UserError("cannot read '" + path + "': " + OIIO::geterror());
+    check_part(in->spec(), path);
     return in;
+}
+
+// Every part's header, each checked.
+std::vector<OIIO::ImageSpec> part_specs(OIIO::ImageInput& in, const std::string& path) {
+    std::vector<OIIO::ImageSpec> parts;
+    for (int p = 0; in.seek_subimage(p, 0); ++p) {
+        parts.push_back(in.spec());
+        check_part(parts.back(), path);
+    }
+    return parts;
 }
 
 // A channel's layer ("diffuse" of "diffuse.R", "" of "R") and its name within it.
@@ -69,81 +91,113 @@ std::vector<int> layer_colour(const std::vector<std::string>& names, const std::
     return rgb.empty() ? layer_channels(names, layer, {"Y"}) : rgb;
 }
 
-std::string layer_list(const std::vector<std::string>& layers) {
+// A channel layer of one of the file's parts.
+struct PartLayer {
+    int part = 0;
+    std::string layer;
+    bool operator==(const PartLayer& o) const { return part == o.part && layer == o.layer; }
+};
+
+std::string part_name(const OIIO::ImageSpec& spec, int part) {
+    const std::string name = spec.get_string_attribute("oiio:subimagename");
+    return name.empty() ? "#" + std::to_string(part) : name;
+}
+
+// "'diffuse', (unnamed)"; in a multi-part file with each one's part: "'diffuse' of part 'aovs'".
+std::string layer_list(const std::vector<PartLayer>& layers, const std::vector<OIIO::ImageSpec>& parts) {
     std::string text;
-    for (const std::string& l : layers) text += (text.empty() ? "" : ", ") + (l.empty() ? "(unnamed)" : "'" + l + "'");
+    for (const PartLayer& l : layers) {
+        text += (text.empty() ? "" : ", ") + (l.layer.empty() ? "(unnamed)" : "'" + l.layer + "'");
+        if (parts.size() > 1) text += " of part '" + part_name(parts[l.part], l.part) + "'";
+    }
     return text;
 }
 
-// The layer read_image develops: the file channel of each of its channels (the layer's colour,
-// its alpha, the rest in the file's order) and how many are colour and alpha.
+// The layer read_image develops: its part, the file channel of each of its channels (the
+// layer's colour, its alpha, the rest in the file's order) and how many are colour and alpha;
+// no channels for a single-part file without layered names and no `layer` asked for: it is read as it is.
 struct LayerOrder {
+    int part = 0;
     std::vector<int> channels;
     int colours = 0;
     bool alpha = false;
 };
 
-// None for a file without layered names and no `layer` asked for: it is read as it is.
-std::optional<LayerOrder> developed_channel_order(const OIIO::ImageSpec& spec, const std::optional<std::string>& layer,
-                                                  const std::string& path) {
-    const std::vector<std::string>& names = spec.channelnames;
-    std::vector<std::string> layers, coloured;  // in the file's order
-    for (const std::string& n : names)
-        if (std::find(layers.begin(), layers.end(), layer_of(n)) == layers.end()) {
-            layers.push_back(layer_of(n));
-            if (!layer_colour(names, layers.back()).empty()) coloured.push_back(layers.back());
-        }
-    if (!layer && layers == std::vector<std::string>{""}) return std::nullopt;
-    std::string chosen;
+PartLayer chosen_layer(const std::vector<OIIO::ImageSpec>& parts, const std::optional<std::string>& layer,
+                       const std::string& path) {
+    std::vector<PartLayer> layers, coloured;  // in the file's order
+    for (int p = 0; p < int(parts.size()); ++p)
+        for (const std::string& n : parts[p].channelnames)
+            if (const PartLayer l{p, layer_of(n)}; std::find(layers.begin(), layers.end(), l) == layers.end()) {
+                layers.push_back(l);
+                if (!layer_colour(parts[p].channelnames, l.layer).empty()) coloured.push_back(l);
+            }
+    auto colour_in_part = [&](int p) {
+        return std::count_if(coloured.begin(), coloured.end(), [&](const PartLayer& l) { return l.part == p; });
+    };
+    std::vector<PartLayer> matches;  // the candidates for `layer`, or for the default
     if (layer) {
-        if (std::find(layers.begin(), layers.end(), *layer) == layers.end())
-            throw UserError("--layer '" + *layer + "': '" + path + "' has no such layer; its layers are " +
-                            layer_list(layers));
-        if (std::find(coloured.begin(), coloured.end(), *layer) == coloured.end())
+        // A channel layer by its name, or a part by its name: its unnamed colour, or its only colour layer.
+        for (const PartLayer& l : coloured)
+            if (l.layer == *layer || (parts.size() > 1 && part_name(parts[l.part], l.part) == *layer &&
+                                      (l.layer.empty() || colour_in_part(l.part) == 1)))
+                matches.push_back(l);
+        const bool named = std::any_of(layers.begin(), layers.end(), [&](const PartLayer& l) {
+            return l.layer == *layer || (parts.size() > 1 && part_name(parts[l.part], l.part) == *layer);
+        });
+        if (matches.empty() && !named)
+            throw UserError("--layer '" + *layer + "': '" + path + "' has no such layer" +
+                            (parts.size() > 1 ? " or part" : "") + "; its layers are " + layer_list(layers, parts));
+        if (matches.empty())
             throw UserError("--layer '" + *layer + "' of '" + path + "' has no colour channels (R, G, B or Y); "
-                            "the layers with colour are " + (coloured.empty() ? "none" : layer_list(coloured)));
-        chosen = *layer;
-    } else if (std::find(coloured.begin(), coloured.end(), "") != coloured.end()) {
-        chosen = "";
-    } else if (coloured.size() == 1) {
-        chosen = coloured.front();
-    } else {
-        throw UserError("'" + path + "' has " + (coloured.empty() ? "no layer with colour (R, G, B or Y)" :
-                        "several layers with colour, " + layer_list(coloured)) +
-                        ": name the one to develop with --layer (its layers are " + layer_list(layers) + ")");
+                            "the layers with colour are " + (coloured.empty() ? "none" : layer_list(coloured, parts)));
+        if (matches.size() > 1)
+            throw UserError("--layer '" + *layer + "' of '" + path + "' names several layers with colour, " +
+                            layer_list(matches, parts) + ": name a part or layer that only one of them has");
+        return matches.front();
     }
+    for (const PartLayer& l : coloured)
+        if (l.layer.empty()) matches.push_back(l);
+    if (matches.empty()) matches = coloured;
+    if (matches.size() == 1) return matches.front();
+    throw UserError("'" + path + "' has " + (coloured.empty() ? "no layer with colour (R, G, B or Y)" :
+                    "several layers with colour, " + layer_list(matches, parts)) +
+                    ": name the one to develop with --layer (its layers are " + layer_list(layers, parts) + ")");
+}
+
+LayerOrder developed_channel_order(const std::vector<OIIO::ImageSpec>& parts, const std::optional<std::string>& layer,
+                                   const std::string& path) {
+    const std::vector<std::string>& first = parts.front().channelnames;
+    if (!layer && parts.size() == 1 &&
+        std::all_of(first.begin(), first.end(), [](const std::string& n) { return layer_of(n).empty(); }))
+        return {};
+    const PartLayer chosen = chosen_layer(parts, layer, path);
+    const std::vector<std::string>& names = parts[chosen.part].channelnames;
     LayerOrder order;
-    order.channels = layer_colour(names, chosen);
+    order.part = chosen.part;
+    order.channels = layer_colour(names, chosen.layer);
     order.colours = int(order.channels.size());
     for (const char* alpha : {"A", "Alpha"})
-        if (std::vector<int> a = layer_channels(names, chosen, {alpha}); !a.empty()) {
+        if (std::vector<int> a = layer_channels(names, chosen.layer, {alpha}); !a.empty()) {
             order.channels.push_back(a.front());
             order.alpha = true;
             break;
         }
-    const std::vector<int> first = order.channels;
+    const std::vector<int> developed = order.channels;
     for (int c = 0; c < int(names.size()); ++c)
-        if (std::find(first.begin(), first.end(), c) == first.end()) order.channels.push_back(c);
+        if (std::find(developed.begin(), developed.end(), c) == developed.end()) order.channels.push_back(c);
     return order;
 }
 
-// `image` and its spec with channel i taken from the file's channel order.channels[i].
-void reorder_channels(LoadedImage& image, const LayerOrder& layer) {
+// The spec with channel i the file's channel order.channels[i].
+void reorder_spec(OIIO::ImageSpec& s, const LayerOrder& layer) {
     const std::vector<int>& order = layer.channels;
-    OIIO::ImageSpec& s = image.spec;
     const OIIO::ImageSpec file = s;
-    const int n = s.nchannels;
-    std::vector<float> pixel(n);
-    for (size_t p = 0; p < size_t(s.width) * s.height; ++p) {
-        float* px = image.pixels.pixels.data() + p * n;
-        for (int c = 0; c < n; ++c) pixel[c] = px[order[c]];
-        std::copy(pixel.begin(), pixel.end(), px);
-    }
     auto moved = [&](int channel) {
         const auto at = std::find(order.begin(), order.end(), channel);
         return channel >= 0 && at != order.end() ? int(at - order.begin()) : -1;
     };
-    for (int c = 0; c < n; ++c) {
+    for (int c = 0; c < s.nchannels; ++c) {
         s.channelnames[c] = file.channelnames[order[c]];
         if (!file.channelformats.empty()) s.channelformats[c] = file.channelformats[order[c]];
     }
@@ -152,30 +206,90 @@ void reorder_channels(LoadedImage& image, const LayerOrder& layer) {
     s.z_channel = moved(file.z_channel);
 }
 
-}  // namespace
+// Pixel channel i taken from the file's channel order[i].
+void reorder_pixels(Image& image, const std::vector<int>& order) {
+    const int n = image.channels;
+    std::vector<float> pixel(n);
+    for (size_t p = 0; p < image.pixels.size() / n; ++p) {
+        float* px = image.pixels.data() + p * n;
+        for (int c = 0; c < n; ++c) pixel[c] = px[order[c]];
+        std::copy(pixel.begin(), pixel.end(), px);
+    }
+}
 
-OIIO::ImageSpec read_image_spec(const std::string& path) { return open_image(path)->spec(); }
-
-LoadedImage read_image(const std::string& path, const std::optional<std::string>& layer) {
-    auto in = open_image(path);
+// The header of what read_image reads: the chosen part's, reordered; how to read it.
+LoadedImage read_header(OIIO::ImageInput& in, const std::string& path, const std::optional<std::string>& layer,
+                        LayerOrder& order) {
+    const std::vector<OIIO::ImageSpec> parts = part_specs(in, path);
+    order = developed_channel_order(parts, layer, path);
     LoadedImage out;
-    out.spec = in->spec();
-    const OIIO::ImageSpec& s = out.spec;
-    const std::optional<LayerOrder> order = developed_channel_order(s, layer, path);
-    out.pixels = Image(s.width, s.height, s.nchannels);
-    if (!in->read_image(0, 0, 0, s.nchannels, OIIO::TypeDesc::FLOAT, out.pixels.pixels.data()))
-        throw UserError("cannot read pixels of '" + path + "': " + in->geterror());
-    if (order) reorder_channels(out, *order);
-    while (in->seek_subimage(out.subimages, 0)) ++out.subimages;
+    out.spec = parts[order.part];
+    out.subimages = int(parts.size());
+    out.through.developed_part = order.part;
+    if (!order.channels.empty()) reorder_spec(out.spec, order);
     return out;
 }
 
-std::string other_subimages_warning(const std::string& path, const LoadedImage& image) {
-    if (image.subimages <= 1) return "";
-    const std::string name = image.spec.get_string_attribute("oiio:subimagename");
-    return "'" + path + "' has " + std::to_string(image.subimages) + " parts: only the first" +
-           (name.empty() ? "" : " ('" + name + "')") + " is read and written, the other " +
-           std::to_string(image.subimages - 1) + " are left out of the output";
+}  // namespace
+
+double file_memory_bytes(const std::string& path) {
+    const auto in = open_image(path);
+    double largest = 0, stored = 0;
+    for (const OIIO::ImageSpec& part : part_specs(*in, path)) {
+        largest = std::max(largest, frame_memory_bytes(part));
+        stored += double(part.image_bytes(true));
+    }
+    return largest + stored;
+}
+
+LoadedImage read_image_header(const std::string& path, const std::optional<std::string>& layer) {
+    LayerOrder order;
+    return read_header(*open_image(path), path, layer, order);
+}
+
+LoadedImage read_image(const std::string& path, const std::optional<std::string>& layer, bool other_parts) {
+    auto in = open_image(path);
+    LayerOrder order;
+    LoadedImage out = read_header(*in, path, layer, order);
+    const OIIO::ImageSpec& s = out.spec;
+    out.pixels = Image(s.width, s.height, s.nchannels);
+    if (!in->read_image(order.part, 0, 0, s.nchannels, OIIO::TypeDesc::FLOAT, out.pixels.pixels.data()))
+        throw UserError("cannot read pixels of '" + path + "': " + in->geterror());
+    if (!order.channels.empty()) reorder_pixels(out.pixels, order.channels);
+    for (int c = 0; c < s.nchannels; ++c) {
+        if (s.channelformat(c) != OIIO::TypeDesc::UINT) continue;
+        const int file_channel = order.channels.empty() ? c : order.channels[c];
+        ExactChannel exact{s.channelnames[c], std::vector<uint32_t>(size_t(s.width) * s.height)};
+        if (!in->read_image(order.part, 0, file_channel, file_channel + 1, OIIO::TypeDesc::UINT, exact.values.data()))
+            throw UserError("cannot read pixels of '" + path + "': " + in->geterror());
+        out.through.exact_channels.push_back(std::move(exact));
+    }
+    for (int p = 0; other_parts && p < out.subimages; ++p) {
+        if (p == order.part || !in->seek_subimage(p, 0)) continue;
+        StoredPart part{in->spec(), std::vector<unsigned char>(in->spec().image_bytes(true))};
+        if (!in->read_image(p, 0, 0, part.spec.nchannels, OIIO::TypeDesc::UNKNOWN, part.pixels.data()))
+            throw UserError("cannot read pixels of '" + path + "': " + in->geterror());
+        out.through.parts.push_back(std::move(part));
+    }
+    return out;
+}
+
+void require_holds_parts(const std::string& output, const std::string& input, const LoadedImage& image) {
+    if (image.subimages <= 1 || lower_extension(output) == ".exr") return;
+    throw UserError("'" + input + "' has " + std::to_string(image.subimages) + " parts, and '" + output +
+                    "' is not OpenEXR, the one format that holds several: write an .exr output, which keeps every "
+                    "part (choose the part or layer to develop with --layer)");
+}
+
+std::string uint32_channels_warning(const std::string& output, const LoadedImage& image) {
+    if (lower_extension(output) == ".exr") return "";
+    std::vector<std::string> ids;
+    for (int c = 0; c < image.spec.nchannels; ++c)
+        if (image.spec.channelformat(c) == OIIO::TypeDesc::UINT) ids.push_back("'" + image.spec.channelnames[c] + "'");
+    if (ids.empty()) return "";
+    return "the uint32 channel" + std::string(ids.size() > 1 ? "s " : " ") + OIIO::Strutil::join(ids, ", ") +
+           " (object IDs) cannot be kept exactly in '" + output + "': they are written in its one data type, scaled "
+           "to 0-1; write an .exr output to keep them";
 }
 
 Window window_flag(const std::vector<int>& xywh, const Window& image, const std::string& flag) {
@@ -210,15 +324,6 @@ static bool same_file(const std::string& a, const std::string& b) {
     return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
 }
 
-namespace {
-
-std::string lower_extension(const std::string& path) {
-    std::string ext = fs::path(path).extension().string();
-    for (char& c : ext) c = char(std::tolower((unsigned char)c));
-    return ext;
-}
-
-}  // namespace
 
 bool is_float_format(const std::string& path) {
     const std::string ext = lower_extension(path);
@@ -386,11 +491,14 @@ OIIO::ImageSpec output_spec(const Image& image, const OIIO::ImageSpec& like, con
                                        : "A";
     }
     // Without -d, the channels past the colour keep their own types where the format stores
-    // one per channel (a float depth beside half colour), so that they pass through bit for bit.
-    if (options.keep_channel_types && !like.channelformats.empty() && lower_extension(path) == ".exr") {
+    // one per channel (a float depth beside half colour), so that they pass through bit for bit;
+    // uint32 ones (object IDs) even with -d, which sets the picture's precision, not an ID's.
+    if (!like.channelformats.empty() && lower_extension(path) == ".exr") {
         spec.channelformats.assign(image.channels, type);
-        for (int c = 3; c < image.channels; ++c)
-            if (from[c] >= 0 && from[c] < like.nchannels) spec.channelformats[c] = like.channelformats[from[c]];
+        for (int c = 3; c < image.channels; ++c) {
+            const OIIO::TypeDesc own = from[c] >= 0 && from[c] < like.nchannels ? like.channelformats[from[c]] : type;
+            if (options.keep_channel_types || own == OIIO::TypeDesc::UINT) spec.channelformats[c] = own;
+        }
     }
     auto output_of = [&](int input) {
         const auto at = std::find(from.begin(), from.end(), input);
@@ -421,8 +529,40 @@ bool writes_integers(const std::string& path, const WriteOptions& options) {
     return !is_float_format(path) || !output_type(path, options).is_floating_point();
 }
 
+namespace {
+
+// `image`'s pixels as the file stores them (each channel in its type in `spec`), the exact
+// channels' stored values in place of their float ones. `image.window` is relative to the data
+// window of `like`, which the exact channels cover.
+std::vector<unsigned char> stored_pixels(const Image& image, const OIIO::ImageSpec& spec, const OIIO::ImageSpec& like,
+                                         const std::vector<ExactChannel>& exact) {
+    const size_t pixel_bytes = spec.pixel_bytes(true);
+    std::vector<unsigned char> stored(pixel_bytes * size_t(image.window.pixel_count()));
+    size_t offset = 0;  // the channel's bytes in a pixel
+    for (int c = 0; c < image.channels; ++c) {
+        const OIIO::TypeDesc type = spec.channelformat(c);
+        const auto kept = std::find_if(exact.begin(), exact.end(), [&](const ExactChannel& e) {
+            return e.name == spec.channelnames[c] && type == OIIO::TypeDesc::UINT;
+        });
+        for (int y = image.window.y0; y < image.window.y1; ++y)
+            for (int x = image.window.x0; x < image.window.x1; ++x) {
+                unsigned char* to = stored.data() + size_t((y - image.window.y0) * image.window.width() +
+                                                           (x - image.window.x0)) * pixel_bytes + offset;
+                if (kept != exact.end())
+                    std::memcpy(to, &kept->values[size_t(y) * like.width + x], sizeof(uint32_t));
+                else
+                    OIIO::convert_pixel_values(OIIO::TypeDesc::FLOAT, image.at(x, y) + c, type, to);
+            }
+        offset += type.size();
+    }
+    return stored;
+}
+
+}  // namespace
+
 std::unique_ptr<TempFile> write_image_to_temp(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
-                                              const std::string& protected_input, const WriteOptions& options) {
+                                              const std::string& protected_input, const WriteOptions& options,
+                                              const PassThrough& through) {
     if (!protected_input.empty() && same_file(path, protected_input))
         throw UserError("refusing to overwrite the input '" + path + "' with the output");
     require_format_holds(path, "", image.channels);
@@ -430,17 +570,36 @@ std::unique_ptr<TempFile> write_image_to_temp(const std::string& path, const Ima
     auto out = OIIO::ImageOutput::create(path);
     if (!out) throw UserError("cannot write '" + path + "': " + OIIO::geterror());
     if (!out->supports("origin")) spec.x = spec.y = 0;
+    // The parts in the file's order, the developed one in its place.
+    std::vector<OIIO::ImageSpec> specs;
+    for (const StoredPart& part : through.parts) specs.push_back(part.spec);
+    const int developed = std::min(through.developed_part, int(specs.size()));
+    specs.insert(specs.begin() + developed, spec);
+    if (specs.size() > 1 && !out->supports("multiimage"))
+        throw UserError("cannot write '" + path + "': its format holds one part, the input has " +
+                        std::to_string(specs.size()));
+    const bool exact = std::any_of(spec.channelformats.begin(), spec.channelformats.end(),
+                                   [](OIIO::TypeDesc t) { return t == OIIO::TypeDesc::UINT; }) &&
+                       !through.exact_channels.empty();
+    auto write_part = [&](int p) {
+        const OIIO::TypeDesc stored = OIIO::TypeDesc::UNKNOWN;  // (each channel in its own type)
+        if (p != developed) return out->write_image(stored, through.parts[p - (p > developed)].pixels.data());
+        if (!exact) return out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
+        return out->write_image(stored, stored_pixels(image, spec, like, through.exact_channels).data());
+    };
     auto temp = std::make_unique<TempFile>(fs::path(path));
-    if (!temp->create([&] { return out->open(temp->path().string(), spec); }) ||
-        !out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data()) || !out->close())
-        throw UserError("cannot write '" + path + "': " + out->geterror());
+    bool written = temp->create([&] { return out->open(temp->path().string(), int(specs.size()), specs.data()); });
+    for (int p = 0; written && p < int(specs.size()); ++p)
+        written = (p == 0 || out->open(temp->path().string(), specs[p], OIIO::ImageOutput::AppendSubimage)) &&
+                  write_part(p);
+    if (!written || !out->close()) throw UserError("cannot write '" + path + "': " + out->geterror());
     return temp;
 }
 
 void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
                  const std::string& protected_input, const WriteOptions& options,
-                 const std::function<void()>& committed) {
-    write_image_to_temp(path, image, like, protected_input, options)->commit(committed);
+                 const std::function<void()>& committed, const PassThrough& through) {
+    write_image_to_temp(path, image, like, protected_input, options, through)->commit(committed);
 }
 
 }  // namespace darkroom::cli

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <OpenImageIO/imageio.h>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -15,36 +16,70 @@
 
 namespace darkroom::cli {
 
+// A part of a multi-part file that passes through untouched: its header and its pixels as
+// the file stores them (each channel in its own type).
+struct StoredPart {
+    OIIO::ImageSpec spec;
+    std::vector<unsigned char> pixels;
+};
+
+// A channel of the developed part that float cannot hold exactly (uint32, an object ID past
+// 2^24), kept as stored so that it is written back so.
+struct ExactChannel {
+    std::string name;
+    std::vector<uint32_t> values;  // one a pixel of the part's data window, row by row
+};
+
+// What of an input passes through to its output besides the channels read as float.
+struct PassThrough {
+    std::vector<StoredPart> parts;  // the file's other parts, in its order
+    int developed_part = 0;         // the developed part's index in the file
+    std::vector<ExactChannel> exact_channels;
+};
+
 struct LoadedImage {
     Image pixels;               // window: (0, 0, width, height) of the data window
-    OIIO::ImageSpec spec;       // the file's own description, for metadata pass-through
+    OIIO::ImageSpec spec;       // the developed part's own description, for metadata pass-through
     int subimages = 1;          // the file's parts (a multi-part EXR, a multi-page TIFF)
+    PassThrough through;
 };
 
 // The window a flag's X,Y,W,H gives (from the image's first pixel): all of `image` when it is
 // empty; a UserError naming `flag` when it has no pixels or is not inside `image`.
 Window window_flag(const std::vector<int>& xywh, const Window& image, const std::string& flag);
 
-// About the memory developing an image of this header takes (its pixels read and written as
-// float, and the working planes): read_image refuses a file past the machine's memory, and a
-// batch runs no more frames at once than fit.
+// About the memory developing a part of this header takes (its pixels read and written as
+// float, and the working planes): read_image refuses a file past the machine's memory.
 double frame_memory_bytes(const OIIO::ImageSpec& spec);
+// The same for a whole file, from its headers: its largest part developed and the others held
+// as stored to pass through; a batch runs no more frames at once than fit.
+double file_memory_bytes(const std::string& path);
 
-// The file's first subimage (part), as oiiotool reads a file without -a, with the channels
-// of the layer to develop first: its colour (R, G, B or Y), then its alpha, then every other
-// channel in the file's order, under its own name (a render's AOVs: depth.Z, diffuse.R, ...),
-// which passes through untouched. The layer is `layer` ("" for the channels without one), or
-// by default the unnamed layer where it has colour, else the only layer that has. UserError
-// listing the layers where the choice is ambiguous or `layer` has no colour. A file without
-// layered names ("name.channel") is read as it is, its first channels the colour.
-LoadedImage read_image(const std::string& path, const std::optional<std::string>& layer = std::nullopt);
+// The layer to develop, chosen among all the file's parts (a multi-part EXR) and the channel
+// layers in each, read as float with its colour first: its colour (R, G, B or Y), then its
+// alpha, then every other channel of its part in the file's order, under its own name (a
+// render's AOVs: depth.Z, diffuse.R, ...). The layer is `layer`, which names a channel layer
+// ("diffuse" of "diffuse.R"; "" for the channels without one) or a part (its unnamed colour,
+// or its only colour layer); by default the unnamed layer with colour of any part, else the
+// only layer with colour. UserError listing the candidates where the choice is ambiguous or
+// `layer` has no colour. A single-part file without layered names ("name.channel") is read as
+// it is, its first channels the colour. Everything else passes through (`through`, unless
+// `other_parts` is false: the other parts are not read), bit for bit: the other channels of
+// the part as float (exact for half and float; uint32 kept as stored), the other parts as stored.
+LoadedImage read_image(const std::string& path, const std::optional<std::string>& layer = std::nullopt,
+                       bool other_parts = true);
 
-// Its header alone (a dry run's look at an input), with read_image's checks and messages.
-OIIO::ImageSpec read_image_spec(const std::string& path);
+// What read_image would read, without any pixels: the developed part's header, its channels
+// in read_image's order, and the file's parts; the same checks and messages.
+LoadedImage read_image_header(const std::string& path, const std::optional<std::string>& layer = std::nullopt);
 
-// What to warn of when a file read by read_image has parts past its first, which are neither
-// processed nor written (empty when it has one).
-std::string other_subimages_warning(const std::string& path, const LoadedImage& image);
+// Throws UserError, before any work, when the output's format cannot hold the input's parts:
+// only OpenEXR holds several.
+void require_holds_parts(const std::string& output, const std::string& input, const LoadedImage& image);
+
+// What to warn of where the output cannot keep the developed part's uint32 channels (object
+// IDs) exactly: any format but OpenEXR gets them as its one type, scaled to 0-1. Empty otherwise.
+std::string uint32_channels_warning(const std::string& output, const LoadedImage& image);
 
 // How many of a file's first channels are colour: one (grey) where the first is named
 // luminance, "Y" or a layer's "<layer>.Y" (a grey plate with alpha and depth: Y, A, Z),
@@ -109,13 +144,16 @@ WriteOptions with_input_data_type(WriteOptions options, const OIIO::ImageSpec& i
 // a partial file; `committed` runs as the finished file takes its name (TempFile::commit).
 // Refuses to overwrite `protected_input` (the same file under any name). `image.window` is
 // relative to the data window of `like`, whose attributes, display window, channel names
-// and alpha channel the output keeps (the first three channels are named R, G, B).
+// and alpha channel the output keeps (the first three channels are named R, G, B). `through`
+// is written with it: its exact channels in place of theirs, and its parts (OpenEXR) around
+// it, `image` in the developed part's place.
 void write_image(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
                  const std::string& protected_input = "", const WriteOptions& options = {},
-                 const std::function<void()>& committed = {});
+                 const std::function<void()>& committed = {}, const PassThrough& through = {});
 // The same, the finished file left under its temporary name until the caller commits it (a
 // batch names its frames' outputs in frame order, whichever is written first).
 std::unique_ptr<TempFile> write_image_to_temp(const std::string& path, const Image& image, const OIIO::ImageSpec& like,
-                                              const std::string& protected_input, const WriteOptions& options);
+                                              const std::string& protected_input, const WriteOptions& options,
+                                              const PassThrough& through = {});
 
 }  // namespace darkroom::cli

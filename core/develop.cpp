@@ -94,7 +94,8 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
     MaterialStages m;
     m.stock = stock;
     m.pixel_pitch_um = width_mm * 1000.0 / frame_width_px;
-    if (!(m.pixel_pitch_um >= kMinPixelPitchUm)) {
+    // (The width the message asks for, divided by the pixels, may round to just below the limit.)
+    if (!(m.pixel_pitch_um >= kMinPixelPitchUm * (1 - 1e-12))) {
         const char* width = std::string(role) == "film" ? "frame" : "print";  // (the settings' names)
         throw std::invalid_argument(std::string("the ") + role + "'s pixel pitch, " + fmt(m.pixel_pitch_um) + " um (" +
                                     fmt(width_mm) + " mm across " + std::to_string(frame_width_px) + " px), is below " +

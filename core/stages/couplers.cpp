@@ -37,7 +37,7 @@ std::array<Curve, 3> curves_before_inhibition(const std::array<const Curve*, 3>&
                 throw std::invalid_argument(
                     "the DIR couplers' inhibition of layer " + layer_names[i] + " at log H " + std::to_string(x) +
                     " grows faster than its exposure: no curve before inhibition reproduces the data sheet "
-                    "(lower the dir-couplers amount)");
+                    "(lower the dir-couplers amount, or the stock's dir_couplers matrix)");
             }
             u.push_back(at);
             d.push_back((*sheet[i])(x));

@@ -915,28 +915,3 @@ TEST_CASE("non-finite values are counted where a window's render reads them", "[
     REQUIRE(r.exit_code == 0);
     CHECK(r.output.find("1 non-finite colour values") != std::string::npos);
 }
-
-// A multi-part EXR: its first part is developed (as oiiotool reads a file without -a), and the
-// run says the others are not in the output rather than dropping them silently.
-TEST_CASE("a file's parts past the first are named as left out", "[cli][batch][metadata]") {
-    fs::path dir = fresh_dir("multi-part");
-    const std::string in = (dir / "parts.exr").string(), out = (dir / "out.exr").string();
-    std::vector<OIIO::ImageSpec> specs(2, OIIO::ImageSpec(12, 8, 3, OIIO::TypeDesc::FLOAT));
-    specs[0].attribute("oiio:subimagename", "beauty");
-    specs[1].attribute("oiio:subimagename", "diffuse");
-    auto file = OIIO::ImageOutput::create(in);
-    REQUIRE(file);
-    REQUIRE(file->open(in, 2, specs.data()));
-    const std::vector<float> grey(12 * 8 * 3, 0.18f);
-    REQUIRE(file->write_image(OIIO::TypeDesc::FLOAT, grey.data()));
-    REQUIRE(file->open(in, specs[1], OIIO::ImageOutput::AppendSubimage));
-    REQUIRE(file->write_image(OIIO::TypeDesc::FLOAT, grey.data()));
-    REQUIRE(file->close());
-
-    Result r = darkroom("develop " + in + " -o " + out + kLook);
-    INFO(r.output);
-    REQUIRE(r.exit_code == 0);
-    CHECK_THAT(r.output, Catch::Contains("has 2 parts: only the first ('beauty') is read and written"));
-    r = darkroom("develop " + make_input("one-part.exr") + " -o " + out + kLook);
-    CHECK(r.output.find("parts") == std::string::npos);
-}

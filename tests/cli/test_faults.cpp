@@ -4,6 +4,7 @@
 // or a named refusal with its documented exit status, never a crash, a hang or wrong pixels.
 #include <OpenImageIO/imageio.h>
 #include <chrono>
+#include <cstring>
 #include <csignal>
 #include <nlohmann/json.hpp>
 #include <sys/mount.h>
@@ -128,6 +129,261 @@ TEST_CASE("faults: a file with several colour layers needs --layer, and the erro
     REQUIRE(r.exit_code == 0);
     CHECK(channel(out, "depth.Z") == channel(grey, "depth.Z"));
     CHECK(channel(out, "matte.B").size() == 16 * 12);
+}
+
+namespace {
+
+// One part of a multi-part test file: its channels and their types, its data window in the
+// 16x12 frame, its compression. Float channels hold layered_file's values; uint32 ones
+// 2^24 + 1 + 1000003 x + 7 y, which float cannot hold.
+struct TestPart {
+    std::string name;
+    std::vector<std::string> channels;
+    std::vector<OIIO::TypeDesc> types;
+    int x = 0, y = 0, width = 16, height = 12;
+    std::string compression = "zip";
+};
+
+std::string multi_part_file(const fs::path& dir, const std::string& name, const std::vector<TestPart>& parts) {
+    std::vector<OIIO::ImageSpec> specs;
+    for (const TestPart& p : parts) {
+        OIIO::ImageSpec spec(p.width, p.height, int(p.channels.size()), OIIO::TypeDesc::FLOAT);
+        spec.x = p.x;
+        spec.y = p.y;
+        spec.full_width = 16;
+        spec.full_height = 12;
+        spec.channelnames = p.channels;
+        spec.channelformats = p.types;
+        spec.alpha_channel = spec.z_channel = -1;
+        if (!p.name.empty()) spec.attribute("oiio:subimagename", p.name);
+        spec.attribute("compression", p.compression);
+        specs.push_back(spec);
+    }
+    const std::string path = (dir / name).string();
+    auto out = OIIO::ImageOutput::create(path);
+    REQUIRE(out);
+    REQUIRE(out->open(path, int(specs.size()), specs.data()));
+    for (size_t p = 0; p < parts.size(); ++p) {
+        const OIIO::ImageSpec& spec = specs[p];
+        std::vector<unsigned char> stored(spec.image_bytes(true));
+        unsigned char* to = stored.data();
+        for (int y = spec.y; y < spec.y + spec.height; ++y)
+            for (int x = spec.x; x < spec.x + spec.width; ++x)
+                for (int c = 0; c < spec.nchannels; ++c) {
+                    const OIIO::TypeDesc type = spec.channelformat(c);
+                    const uint32_t id = (1u << 24) + 1 + 1000003u * x + 7u * y;
+                    const float value = 0.1f * float(std::string("RGBAZY").find(spec.channelnames[c].back()) + 1) +
+                                        0.001f * x + 1e-7f * y;
+                    if (type == OIIO::TypeDesc::UINT)
+                        std::memcpy(to, &id, sizeof id);
+                    else
+                        OIIO::convert_pixel_values(OIIO::TypeDesc::FLOAT, &value, type, to);
+                    to += type.size();
+                }
+        REQUIRE((p == 0 || out->open(path, spec, OIIO::ImageOutput::AppendSubimage)));
+        REQUIRE(out->write_image(OIIO::TypeDesc::UNKNOWN, stored.data()));
+    }
+    REQUIRE(out->close());
+    return path;
+}
+
+// A channel of a part ("": the first) as the file stores it: its bytes, type, data window and
+// compression.
+struct StoredChannel {
+    std::vector<unsigned char> bytes;
+    std::string type, window, compression;
+    bool operator==(const StoredChannel& o) const {
+        return bytes == o.bytes && type == o.type && window == o.window && compression == o.compression;
+    }
+};
+
+StoredChannel stored_channel(const std::string& path, const std::string& part, const std::string& name) {
+    auto in = OIIO::ImageInput::open(path);
+    REQUIRE(in);
+    for (int p = 0; in->seek_subimage(p, 0); ++p) {
+        const OIIO::ImageSpec s = in->spec();
+        if (!part.empty() && s.get_string_attribute("oiio:subimagename") != part) continue;
+        const auto at = std::find(s.channelnames.begin(), s.channelnames.end(), name);
+        REQUIRE(at != s.channelnames.end());
+        const int c = int(at - s.channelnames.begin());
+        StoredChannel out{std::vector<unsigned char>(s.image_pixels() * s.channelformat(c).size()),
+                          s.channelformat(c).c_str(),
+                          std::to_string(s.x) + "," + std::to_string(s.y) + "," + std::to_string(s.width) + "x" +
+                              std::to_string(s.height),
+                          s.get_string_attribute("compression")};
+        REQUIRE(in->read_image(p, 0, c, c + 1, s.channelformat(c), out.bytes.data()));
+        return out;
+    }
+    FAIL("'" << path << "' has no part '" << part << "'");
+    return {};
+}
+
+std::vector<std::string> part_names(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    REQUIRE(in);
+    std::vector<std::string> names;
+    for (int p = 0; in->seek_subimage(p, 0); ++p) names.push_back(in->spec().get_string_attribute("oiio:subimagename"));
+    return names;
+}
+
+const OIIO::TypeDesc kHalf = OIIO::TypeDesc::HALF, kFloat = OIIO::TypeDesc::FLOAT, kUint = OIIO::TypeDesc::UINT;
+
+// A beauty part (RGBA half, an object ID, a float depth), a diffuse part of its own smaller data
+// window and compression, and a part of IDs alone.
+std::vector<TestPart> render_parts() {
+    return {{"beauty", {"R", "G", "B", "A", "id", "depth.Z"}, {kHalf, kHalf, kHalf, kHalf, kUint, kFloat}},
+            {"diffuse", {"diffuse.R", "diffuse.G", "diffuse.B"}, {kHalf, kHalf, kFloat}, 4, 3, 8, 6, "piz"},
+            {"ids", {"crypto.id", "crypto.coverage"}, {kUint, kFloat}, 2, 1, 12, 10, "rle"}};
+}
+
+}  // namespace
+
+// Multi-part EXRs: the layer to develop is chosen among every part's layers, developed in its
+// part, and every other part and channel is written under its own name, type, part, data
+// window and compression, bit for bit.
+TEST_CASE("faults: a multi-part EXR develops its layer in its part and passes the rest through bit for bit",
+          "[cli][faults][layers][parts]") {
+    const fs::path dir = fresh_dir("multi-part");
+    const std::vector<TestPart> parts = render_parts();
+    const std::string in = multi_part_file(dir, "render.exr", parts), out = (dir / "out.exr").string();
+    auto passes_through = [&](const std::string& output, const TestPart& part) {
+        for (const std::string& c : part.channels) {
+            INFO(part.name << " " << c);
+            CHECK(stored_channel(output, part.name, c) == stored_channel(in, part.name, c));
+        }
+    };
+
+    // By default the unnamed colour (of the beauty part) develops; its alpha, ID and depth pass
+    // through, and so do the other parts.
+    Result r = darkroom("develop " + in + " -o " + out + kLook);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(part_names(out) == std::vector<std::string>{"beauty", "diffuse", "ids"});
+    for (const char* c : {"A", "id", "depth.Z"}) {
+        INFO(c);
+        CHECK(stored_channel(out, "beauty", c) == stored_channel(in, "beauty", c));
+    }
+    CHECK(stored_channel(out, "beauty", "R").bytes != stored_channel(in, "beauty", "R").bytes);
+    passes_through(out, parts[1]);
+    passes_through(out, parts[2]);
+    // -d sets the picture's precision; an object ID stays uint32, exactly.
+    REQUIRE(darkroom("develop " + in + " -o " + out + " -d float" + kLook).exit_code == 0);
+    CHECK(stored_channel(out, "beauty", "id") == stored_channel(in, "beauty", "id"));
+    CHECK(stored_channel(out, "beauty", "R").type == "float");
+
+    // --layer by a part's name: the diffuse part develops in its own data window as the same
+    // layer alone in a file would; the beauty and ID parts pass through whole.
+    const std::string alone = multi_part_file(dir, "diffuse.exr", {parts[1]}), out_alone = (dir / "alone.exr").string();
+    r = darkroom("develop " + in + " -o " + out + " --layer diffuse" + kLook);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    REQUIRE(darkroom("develop " + alone + " -o " + out_alone + kLook).exit_code == 0);
+    CHECK(part_names(out) == std::vector<std::string>{"beauty", "diffuse", "ids"});
+    passes_through(out, parts[0]);
+    passes_through(out, parts[2]);
+    for (const char* c : {"diffuse.R", "diffuse.G", "diffuse.B"}) {
+        INFO(c);
+        CHECK(stored_channel(out, "diffuse", c) == stored_channel(out_alone, "diffuse", c));
+        CHECK(stored_channel(out, "diffuse", c).bytes != stored_channel(in, "diffuse", c).bytes);
+        CHECK(stored_channel(out, "diffuse", c).window == "4,3,8x6");
+    }
+
+    // grain apply puts the grain on the chosen layer and passes the rest through the same way.
+    {
+        std::ofstream profile((dir / "grain.json").string());
+        profile << R"({"format": "darkroom-grain-profile", "version": 1, "encoding": "linear", "channels": [)";
+        for (const char* c : {"R", "G", "B"})
+            profile << (c[0] == 'R' ? "" : ", ") << R"({"name": ")" << c
+                    << R"(", "response": {"level": [0.1, 0.9], "sigma": [0.01, 0.02]},)"
+                    << R"( "autocorrelation": {"radius": 1, "values": [0, 0.2, 0, 0.2, 1, 0.2, 0, 0.2, 0]}})";
+        profile << R"(], "channel_correlation": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]})";
+    }
+    r = darkroom("grain apply " + in + " --profile " + (dir / "grain.json").string() + " -o " + out +
+                 " --layer diffuse --seed 3");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    passes_through(out, parts[0]);
+    passes_through(out, parts[2]);
+    CHECK(stored_channel(out, "diffuse", "diffuse.G").bytes != stored_channel(in, "diffuse", "diffuse.G").bytes);
+
+    // grain analyze measures the chosen layer: the diffuse part is 8x6, the beauty 16x12 (both
+    // too small to measure, which says which was read).
+    r = darkroom("grain analyze " + in + " --layer diffuse --block-size 8 -o " + (dir / "plate.json").string());
+    CHECK_THAT(r.output, Catch::Contains("8x6 pixels"));
+    r = darkroom("grain analyze " + in + " --block-size 8 -o " + (dir / "plate.json").string());
+    CHECK_THAT(r.output, Catch::Contains("16x12 pixels"));
+    r = darkroom("grain analyze " + in + " --layer crypto --block-size 8 -o " + (dir / "plate.json").string());
+    CHECK_THAT(r.output, Catch::Contains("--layer 'crypto'") && Catch::Contains("has no colour channels"));
+}
+
+// uint32 channels (object IDs) in a file of one part: kept exactly in OpenEXR; any other format
+// holds one type for all its channels, and the run says the IDs are not kept.
+TEST_CASE("faults: uint32 channels pass through exactly, or are named where the format cannot keep them",
+          "[cli][faults][layers]") {
+    const fs::path dir = fresh_dir("uint32");
+    const std::string in = multi_part_file(dir, "ids.exr", {{"", {"R", "G", "B", "id"}, {kHalf, kHalf, kHalf, kUint}}});
+    const std::string out = (dir / "out.exr").string();
+    Result r = darkroom("develop " + in + " -o " + out + kLook);
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    CHECK(stored_channel(out, "", "id") == stored_channel(in, "", "id"));
+    CHECK(stored_channel(out, "", "id").type == "uint");
+    for (const std::string flags : {"", " -n"}) {
+        r = darkroom("develop " + in + " -o " + (dir / "out.tif").string() + kLook + flags);
+        INFO(flags << "\n" << r.output);
+        CHECK(r.exit_code == 0);
+        CHECK_THAT(r.output, Catch::Contains("uint32 channel 'id'") && Catch::Contains(".exr"));
+    }
+    r = darkroom("develop " + in + " -o " + out + kLook);
+    CHECK(r.output.find("uint32") == std::string::npos);
+}
+
+TEST_CASE("faults: a layer that several parts could give is named, and a single-part format refused",
+          "[cli][faults][layers][parts]") {
+    const fs::path dir = fresh_dir("part-choice");
+    const std::vector<TestPart> two{{"left", {"R", "G", "B"}, {kHalf, kHalf, kHalf}},
+                                    {"right", {"R", "G", "B"}, {kHalf, kHalf, kHalf}}};
+    const std::string in = multi_part_file(dir, "stereo.exr", two), out = (dir / "out.exr").string();
+    Result r = darkroom("develop " + in + " -o " + out + kLook);
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("--layer") && Catch::Contains("(unnamed) of part 'left'") &&
+                             Catch::Contains("(unnamed) of part 'right'"));
+    CHECK_FALSE(fs::exists(out));
+    r = darkroom("develop " + in + " -o " + out + kLook + " --layer centre");
+    CHECK(r.exit_code == 1);
+    CHECK_THAT(r.output, Catch::Contains("no such layer or part") && Catch::Contains("of part 'right'"));
+
+    r = darkroom("develop " + in + " -o " + out + kLook + " --layer right");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    for (const char* c : {"R", "G", "B"}) {
+        CHECK(stored_channel(out, "left", c) == stored_channel(in, "left", c));
+        CHECK(stored_channel(out, "right", c).bytes != stored_channel(in, "right", c).bytes);
+    }
+
+    // Only OpenEXR holds several parts: any other output is refused before the work, a dry run
+    // says so too, and a layer of one part alone is not enough.
+    const std::string render = multi_part_file(dir, "render.exr", render_parts());
+    for (const std::string output : {"out.tif", "out.png", "out.dpx"})
+        for (const std::string& flags : {std::string(), std::string(" --layer diffuse"), std::string(" -n")}) {
+            r = darkroom("develop " + render + " -o " + (dir / output).string() + kLook + flags);
+            INFO(output << flags << "\n" << r.output);
+            CHECK(r.exit_code == (flags == " -n" ? 0 : 1));
+            CHECK_THAT(r.output, Catch::Contains("has 3 parts") && Catch::Contains(".exr"));
+            CHECK_FALSE(fs::exists(dir / output));
+        }
+
+    // A sequence of multi-part frames: each frame's parts, through the overlapped writer.
+    for (const char* frame : {"1001", "1002"}) fs::copy_file(render, dir / ("seq." + std::string(frame) + ".exr"));
+    r = darkroom("develop " + (dir / "seq.####.exr").string() + " -o " + (dir / "dev.####.exr").string() +
+                 " --frames 1001-1002 --seed 7 --frame-width-mm 3 --print-width-mm 20");
+    INFO(r.output);
+    REQUIRE(r.exit_code == 0);
+    for (const char* frame : {"1001", "1002"}) {
+        const std::string developed = (dir / ("dev." + std::string(frame) + ".exr")).string();
+        CHECK(part_names(developed) == std::vector<std::string>{"beauty", "diffuse", "ids"});
+        CHECK(stored_channel(developed, "ids", "crypto.id") == stored_channel(render, "ids", "crypto.id"));
+    }
 }
 
 // A farm wrapper or nohup ignores SIGHUP (or SIGINT) for the program it starts: it runs on.

@@ -401,11 +401,12 @@ TEST_CASE("extreme grain, halation, MTF, format, printer light and filtration se
 
 TEST_CASE("settings just past their limits are refused, naming the setting", "[stability]") {
     const StockPair& p = stock_pairs()[1];
-    auto refusal = [&](const std::function<void(DevelopSettings&)>& apply) -> std::string {
+    auto refusal = [&](const std::function<void(DevelopSettings&)>& apply,
+                       FrameGeometry frame = {4, 4}) -> std::string {
         DevelopSettings s;
         apply(s);
         try {
-            Plan::compile(p.film, &p.paper, s, {4, 4});
+            Plan::compile(p.film, &p.paper, s, frame);
         } catch (const std::invalid_argument& e) {
             return e.what();
         }
@@ -431,6 +432,13 @@ TEST_CASE("settings just past their limits are refused, naming the setting", "[s
               s.frame_width_mm = s.print_width_mm = 0.0004 * (1 + 1e-9);
               s.halation = 0;  // (its 150 um would be 6000 px: the budget below)
           }) == "accepted");
+    // The width the message asks for is accepted: 0.0012 mm across 12 px is 0.1 um less a rounding.
+    CHECK(refusal(
+              [&](DevelopSettings& s) {
+                  s.frame_width_mm = s.print_width_mm = 0.0012;
+                  s.halation = 0;
+              },
+              {12, 4}) == "accepted");
     // Kernels whose reach would make the working planes gigabytes are refused before they are
     // designed (a 150 um halo at 0.1 um pitch; grain 100 times its size there).
     CHECK_THAT(refusal([&](DevelopSettings& s) { s.frame_width_mm = s.print_width_mm = 0.0004; }),

@@ -1,7 +1,9 @@
 // Grain profiles (core/plate/grain_profile.h). Rejection is a GrainProfileError; an accepted
 // profile satisfies validate_grain_profile, and grain_profile_to_json (which also derives
 // the noise-equivalent area and half-power frequency from it) writes a file that reads
-// back as the same profile.
+// back as the same profile; planned for synthesis (or refused with a GrainProfileError) it
+// puts grain on a frame that stays finite wherever the frame is (fuzz_render.h), or refuses
+// the frame's channels with a UserError.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -9,6 +11,7 @@
 
 #include "core/plate/grain_profile.h"
 #include "tests/fuzz/fuzz_check.h"
+#include "tests/fuzz/fuzz_render.h"
 
 using namespace darkroom;
 
@@ -33,5 +36,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         fuzz_require(a.acf_radius == b.acf_radius && a.autocorrelation == b.autocorrelation);
     }
     fuzz_require(written.channel_correlation == profile.channel_correlation);
+    try {
+        fuzz_require(darkroom::fuzz::grains_finite(plan_grain_synthesis(profile)));
+    } catch (const GrainProfileError&) {
+    } catch (const UserError&) {
+    }
     return 0;
 }

@@ -1,8 +1,10 @@
 // Stock files (core/stock.h): darkroom-stock versions 1 and 2 and spektrafilm profiles, all
 // through parse_stock_json. Rejection is a StockError; an accepted stock must be usable by
 // the model: one or three layers, curves that are monotone functions, finite spectra with
-// sensitivities and dyes of peak 1, a positive speed; and stock_to_json must write it so
-// that it reads back.
+// sensitivities and dyes of peak 1, a positive speed; stock_to_json must write it so
+// that it reads back; and it must develop a frame to finite colour (fuzz_render.h) at the
+// fast tier, as the film (its negative, and printed on the default paper) or as the paper
+// (of the default film), or be refused with a UserError.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -11,6 +13,7 @@
 
 #include "core/stock.h"
 #include "tests/fuzz/fuzz_check.h"
+#include "tests/fuzz/fuzz_render.h"
 
 namespace {
 
@@ -60,6 +63,32 @@ void check_usable(const Stock& stock) {
 
 }  // namespace
 
+namespace darkroom::fuzz {
+
+// The stock in a render: a camera film's negative and its print on the default paper, or a
+// paper's or print film's print of the default film. Each may be refused (a UserError).
+void develops_finite_as_film_or_paper(const Stock& stock) {
+    auto finite_or_refused = [](const Look& look, const Stock& film, const Stock* paper) {
+        try {
+            fuzz_require(develops_finite(look, Quality::fast, &film, paper).value_or(true));
+        } catch (const UserError&) {
+        }
+    };
+    const Look print;
+    if (is_camera_film(stock.kind)) {
+        Look negative;
+        negative.paper = "none";
+        negative.settings.output = OutputMode::negative;
+        finite_or_refused(negative, stock, nullptr);
+        const std::optional<Stock> paper = find_paper(print, flag_name);
+        finite_or_refused(print, stock, paper ? &*paper : nullptr);
+    } else {
+        finite_or_refused(print, find_film(print, flag_name), &stock);
+    }
+}
+
+}  // namespace darkroom::fuzz
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const std::string text(reinterpret_cast<const char*>(data), size);
     Stock stock;
@@ -71,5 +100,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     check_usable(stock);
     const Stock written = parse_stock_json(stock_to_json(stock), "the fuzz input's stock, written");
     fuzz_require(written.layers.size() == stock.layers.size());
+    fuzz::develops_finite_as_film_or_paper(stock);
     return 0;
 }
