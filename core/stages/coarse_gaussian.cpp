@@ -120,8 +120,13 @@ CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation) {
 }
 
 CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<float>*>& coarse_taps, int decimation,
-                                           const Window& out, const Window& frame, Source source)
-    : out_(out), frame_(frame), source_(std::move(source)), planes_(coarse_taps.size()), d_(decimation) {
+                                           const Window& out, const Window& frame, Source source, MeansMap map)
+    : out_(out),
+      frame_(frame),
+      source_(std::move(source)),
+      map_(std::move(map)),
+      planes_(coarse_taps.size()),
+      d_(decimation) {
     if (d_ < 2) throw std::invalid_argument("coarse Gaussian: a decimation below 2");
     int r = 0;  // the largest coarse Gaussian's radius
     for (size_t p = 0; p < coarse_taps.size(); ++p)
@@ -221,6 +226,7 @@ void CoarseGaussianStream::block_means(int by, float* const* means) {
             means[i][bx - means_window_.x0] = sum / float(d * d);
         }
     }
+    if (map_) map_(means, means_window_.width());
 }
 
 // Coarse row j of every plane's blurred means, interpolated along x to out's columns (the

@@ -35,9 +35,12 @@ CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation);
 class CoarseGaussianStream {
 public:
     using Source = std::function<void(int y, int x_begin, int x_end, float* const* rows)>;
+    // A linear map of the blurred planes, applied to a row of their block means (in place) before
+    // the blur: the same, up to rounding, as applied to the result, on fewer values.
+    using MeansMap = std::function<void(float* const* means, int width)>;
     // coarse_taps[p]: plane p's Gaussian on the coarse grid, null where it passes through.
     CoarseGaussianStream(const std::vector<const std::vector<float>*>& coarse_taps, int decimation, const Window& out,
-                         const Window& frame, Source source);
+                         const Window& frame, Source source, MeansMap map = {});
     CoarseGaussianStream(const CoarseGaussianStream&) = delete;  // (its coarse streams hold `this`)
     CoarseGaussianStream& operator=(const CoarseGaussianStream&) = delete;
 
@@ -64,6 +67,7 @@ private:
 
     Window out_, frame_;
     Source source_;
+    MeansMap map_;
     std::vector<PlaneRows> planes_;
     std::vector<size_t> blurred_;  // the planes with a Gaussian
     int d_ = 0;

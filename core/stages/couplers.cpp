@@ -111,40 +111,63 @@ __attribute__((always_inline)) inline V exp2_of_nonpositive(V v) {
     return (p * f + 1.0f) * scale;
 }
 
-// Each layer's e_i[x] *= 2^(m_i0 n_0 + m_i1 n_1 + m_i2 n_2) on the lanes from x, n the
-// donors' spread net densities there (m already times -log2 10).
+// Each layer's exponent of 2, a_i = m_i0 n_0 + m_i1 n_1 + m_i2 n_2, from the donors' spread
+// net densities n_j at the lanes from x (m already times -log2 10).
 template <typename V>
-__attribute__((always_inline)) inline void inhibit_lanes(float* const* e, const V* n, const float* m, int x) {
+__attribute__((always_inline)) inline void exponents(const float* const* n, const float* m, int x, V* a) {
+    V v[3];
+    for (int j = 0; j < 3; ++j) simd::load(v[j], n[j] + x);
+    for (int i = 0; i < 3; ++i) a[i] = m[3 * i] * v[0] + m[3 * i + 1] * v[1] + m[3 * i + 2] * v[2];
+}
+
+// e_i[x] *= 2^a_i on the lanes from x.
+template <typename V>
+__attribute__((always_inline)) inline void scale_by_powers_of_two(float* const* e, const V* a, int x) {
     using I = typename simd::Lanes<int(sizeof(V) / sizeof(float))>::I;
     for (int i = 0; i < 3; ++i) {
         V h;
         simd::load(h, e[i] + x);
-        simd::store(e[i] + x, h * exp2_of_nonpositive<V, I>(m[3 * i] * n[0] + m[3 * i + 1] * n[1] + m[3 * i + 2] * n[2]));
+        simd::store(e[i] + x, h * exp2_of_nonpositive<V, I>(a[i]));
     }
 }
 
-// The spread net densities in rows.
 template <typename V>
 __attribute__((always_inline)) inline void inhibit_by_rows(float* const* e, const float* const* spread, const float* m,
                                                            int x) {
-    V n[3];
-    for (int j = 0; j < 3; ++j) simd::load(n[j], spread[j] + x);
-    inhibit_lanes<V>(e, n, m, x);
+    V a[3];
+    exponents<V>(spread, m, x, a);
+    scale_by_powers_of_two<V>(e, a, x);
 }
 
-// The spread net densities between two coarse rows interpolated along x: above + t (below - above).
+// The exponents between two coarse rows of them, interpolated along x: above + t (below - above).
 template <typename V>
 __attribute__((always_inline)) inline void inhibit_between_rows(float* const* e, const float* const* above,
-                                                                const float* const* below, float t, const float* m,
-                                                                int x) {
-    V n[3];
-    for (int j = 0; j < 3; ++j) {
-        V a, b;
-        simd::load(a, above[j] + x), simd::load(b, below[j] + x);
-        n[j] = a + t * (b - a);
+                                                                const float* const* below, float t, int x) {
+    V a[3];
+    for (int i = 0; i < 3; ++i) {
+        V lo, hi;
+        simd::load(lo, above[i] + x), simd::load(hi, below[i] + x);
+        a[i] = lo + t * (hi - lo);
     }
-    inhibit_lanes<V>(e, n, m, x);
+    scale_by_powers_of_two<V>(e, a, x);
 }
+
+// The exponents in place of the net densities.
+template <typename V>
+__attribute__((always_inline)) inline void exponent_lanes(float* const* n, const float* m, int x) {
+    V a[3];
+    exponents<V>(n, m, x, a);
+    for (int i = 0; i < 3; ++i) simd::store(n[i] + x, a[i]);
+}
+
+struct ExponentRows {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(float* const* n, const float* m, int width) {
+        int x = 0;
+        for (; x + lanes <= width; x += lanes) exponent_lanes<typename simd::Lanes<lanes>::F>(n, m, x);
+        for (; x < width; ++x) exponent_lanes<simd::Float1>(n, m, x);
+    }
+};
 
 struct InhibitRows {
     template <int lanes>
@@ -159,11 +182,11 @@ struct InhibitRows {
 struct InhibitBetweenRows {
     template <int lanes>
     __attribute__((always_inline)) static void run(float* const* e, const float* const* above,
-                                                   const float* const* below, float t, const float* m, int width) {
+                                                   const float* const* below, float t, int width) {
         int x = 0;
         for (; x + lanes <= width; x += lanes)
-            inhibit_between_rows<typename simd::Lanes<lanes>::F>(e, above, below, t, m, x);
-        for (; x < width; ++x) inhibit_between_rows<simd::Float1>(e, above, below, t, m, x);
+            inhibit_between_rows<typename simd::Lanes<lanes>::F>(e, above, below, t, x);
+        for (; x < width; ++x) inhibit_between_rows<simd::Float1>(e, above, below, t, x);
     }
 };
 
@@ -191,12 +214,15 @@ CoarseCouplerStream::CoarseCouplerStream(const CouplerStage& c, const Window& ou
               [this](int y, int x_begin, int x_end, float* const* rows) {
                   source_(y, x_begin, x_end, rows);
                   for (size_t l = 0; l < 3; ++l) coupler_donor_row(c_, l, rows[l], rows[3 + l], x_end - x_begin);
-              }) {}
+              },
+              // The block means' exponents of 2 (the matrix is linear, so it goes before the
+              // Gaussian, on the coarse grid): the pixels then interpolate them and take 2^.
+              [this](float* const* means, int width) { simd::dispatch<ExponentRows>(means, m_.data(), width); }) {}
 
 float* const* CoarseCouplerStream::row(int y) {
     const CoarseGaussianStream::Row& r = stream_.row(y);
     for (size_t l = 0; l < 3; ++l) out_[l] = r.read[l];
-    simd::dispatch<InhibitBetweenRows>(out_, &r.above[3], &r.below[3], r.t, m_.data(), width_);
+    simd::dispatch<InhibitBetweenRows>(out_, &r.above[3], &r.below[3], r.t, width_);
     return out_;
 }
 
