@@ -1176,7 +1176,10 @@ std::vector<std::string> Plan::describe() const {
             rows += std::string(i ? "; " : "") + fmt(c->matrix[3 * i]) + " " + fmt(c->matrix[3 * i + 1]) + " " +
                     fmt(c->matrix[3 * i + 2]);
         lines.push_back("  DIR couplers: log H lowered by M x net density (rows R, G, B: " + rows +
-                        "), the inhibitor spread " + std::to_string(c->radius()) + " px");
+                        "), the inhibitor spread " + std::to_string(c->radius()) + " px" +
+                        (c->spread.decimation > 1
+                             ? ", on a " + std::to_string(c->spread.decimation) + "x coarser grid"
+                             : std::string()));
     }
     switch (settings_.output) {
         case OutputMode::print: {
