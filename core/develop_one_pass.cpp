@@ -114,7 +114,8 @@ public:
             coarse_ = std::make_unique<CoarseCouplerStream>(
                 c, film, frame, [scattered, scattered_row](int y, int x_begin, int x_end, float* const* rows) {
                     float* const* in = scattered_row(y);
-                    for (size_t l = 0; l < 3; ++l) std::copy(in[l] + (x_begin - scattered.x0), in[l] + (x_end - scattered.x0), rows[l]);
+                    for (size_t l = 0; l < 3; ++l)
+                        std::copy(in[l] + (x_begin - scattered.x0), in[l] + (x_end - scattered.x0), rows[l]);
                 });
             return;
         }

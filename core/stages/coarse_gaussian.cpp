@@ -90,7 +90,8 @@ struct PairMeans {
     }
     template <typename V, size_t... J>
     __attribute__((always_inline)) static V deinterleave(const V& a, const V& b, int odd, std::index_sequence<J...>) {
-        return odd ? __builtin_shufflevector(a, b, (2 * int(J) + 1)...) : __builtin_shufflevector(a, b, (2 * int(J))...);
+        return odd ? __builtin_shufflevector(a, b, (2 * int(J) + 1)...)
+                   : __builtin_shufflevector(a, b, (2 * int(J))...);
     }
 };
 
@@ -141,7 +142,8 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
     means_window_ = blurred_window_.grown(r);
     inside0_ = std::clamp(means_window_.x0 * d_, frame.x0, frame.x1);
     inside1_ = std::clamp(means_window_.x1 * d_, frame.x0, frame.x1);
-    read_x0_ = std::min(std::max(out.x0, frame.x0), inside0_), read_x1_ = std::max(std::min(out.x1, frame.x1), inside1_);
+    read_x0_ = std::min(std::max(out.x0, frame.x0), inside0_);
+    read_x1_ = std::max(std::min(out.x1, frame.x1), inside1_);
     // The columns' blocks and weights of the interpolation along x (the same on every row).
     for (int x = out.x0; x < out.x1; ++x) {
         const int i = floor_div(2 * x + 1 - d_, 2 * d_), column = x - out.x0, block = i - blurred_window_.x0;
@@ -160,10 +162,9 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
     // two coarse rows summed at once (more would read further ahead, for a ring of fine rows
     // the deeper, and the coarse rows cost little).
     constexpr int kCoarseRowsTogether = 2;
-    blur_ = std::make_unique<SeparableStream>(blurred_window_.width(), std::move(filters), means_window_.y0, means_window_.y1,
-                                              blurred_window_.y1,
-                                              [this](int by, float* const* means) { block_means(by, means); },
-                                              kCoarseRowsTogether);
+    blur_ = std::make_unique<SeparableStream>(
+        blurred_window_.width(), std::move(filters), means_window_.y0, means_window_.y1, blurred_window_.y1,
+        [this](int by, float* const* means) { block_means(by, means); }, kCoarseRowsTogether);
     // Output row y lies above coarse row j + 1 <= y / d + 1, whose blur (with the next one)
     // reads block rows to j + kCoarseRowsTogether + r, each d fine rows.
     slots_ = d_ * (r + 3 + kCoarseRowsTogether) + 2;

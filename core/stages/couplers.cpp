@@ -210,7 +210,8 @@ CoarseCouplerStream::CoarseCouplerStream(const CouplerStage& c, const Window& ou
       m_(log2_inhibition(c)),
       width_(out.width()),
       source_(std::move(source)),
-      stream_({nullptr, nullptr, nullptr, &c.spread.taps, &c.spread.taps, &c.spread.taps}, c.spread.decimation, out, frame,
+      stream_({nullptr, nullptr, nullptr, &c.spread.taps, &c.spread.taps, &c.spread.taps}, c.spread.decimation, out,
+              frame,
               [this](int y, int x_begin, int x_end, float* const* rows) {
                   source_(y, x_begin, x_end, rows);
                   for (size_t l = 0; l < 3; ++l) coupler_donor_row(c_, l, rows[l], rows[3 + l], x_end - x_begin);

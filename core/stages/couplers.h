@@ -55,12 +55,14 @@ void inhibit_rows(const CouplerStage& c, float* const* exposure, const float* co
 // The couplers with their spread on the coarse grid (spread.decimation > 1), streamed down the
 // rows of `out` for one thread: the layers' exposure rows from
 // source(y, x_begin, x_end, rows) (as CoarseGaussianStream reads them: within the frame, each
-// once, in order), their donors' net densities blurred on the coarse grid, and row(y) each
-// layer's inhibited exposure on out's columns (the stream's rows: the caller's to change until
-// the next call), y increasing.
+// once, in order), their donors' net densities' block means turned into each layer's exponent
+// of 2 (the matrix) and blurred on the coarse grid, and row(y) each layer's inhibited exposure
+// on out's columns (the stream's rows: the caller's to change until the next call), y
+// increasing.
 class CoarseCouplerStream {
 public:
-    CoarseCouplerStream(const CouplerStage& c, const Window& out, const Window& frame, CoarseGaussianStream::Source source);
+    CoarseCouplerStream(const CouplerStage& c, const Window& out, const Window& frame,
+                        CoarseGaussianStream::Source source);
     float* const* row(int y);
 
 private:
