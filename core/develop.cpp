@@ -177,7 +177,7 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
                                       fmt(s.dir_coupler_spread) + pitch + ")",
                                   "give a smaller dir-coupler-spread or a larger " + width_setting);
             m.couplers = design_couplers(stock, s.dir_couplers, s.dir_coupler_spread, m.pixel_pitch_um,
-                                         tier.curve_table_bits);
+                                         tier.curve_table_bits, tier.coupler_decimation);
         }
     }
     // The tabulated curves; with grain, each also gives the grain's amplitude at its density
@@ -226,6 +226,25 @@ std::vector<Plane> inhibited_exposure(const MaterialStages& m, std::vector<Plane
     const Window reach = developed.grown(c.radius()).intersected(frame);
     for (size_t l = 0; l < 3; ++l) exposure[l] = spread_exposure(m, l, std::move(exposure[l]), reach, frame, threads, times);
     StageTimer timer(times, "DIR couplers");
+    if (c.spread.decimation > 1) {
+        // The spread on the coarse grid, a stream per band (as the one pass runs it).
+        std::vector<Plane> inhibited;
+        for (size_t l = 0; l < 3; ++l) inhibited.push_back(Plane::unset(developed));
+        parallel_for(developed.y0, developed.y1, threads, [&](int y0, int y1) {
+            CoarseCouplerStream stream(c, Window{developed.x0, y0, developed.x1, y1}, frame,
+                                       [&](int y, int x_begin, int x_end, float* const* rows) {
+                                           for (size_t l = 0; l < 3; ++l) {
+                                               const float* in = exposure[l].row(y) - exposure[l].window.x0;
+                                               std::copy(in + x_begin, in + x_end, rows[l]);
+                                           }
+                                       });
+            for (int y = y0; y < y1; ++y) {
+                float* const* rows = stream.row(y);
+                for (size_t l = 0; l < 3; ++l) std::copy_n(rows[l], developed.width(), inhibited[l].row(y));
+            }
+        });
+        return inhibited;
+    }
     std::vector<Plane> donor;
     for (size_t l = 0; l < 3; ++l) {
         donor.push_back(Plane::unset(reach));
@@ -234,7 +253,7 @@ std::vector<Plane> inhibited_exposure(const MaterialStages& m, std::vector<Plane
         });
         if (c.radius() > 0) {
             Plane spread = Plane::unset(developed);
-            convolve_separable(donor[l], spread, c.taps, frame, threads);
+            convolve_separable(donor[l], spread, c.spread.taps, frame, threads);
             donor[l] = std::move(spread);
         }
         exposure[l] = cropped(std::move(exposure[l]), developed);
@@ -1158,7 +1177,10 @@ std::vector<std::string> Plan::describe() const {
             rows += std::string(i ? "; " : "") + fmt(c->matrix[3 * i]) + " " + fmt(c->matrix[3 * i + 1]) + " " +
                     fmt(c->matrix[3 * i + 2]);
         lines.push_back("  DIR couplers: log H lowered by M x net density (rows R, G, B: " + rows +
-                        "), the inhibitor spread " + std::to_string(c->radius()) + " px");
+                        "), the inhibitor spread " + std::to_string(c->radius()) + " px" +
+                        (c->spread.decimation > 1
+                             ? ", on a " + std::to_string(c->spread.decimation) + "x coarser grid"
+                             : std::string()));
     }
     switch (settings_.output) {
         case OutputMode::print: {

@@ -101,33 +101,43 @@ private:
 
 // The DIR couplers (core/stages/couplers.h) on the scattered exposure as it streams down the
 // rows: the donors' net densities of each row the scatter gives (on `film` grown by the
-// inhibitor's reach, `scattered`), spread by their own stream, and each row's exposure kept
-// in a ring until its inhibition is known. The same steps as develop.cpp's inhibited_exposure.
+// inhibitor's reach, `scattered`), spread by their own stream (on the coarse grid where the
+// stage has one: CoarseCouplerStream), and each row's exposure kept in a ring until its
+// inhibition is known. The same steps as develop.cpp's inhibited_exposure.
 class CouplerStream {
 public:
     using ScatteredRow = std::function<float* const*(int y)>;  // row y of the three layers on `scattered`
     CouplerStream(const CouplerStage& c, const Window& film, const Window& scattered, const Window& frame, int rows_end,
                   ScatteredRow scattered_row)
-        : c_(c),
-          offset_(film.x0 - scattered.x0),
-          width_(film.width()),
-          slots_(2 * c.radius() + 2 * SeparableStream::kMaxRowsTogether + 2),
-          ring_(3, std::vector<float>(size_t(slots_) * size_t(scattered.width()))),
-          stride_(scattered.width()),
-          spread_(film.width(), std::vector<SeparableFilter>(3, SeparableFilter{{c.taps}, {1.0f}}), frame.y0, frame.y1,
-                  rows_end, [this, film, scattered, frame, scattered_row](int y, float* const* padded) {
-                      float* const* rows = scattered_row(y);
-                      const int padded_x0 = film.x0 - c_.radius(), padded_x1 = film.x1 + c_.radius();
-                      for (size_t l = 0; l < 3; ++l) {
-                          std::copy_n(rows[l], stride_, kept(l, y));
-                          coupler_donor_row(c_, l, rows[l], padded[l] + (scattered.x0 - padded_x0), stride_);
-                          hold_frame_edges(padded[l], padded_x0, padded_x1, frame);
-                      }
-                  }) {}
+        : c_(c), offset_(film.x0 - scattered.x0), width_(film.width()), stride_(scattered.width()) {
+        if (c.spread.decimation > 1) {
+            coarse_ = std::make_unique<CoarseCouplerStream>(
+                c, film, frame, [scattered, scattered_row](int y, int x_begin, int x_end, float* const* rows) {
+                    float* const* in = scattered_row(y);
+                    for (size_t l = 0; l < 3; ++l)
+                        std::copy(in[l] + (x_begin - scattered.x0), in[l] + (x_end - scattered.x0), rows[l]);
+                });
+            return;
+        }
+        slots_ = 2 * c.radius() + 2 * SeparableStream::kMaxRowsTogether + 2;
+        ring_.assign(3, std::vector<float>(size_t(slots_) * size_t(stride_)));
+        spread_ = std::make_unique<SeparableStream>(
+            film.width(), std::vector<SeparableFilter>(3, SeparableFilter{{c.spread.taps}, {1.0f}}), frame.y0, frame.y1,
+            rows_end, [this, film, scattered, frame, scattered_row](int y, float* const* padded) {
+                float* const* rows = scattered_row(y);
+                const int padded_x0 = film.x0 - c_.radius(), padded_x1 = film.x1 + c_.radius();
+                for (size_t l = 0; l < 3; ++l) {
+                    std::copy_n(rows[l], stride_, kept(l, y));
+                    coupler_donor_row(c_, l, rows[l], padded[l] + (scattered.x0 - padded_x0), stride_);
+                    hold_frame_edges(padded[l], padded_x0, padded_x1, frame);
+                }
+            });
+    }
     // Row y's inhibited exposure of each layer on `film`, in the stream's own rows (the caller's
     // to change until the next call).
     float* const* row(int y) {
-        const float* const* spread = spread_.row(y);
+        if (coarse_) return coarse_->row(y);
+        const float* const* spread = spread_->row(y);
         for (size_t l = 0; l < 3; ++l) out_[l] = kept(l, y) + offset_;
         inhibit_rows(c_, out_, spread, width_);
         return out_;
@@ -138,10 +148,10 @@ private:
         return ring_[layer].data() + size_t(((y % slots_) + slots_) % slots_) * size_t(stride_);
     }
     const CouplerStage& c_;
-    int offset_, width_, slots_;
-    std::vector<std::vector<float>> ring_;  // per layer, slots_ rows of `scattered`'s width
-    int stride_;
-    SeparableStream spread_;
+    int offset_, width_, stride_, slots_ = 0;
+    std::unique_ptr<CoarseCouplerStream> coarse_;  // or:
+    std::vector<std::vector<float>> ring_;         // per layer, slots_ rows of `scattered`'s width
+    std::unique_ptr<SeparableStream> spread_;
     float* out_[3];
 };
 

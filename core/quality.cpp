@@ -7,11 +7,11 @@ namespace {
 // The settings of each tier; `darkroom bench` measures what each costs and how far it is
 // from the reference (docs/development/quality-tiers.md).
 constexpr QualityTier kTiers[] = {
-    {Quality::reference, "reference", {0, 0.0}, 1, GrainMethod::boolean_model, 0, 0, 1},
-    {Quality::high, "high", {0, kSeparableTolerance}, 1, GrainMethod::filtered_noise, 0, 0, 1},
-    {Quality::fast, "fast", {3, 1e-3, 2, true}, 8, GrainMethod::hashed_noise, 65, 6, 1},
+    {Quality::reference, "reference", {0, 0.0}, 1, 1, GrainMethod::boolean_model, 0, 0, 1},
+    {Quality::high, "high", {0, kSeparableTolerance}, 1, 1, GrainMethod::filtered_noise, 0, 0, 1},
+    {Quality::fast, "fast", {3, 1e-3, 2, true}, 8, 8, GrainMethod::hashed_noise, 65, 6, 1},
     // fast's stages on the proxy
-    {Quality::preview, "preview", {3, 1e-3, 2, true}, 8, GrainMethod::hashed_noise, 65, 6, 2},
+    {Quality::preview, "preview", {3, 1e-3, 2, true}, 8, 8, GrainMethod::hashed_noise, 65, 6, 2},
 };
 
 }  // namespace

@@ -11,7 +11,8 @@
 //   fast       the print of a colour negative as one 3D table from the negative's densities
 //              to the print's colour, the paper's MTF applied to the negative's densities
 //              and its grain folded into the film's; the PSF tapered to a compact kernel (a
-//              centre delta and separable terms), halation on an 8x coarser grid, tabulated
+//              centre delta and separable terms), halation on an 8x coarser grid, the DIR
+//              couplers' inhibitor on a grid as coarse as its standard deviation, tabulated
 //              H&D curves, grain from hashed noise (sums of uniform bytes: core/random.h)
 //              through a kernel without its negligible outer taps
 //   preview    as fast, on a proxy of the frame at half its resolution (twice the pixel
@@ -42,6 +43,9 @@ struct QualityTier {
     const char* name;
     ScatterDesign scatter;    // the MTF's kernel (stages/scatter.h)
     int halation_decimation;  // halation on a grid this many times coarser (1: the pixels)
+    // The DIR couplers' inhibitor spread on a grid up to this many times coarser (1: the
+    // pixels), its spacing at most the Gaussian's standard deviation (stages/couplers.h).
+    int coupler_decimation;
     GrainMethod grain;
     // Printing a colour negative on colour paper: 0 = per-pixel spectral integration in
     // double; otherwise one 3D table of this many nodes per axis from the negative's densities

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "core/simd.h"
 #include "core/stages/filters.h"
@@ -48,7 +49,7 @@ std::array<Curve, 3> curves_before_inhibition(const std::array<const Curve*, 3>&
 }
 
 CouplerStage design_couplers(const Stock& stock, double amount, double spread, double pixel_pitch_um,
-                             int curve_table_bits) {
+                             int curve_table_bits, int max_decimation) {
     const DirCouplerSpec spec = stock_dir_couplers(stock);
     CouplerStage c;
     CouplerMatrix m;
@@ -63,22 +64,28 @@ CouplerStage design_couplers(const Stock& stock, double amount, double spread, d
         names[i] = stock.layers[i].name;
         c.sheet[i] = *sheet[i];
         c.d_min[i] = sheet[i]->y_min();
-        if (curve_table_bits > 0) c.sheet_tables.emplace_back(*sheet[i], curve_table_bits);
+        if (curve_table_bits > 0) {
+            Curve net = *sheet[i];  // (the net density tabulated: one lookup a donor)
+            for (double& d : net.y) d -= c.d_min[i];
+            c.sheet_tables.emplace_back(net, curve_table_bits);
+        }
     }
     c.before = curves_before_inhibition(sheet, m, names);
-    c.taps = pixel_integrated_gaussian(spec.diffusion_um * spread / pixel_pitch_um);
+    // The coarse grid's spacing at most the Gaussian's standard deviation: a step's spread is
+    // then within 0.03 (d / sigma)^2 of the step of the exact one (docs/model/dir-couplers.md).
+    const double sigma_px = spec.diffusion_um * spread / pixel_pitch_um;
+    c.spread = design_coarse_gaussian(sigma_px, std::clamp(int(sigma_px), 1, std::max(1, max_decimation)));
     return c;
 }
 
 void coupler_donor_row(const CouplerStage& c, size_t layer, const float* exposure, float* net_density, int width) {
-    const float d_min = float(c.d_min[layer]);
     if (!c.sheet_tables.empty()) {
         c.sheet_tables[layer].apply_row(exposure, net_density, width);
-    } else {
-        for (int x = 0; x < width; ++x)
-            net_density[x] = float(c.sheet[layer](std::log10(std::max(double(exposure[x]), 1e-30))));
+        return;
     }
-    for (int x = 0; x < width; ++x) net_density[x] -= d_min;
+    const float d_min = float(c.d_min[layer]);
+    for (int x = 0; x < width; ++x)
+        net_density[x] = float(c.sheet[layer](std::log10(std::max(double(exposure[x]), 1e-30)))) - d_min;
 }
 
 namespace {
@@ -104,35 +111,120 @@ __attribute__((always_inline)) inline V exp2_of_nonpositive(V v) {
     return (p * f + 1.0f) * scale;
 }
 
-// e[x] *= 2^(m0 n0[x] + m1 n1[x] + m2 n2[x]) on the lanes from x (m already times -log2 10).
+// Each layer's exponent of 2, a_i = m_i0 n_0 + m_i1 n_1 + m_i2 n_2, from the donors' spread
+// net densities n_j at the lanes from x (m already times -log2 10).
 template <typename V>
-__attribute__((always_inline)) inline void inhibit_lanes(float* e, const float* n0, const float* n1, const float* n2,
-                                                         float m0, float m1, float m2, int x) {
-    using I = typename simd::Lanes<int(sizeof(V) / sizeof(float))>::I;
-    V a, b, c, h;
-    simd::load(a, n0 + x), simd::load(b, n1 + x), simd::load(c, n2 + x), simd::load(h, e + x);
-    simd::store(e + x, h * exp2_of_nonpositive<V, I>(m0 * a + m1 * b + m2 * c));
+__attribute__((always_inline)) inline void exponents(const float* const* n, const float* m, int x, V* a) {
+    V v[3];
+    for (int j = 0; j < 3; ++j) simd::load(v[j], n[j] + x);
+    for (int i = 0; i < 3; ++i) a[i] = m[3 * i] * v[0] + m[3 * i + 1] * v[1] + m[3 * i + 2] * v[2];
 }
 
-struct InhibitRow {
+// e_i[x] *= 2^a_i on the lanes from x.
+template <typename V>
+__attribute__((always_inline)) inline void scale_by_powers_of_two(float* const* e, const V* a, int x) {
+    using I = typename simd::Lanes<int(sizeof(V) / sizeof(float))>::I;
+    for (int i = 0; i < 3; ++i) {
+        V h;
+        simd::load(h, e[i] + x);
+        simd::store(e[i] + x, h * exp2_of_nonpositive<V, I>(a[i]));
+    }
+}
+
+template <typename V>
+__attribute__((always_inline)) inline void inhibit_by_rows(float* const* e, const float* const* spread, const float* m,
+                                                           int x) {
+    V a[3];
+    exponents<V>(spread, m, x, a);
+    scale_by_powers_of_two<V>(e, a, x);
+}
+
+// The exponents between two coarse rows of them, interpolated along x: above + t (below - above).
+template <typename V>
+__attribute__((always_inline)) inline void inhibit_between_rows(float* const* e, const float* const* above,
+                                                                const float* const* below, float t, int x) {
+    V a[3];
+    for (int i = 0; i < 3; ++i) {
+        V lo, hi;
+        simd::load(lo, above[i] + x), simd::load(hi, below[i] + x);
+        a[i] = lo + t * (hi - lo);
+    }
+    scale_by_powers_of_two<V>(e, a, x);
+}
+
+// The exponents in place of the net densities.
+template <typename V>
+__attribute__((always_inline)) inline void exponent_lanes(float* const* n, const float* m, int x) {
+    V a[3];
+    exponents<V>(n, m, x, a);
+    for (int i = 0; i < 3; ++i) simd::store(n[i] + x, a[i]);
+}
+
+struct ExponentRows {
     template <int lanes>
-    __attribute__((always_inline)) static void run(float* e, const float* n0, const float* n1, const float* n2,
-                                                   float m0, float m1, float m2, int width) {
+    __attribute__((always_inline)) static void run(float* const* n, const float* m, int width) {
         int x = 0;
-        for (; x + lanes <= width; x += lanes)
-            inhibit_lanes<typename simd::Lanes<lanes>::F>(e, n0, n1, n2, m0, m1, m2, x);
-        for (; x < width; ++x) inhibit_lanes<simd::Float1>(e, n0, n1, n2, m0, m1, m2, x);
+        for (; x + lanes <= width; x += lanes) exponent_lanes<typename simd::Lanes<lanes>::F>(n, m, x);
+        for (; x < width; ++x) exponent_lanes<simd::Float1>(n, m, x);
     }
 };
+
+struct InhibitRows {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(float* const* e, const float* const* spread, const float* m,
+                                                   int width) {
+        int x = 0;
+        for (; x + lanes <= width; x += lanes) inhibit_by_rows<typename simd::Lanes<lanes>::F>(e, spread, m, x);
+        for (; x < width; ++x) inhibit_by_rows<simd::Float1>(e, spread, m, x);
+    }
+};
+
+struct InhibitBetweenRows {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(float* const* e, const float* const* above,
+                                                   const float* const* below, float t, int width) {
+        int x = 0;
+        for (; x + lanes <= width; x += lanes)
+            inhibit_between_rows<typename simd::Lanes<lanes>::F>(e, above, below, t, x);
+        for (; x < width; ++x) inhibit_between_rows<simd::Float1>(e, above, below, t, x);
+    }
+};
+
+// The matrix times -log2 10, the exponent of 2 per unit spread net density.
+std::array<float, 9> log2_inhibition(const CouplerStage& c) {
+    constexpr float kLog2Of10 = 3.321928094887362f;
+    std::array<float, 9> m;
+    for (size_t k = 0; k < 9; ++k) m[k] = -kLog2Of10 * c.matrix[k];
+    return m;
+}
 
 }  // namespace
 
 void inhibit_rows(const CouplerStage& c, float* const* exposure, const float* const* spread_net_density, int width) {
-    constexpr float kLog2Of10 = 3.321928094887362f;
-    for (int i = 0; i < 3; ++i)
-        simd::dispatch<InhibitRow>(exposure[i], spread_net_density[0], spread_net_density[1], spread_net_density[2],
-                                   -kLog2Of10 * c.matrix[3 * i], -kLog2Of10 * c.matrix[3 * i + 1],
-                                   -kLog2Of10 * c.matrix[3 * i + 2], width);
+    simd::dispatch<InhibitRows>(exposure, spread_net_density, log2_inhibition(c).data(), width);
+}
+
+CoarseCouplerStream::CoarseCouplerStream(const CouplerStage& c, const Window& out, const Window& frame,
+                                         CoarseGaussianStream::Source source)
+    : c_(c),
+      m_(log2_inhibition(c)),
+      width_(out.width()),
+      source_(std::move(source)),
+      stream_({nullptr, nullptr, nullptr, &c.spread.taps, &c.spread.taps, &c.spread.taps}, c.spread.decimation, out,
+              frame,
+              [this](int y, int x_begin, int x_end, float* const* rows) {
+                  source_(y, x_begin, x_end, rows);
+                  for (size_t l = 0; l < 3; ++l) coupler_donor_row(c_, l, rows[l], rows[3 + l], x_end - x_begin);
+              },
+              // The block means' exponents of 2 (the matrix is linear, so it goes before the
+              // Gaussian, on the coarse grid): the pixels then interpolate them and take 2^.
+              [this](float* const* means, int width) { simd::dispatch<ExponentRows>(means, m_.data(), width); }) {}
+
+float* const* CoarseCouplerStream::row(int y) {
+    const CoarseGaussianStream::Row& r = stream_.row(y);
+    for (size_t l = 0; l < 3; ++l) out_[l] = r.read[l];
+    simd::dispatch<InhibitBetweenRows>(out_, &r.above[3], &r.below[3], r.t, width_);
+    return out_;
 }
 
 }  // namespace darkroom

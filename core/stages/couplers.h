@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/curve.h"
+#include "core/stages/coarse_gaussian.h"
 #include "core/stages/tables.h"
 #include "core/stock.h"
 
@@ -29,24 +30,48 @@ std::array<Curve, 3> curves_before_inhibition(const std::array<const Curve*, 3>&
 // The develop stage's couplers, designed for a plan.
 struct CouplerStage {
     std::array<float, 9> matrix{};  // M_ij at [3 i + j], the stock's times the amount
-    std::vector<float> taps;        // the inhibitor's spread (pixel-integrated Gaussian)
+    // The inhibitor's spread; in the fast tiers on a grid up to the Gaussian's standard
+    // deviation coarser (the spread net density is a smooth field: CoarseCouplerStream).
+    CoarseGaussian spread;
     std::array<Curve, 3> sheet;     // the donors' curves S_j
     std::array<Curve, 3> before;    // the receivers' curves before inhibition D0_i
     std::array<double, 3> d_min{};
-    std::vector<LogAxisTable> sheet_tables;  // S_j tabulated, in the tiers that tabulate curves
-    int radius() const { return int(taps.size() / 2); }
+    std::vector<LogAxisTable> sheet_tables;  // S_j - Dmin_j tabulated, in the tiers that tabulate curves
+    int radius() const { return spread.radius_px; }
 };
 
 // The stage for a stock's couplers times `amount`, its Gaussian of diffusion_um x `spread` on
-// the film at the pixel pitch. curve_table_bits > 0: the donors' curves tabulated
-// (stages/tables.h).
+// the film at the pixel pitch, on a grid up to max_decimation times coarser. curve_table_bits
+// > 0: the donors' curves tabulated (stages/tables.h).
 CouplerStage design_couplers(const Stock& stock, double amount, double spread, double pixel_pitch_um,
-                             int curve_table_bits);
+                             int curve_table_bits, int max_decimation);
 
 // The donors' net densities n_j of a row of layer j's exposures (lux-seconds; below 0 none).
 void coupler_donor_row(const CouplerStage& c, size_t layer, const float* exposure, float* net_density, int width);
 
 // Each layer's exposure row times 10^-s_i, s_i from the donors' spread net densities.
 void inhibit_rows(const CouplerStage& c, float* const* exposure, const float* const* spread_net_density, int width);
+
+// The couplers with their spread on the coarse grid (spread.decimation > 1), streamed down the
+// rows of `out` for one thread: the layers' exposure rows from
+// source(y, x_begin, x_end, rows) (as CoarseGaussianStream reads them: within the frame, each
+// once, in order), their donors' net densities' block means turned into each layer's exponent
+// of 2 (the matrix) and blurred on the coarse grid, and row(y) each layer's inhibited exposure
+// on out's columns (the stream's rows: the caller's to change until the next call), y
+// increasing.
+class CoarseCouplerStream {
+public:
+    CoarseCouplerStream(const CouplerStage& c, const Window& out, const Window& frame,
+                        CoarseGaussianStream::Source source);
+    float* const* row(int y);
+
+private:
+    const CouplerStage& c_;
+    std::array<float, 9> m_;  // the matrix times -log2 10
+    int width_;
+    CoarseGaussianStream::Source source_;
+    CoarseGaussianStream stream_;  // planes 0-2 the exposures (passed through), 3-5 the donors
+    float* out_[3];
+};
 
 }  // namespace darkroom

@@ -8,6 +8,7 @@
 #include "core/develop.h"
 #include "core/spectral.h"
 #include "core/stages/couplers.h"
+#include "core/stages/filters.h"
 #include "test_support.h"
 
 using namespace darkroom;
@@ -189,15 +190,62 @@ TEST_CASE("a step edge develops the adjacency effect of the inhibitor's Gaussian
     CHECK(half_width[1] / half_width[0] == Approx(2.0).epsilon(0.15));
 }
 
+TEST_CASE("the fast tiers' coarse inhibitor spreads a step within its grid's bound of the exact Gaussian",
+          "[couplers][quality]") {
+    // The fast tier's design at a 4K frame's pitch (6.08 um): the 15 um inhibitor (sigma 2.47 px)
+    // on a grid of 2, twice as wide on a grid of 4. The exact spread of a unit step is
+    // f(x) = Phi(x / sigma); linear interpolation between nodes d apart is within
+    // d^2/8 max|f''| = d^2 phi(1) / (8 sigma^2) = 0.030 (d / sigma)^2 of it, and the block means
+    // and the narrowed Gaussian keep the exact one's variance, adding less than that. A step at
+    // every place within a block, across x and across y, on one plane.
+    const Stock film = find_stock("kodak-vision3-250d");
+    const double pitch_um = 6.08;
+    for (double spread : {1.0, 2.0}) {
+        const CouplerStage fast = design_couplers(film, 1, spread, pitch_um, 6, 8);
+        const double sigma_px = stock_dir_couplers(film).diffusion_um * spread / pitch_um;
+        const int d = fast.spread.decimation;
+        REQUIRE(d == int(sigma_px));
+        const double bound = std::exp(-0.5) / std::sqrt(2 * M_PI) * d * d / (8 * sigma_px * sigma_px);
+        const std::vector<float> exact_taps = pixel_integrated_gaussian(sigma_px);
+        const Window frame{0, 0, 96, 96};
+        double worst = 0;
+        for (int across_y = 0; across_y < 2; ++across_y)
+            for (int edge = 48; edge < 48 + d; ++edge) {
+                Plane step = Plane::unset(frame), exact = Plane::unset(frame);
+                for (int y = 0; y < frame.y1; ++y)
+                    for (int x = 0; x < frame.x1; ++x) step.at(x, y) = (across_y ? y : x) >= edge ? 1.0f : 0.0f;
+                convolve_separable(step, exact, exact_taps, frame, 1);
+                CoarseGaussianStream coarse({&fast.spread.taps}, d, frame, frame,
+                                            [&](int y, int x_begin, int x_end, float* const* rows) {
+                                                std::copy(step.row(y) + x_begin, step.row(y) + x_end, rows[0]);
+                                            });
+                for (int y = 0; y < frame.y1; ++y) {
+                    const CoarseGaussianStream::Row& r = coarse.row(y);
+                    for (int x = 0; x < frame.x1; ++x) {
+                        const double spread_value = r.above[0][x] + r.t * (r.below[0][x] - r.above[0][x]);
+                        worst = std::max(worst, std::abs(spread_value - exact.at(x, y)));
+                    }
+                }
+            }
+        INFO("spread " << spread << ": sigma " << sigma_px << " px, grid " << d << ", bound " << bound);
+        CHECK(worst <= bound);
+        CHECK(worst > bound / 4);  // (the grid is coarse: the bound is not loose by orders)
+    }
+}
+
 TEST_CASE("DIR couplers give the same pixels for any thread count and window", "[couplers][determinism]") {
     const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     const Image scene = demo_scene(160, 120);
-    for (Quality q : {Quality::high, Quality::fast, Quality::preview}) {
+    // ~3 um pixels: the inhibitor reaches 20 px, on a grid of 5 in the fast tiers; a 4K
+    // frame's 6.08 um: on a grid of 2 (its vector loops).
+    for (auto [q, frame_width_mm] : {std::pair{Quality::high, 0.5}, std::pair{Quality::fast, 0.5},
+                                     std::pair{Quality::preview, 0.5}, std::pair{Quality::fast, 160 * 0.00608}}) {
         DevelopSettings s;
         s.quality = q;
         s.seed = 3;
-        s.frame_width_mm = 0.5;  // ~3 um pixels: the inhibitor reaches 20 px
+        s.frame_width_mm = frame_width_mm;
         s.print_width_mm = 5;
+        INFO(quality_name(q) << ", frame width " << frame_width_mm << " mm");
         for (OutputMode mode : {OutputMode::print, OutputMode::density}) {
             s.output = mode;
             const Image one = render(film, &paper, s, scene, 1);

@@ -1,0 +1,284 @@
+#include "core/stages/coarse_gaussian.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "core/simd.h"
+
+// GCC warns that a vector value would be passed differently without AVX; the vector
+// helpers here are inlined, so no vector crosses a call.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace darkroom {
+
+namespace {
+
+int floor_div(int a, int d) { return a >= 0 ? a / d : -((-a + d - 1) / d); }
+
+// The row loops, in vectors of any width then one value at a time (core/simd.h): the same
+// float operations on every value.
+template <typename V>
+__attribute__((always_inline)) inline void lanes_of_sum(float* sums, const float* in, int i) {
+    V s, v;
+    simd::load(s, sums + i);
+    simd::load(v, in + i);
+    simd::store(sums + i, s + v);
+}
+
+// sums[i] += in[i].
+struct AddRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(float* sums, const float* in, int n) {
+        int i = 0;
+        for (; i + lanes <= n; i += lanes) lanes_of_sum<typename simd::Lanes<lanes>::F>(sums, in, i);
+        for (; i < n; ++i) lanes_of_sum<simd::Float1>(sums, in, i);
+    }
+};
+
+// Grids of d = 2 (the DIR couplers' at a 4K frame's pitch): each block's two columns in vectors,
+// the same operations as the scalar loops for any d.
+constexpr int interleaved(int j, int lanes) { return j / 2 + (j % 2) * lanes; }  // a0 b0 a1 b1 ...
+
+template <typename V, size_t... J>
+__attribute__((always_inline)) inline void store_interleaved(float* out, const V& a, const V& b,
+                                                             std::index_sequence<J...>) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    simd::store(out, __builtin_shufflevector(a, b, interleaved(int(J), lanes)...));
+    simd::store(out + lanes, __builtin_shufflevector(a, b, interleaved(int(J) + lanes, lanes)...));
+}
+
+// out[2k + m] = coarse[k] + t[m] (coarse[k + 1] - coarse[k]), m = 0, 1, k < blocks: two fine
+// columns per block, interpolated along x.
+struct InterpolatePairs {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* coarse, float t0, float t1, int blocks, float* out) {
+        using V = typename simd::Lanes<lanes>::F;
+        int k = 0;
+        if constexpr (lanes > 1)
+            for (; k + lanes <= blocks; k += lanes) {
+                V b0, b1;
+                simd::load(b0, coarse + k), simd::load(b1, coarse + k + 1);
+                const V step = b1 - b0;
+                store_interleaved(out + 2 * k, b0 + t0 * step, b0 + t1 * step, std::make_index_sequence<lanes>());
+            }
+        for (; k < blocks; ++k) {
+            const float step = coarse[k + 1] - coarse[k];
+            out[2 * k] = coarse[k] + t0 * step, out[2 * k + 1] = coarse[k] + t1 * step;
+        }
+    }
+};
+
+// means[k] = (0 + sums[2k] + sums[2k + 1]) / 4, k < blocks: the means of 2x2 blocks from
+// their column sums.
+struct PairMeans {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* sums, int blocks, float* means) {
+        using V = typename simd::Lanes<lanes>::F;
+        int k = 0;
+        if constexpr (lanes > 1)
+            for (; k + lanes <= blocks; k += lanes) {
+                V a, b;
+                simd::load(a, sums + 2 * k), simd::load(b, sums + 2 * k + lanes);
+                const V even = deinterleave(a, b, 0, std::make_index_sequence<lanes>());
+                const V odd = deinterleave(a, b, 1, std::make_index_sequence<lanes>());
+                simd::store(means + k, ((V{} + 0.0f) + even + odd) / 4.0f);
+            }
+        for (; k < blocks; ++k) means[k] = (0.0f + sums[2 * k] + sums[2 * k + 1]) / 4.0f;
+    }
+    template <typename V, size_t... J>
+    __attribute__((always_inline)) static V deinterleave(const V& a, const V& b, int odd, std::index_sequence<J...>) {
+        return odd ? __builtin_shufflevector(a, b, (2 * int(J) + 1)...)
+                   : __builtin_shufflevector(a, b, (2 * int(J))...);
+    }
+};
+
+// Fine pixel x sits at u = (x + 0.5)/d - 0.5 = (2x + 1 - d)/2d on the coarse grid, between
+// blocks floor(u) and floor(u) + 1 (exact in integers); the blocks a range of pixels needs.
+std::pair<int, int> coarse_range(int lo, int hi, int d) {
+    return {floor_div(2 * lo + 1 - d, 2 * d), floor_div(2 * (hi - 1) + 1 - d, 2 * d) + 2};
+}
+
+}  // namespace
+
+CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation) {
+    CoarseGaussian g;
+    g.decimation = std::max(1, decimation);
+    const int d = g.decimation;
+    if (d == 1) {
+        g.taps = pixel_integrated_gaussian(sigma_px);
+        g.radius_px = int(g.taps.size() / 2);
+    } else {
+        // The block means and the interpolation add d^2/12 + d^2/6 of variance, taken off the
+        // coarse Gaussian's.
+        if (!(sigma_px * sigma_px > d * d / 4.0)) throw std::logic_error("a coarse Gaussian narrower than its grid");
+        g.taps = pixel_integrated_gaussian(std::sqrt(sigma_px * sigma_px - d * d / 4.0) / d);
+        g.radius_px = (int(g.taps.size() / 2) + 2) * d;
+    }
+    return g;
+}
+
+CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<float>*>& coarse_taps, int decimation,
+                                           const Window& out, const Window& frame, Source source, MeansMap map)
+    : out_(out),
+      frame_(frame),
+      source_(std::move(source)),
+      map_(std::move(map)),
+      planes_(coarse_taps.size()),
+      d_(decimation) {
+    if (d_ < 2) throw std::invalid_argument("coarse Gaussian: a decimation below 2");
+    int r = 0;  // the largest coarse Gaussian's radius
+    for (size_t p = 0; p < coarse_taps.size(); ++p)
+        if (coarse_taps[p]) {
+            r = std::max(r, int(coarse_taps[p]->size() / 2));
+            blurred_.push_back(p);
+        }
+    if (blurred_.empty()) throw std::invalid_argument("coarse Gaussian: no plane is blurred");
+    auto [cx0, cx1] = coarse_range(out.x0, out.x1, d_);
+    auto [cy0, cy1] = coarse_range(out.y0, out.y1, d_);
+    blurred_window_ = {cx0, cy0, cx1, cy1};
+    means_window_ = blurred_window_.grown(r);
+    inside0_ = std::clamp(means_window_.x0 * d_, frame.x0, frame.x1);
+    inside1_ = std::clamp(means_window_.x1 * d_, frame.x0, frame.x1);
+    read_x0_ = std::min(std::max(out.x0, frame.x0), inside0_);
+    read_x1_ = std::max(std::min(out.x1, frame.x1), inside1_);
+    // The columns' blocks and weights of the interpolation along x (the same on every row).
+    for (int x = out.x0; x < out.x1; ++x) {
+        const int i = floor_div(2 * x + 1 - d_, 2 * d_), column = x - out.x0, block = i - blurred_window_.x0;
+        tx_.push_back(float(2 * x + 1 - d_ - 2 * d_ * i) / float(2 * d_));
+        if (column_runs_.empty() || column_runs_.back().block != block) column_runs_.push_back({column, column, block});
+        column_runs_.back().end = column + 1;
+    }
+    std::vector<SeparableFilter> filters;
+    for (size_t p : blurred_) {
+        PlaneRows& plane = planes_[p];
+        filters.push_back(SeparableFilter{{*coarse_taps[p]}, {1.0f}});
+        plane.column_sums.resize(size_t(means_window_.width()) * d_);
+        for (auto& row : plane.across) row.resize(size_t(out.width()));
+    }
+    // Every plane's coarse rows from one stream, so that each fine row is read once for all;
+    // two coarse rows summed at once (more would read further ahead, for a ring of fine rows
+    // the deeper, and the coarse rows cost little).
+    constexpr int kCoarseRowsTogether = 2;
+    blur_ = std::make_unique<SeparableStream>(
+        blurred_window_.width(), std::move(filters), means_window_.y0, means_window_.y1, blurred_window_.y1,
+        [this](int by, float* const* means) { block_means(by, means); }, kCoarseRowsTogether);
+    // Output row y lies above coarse row j + 1 <= y / d + 1, whose blur (with the next one)
+    // reads block rows to j + kCoarseRowsTogether + r, each d fine rows.
+    slots_ = d_ * (r + 3 + kCoarseRowsTogether) + 2;
+    ring_.resize(planes_.size());
+    for (auto& ring : ring_) ring.resize(size_t(slots_) * size_t(read_x1_ - read_x0_));
+    ring_rows_.resize(planes_.size());
+    row_.read.resize(planes_.size());
+    row_.above.assign(planes_.size(), nullptr);
+    row_.below.assign(planes_.size(), nullptr);
+}
+
+float* CoarseGaussianStream::ring_row(size_t plane, int y) {
+    if (y < next_ - slots_ || y >= next_) throw std::logic_error("coarse Gaussian: a row outside the stream's ring");
+    return &ring_[plane][size_t(((y % slots_) + slots_) % slots_) * size_t(read_x1_ - read_x0_)];
+}
+
+// Reads fine rows up to y (within the frame) into the ring.
+void CoarseGaussianStream::read_to(int y) {
+    if (!started_) {
+        next_ = std::clamp(y, frame_.y0, frame_.y1 - 1);
+        started_ = true;
+    }
+    for (; next_ <= y; ++next_) {
+        for (size_t p = 0; p < planes_.size(); ++p)
+            ring_rows_[p] = &ring_[p][size_t(((next_ % slots_) + slots_) % slots_) * size_t(read_x1_ - read_x0_)];
+        source_(next_, read_x0_, read_x1_, ring_rows_.data());
+    }
+}
+
+// Block means of the image extended past the frame by its edge pixels, as the Gaussian on
+// the pixels reads it (blocks past the frame too, so that the coarse Gaussian clamps nothing
+// of its own): the block row's d rows summed column by column (whole rows, in vector
+// registers), then each block's d columns; for every blurred plane, means[i] its row.
+void CoarseGaussianStream::block_means(int by, float* const* means) {
+    const int d = d_, px_begin = means_window_.x0 * d, n = inside1_ - inside0_;
+    for (int k = 0; k < d; ++k) {
+        const int y = std::clamp(by * d + k, frame_.y0, frame_.y1 - 1);
+        read_to(y);
+        for (size_t p : blurred_) {
+            const float* in = ring_row(p, y) + (inside0_ - read_x0_);
+            float* sums = planes_[p].column_sums.data() + (inside0_ - px_begin);
+            if (k == 0)
+                std::copy(in, in + n, sums);
+            else
+                simd::dispatch<AddRow>(sums, in, n);
+        }
+    }
+    for (size_t i = 0; i < blurred_.size(); ++i) {
+        // The columns past the frame's edges are its edge columns.
+        std::vector<float>& sums = planes_[blurred_[i]].column_sums;
+        std::fill(sums.begin(), sums.begin() + (inside0_ - px_begin), sums[inside0_ - px_begin]);
+        std::fill(sums.begin() + (inside1_ - px_begin), sums.end(), sums[inside1_ - 1 - px_begin]);
+        if (d == 2) {
+            simd::dispatch<PairMeans>(sums.data(), means_window_.width(), means[i]);
+            continue;
+        }
+        for (int bx = means_window_.x0; bx < means_window_.x1; ++bx) {
+            float sum = 0;
+            for (int x = bx * d; x < bx * d + d; ++x) sum += sums[size_t(x - px_begin)];
+            means[i][bx - means_window_.x0] = sum / float(d * d);
+        }
+    }
+    if (map_) map_(means, means_window_.width());
+}
+
+// Coarse row j of every plane's blurred means, interpolated along x to out's columns (the
+// last two rows are kept).
+void CoarseGaussianStream::interpolate(int j) {
+    if (across_row_[j & 1] == j) return;
+    const float* const* blurred_rows = blur_->row(j);
+    for (size_t b = 0; b < blurred_.size(); ++b) {
+        float* row = planes_[blurred_[b]].across[j & 1].data();
+        // A run's two coarse values once, then a loop without indirection (which vectorises);
+        // with d = 2, the whole runs (two columns each) in vectors.
+        size_t first = 0, last = column_runs_.size();
+        if (d_ == 2) {
+            while (first < last && column_runs_[first].end - column_runs_[first].begin < 2) ++first;
+            size_t whole = first;
+            while (whole < last && column_runs_[whole].end - column_runs_[whole].begin == 2) ++whole;
+            if (whole > first) {
+                const ColumnRun& run = column_runs_[first];
+                simd::dispatch<InterpolatePairs>(blurred_rows[b] + run.block, tx_[size_t(run.begin)],
+                                                 tx_[size_t(run.begin) + 1], int(whole - first), row + run.begin);
+            }
+            interpolate_runs(blurred_rows[b], 0, first, row);
+            first = whole;
+        }
+        interpolate_runs(blurred_rows[b], first, last, row);
+    }
+    across_row_[j & 1] = j;
+}
+
+void CoarseGaussianStream::interpolate_runs(const float* coarse, size_t first, size_t last, float* row) const {
+    for (size_t r = first; r < last; ++r) {
+        const ColumnRun& run = column_runs_[r];
+        const float b0 = coarse[run.block], step = coarse[run.block + 1] - b0;
+        for (int i = run.begin; i < run.end; ++i) row[i] = b0 + tx_[size_t(i)] * step;
+    }
+}
+
+const CoarseGaussianStream::Row& CoarseGaussianStream::row(int y) {
+    // The coarse rows first: they read the fine rows below this one.
+    const int j = floor_div(2 * y + 1 - d_, 2 * d_);
+    interpolate(j);
+    interpolate(j + 1);
+    read_to(y);
+    row_.t = float(2 * y + 1 - d_ - 2 * d_ * j) / float(2 * d_);  // the fine row's place between them
+    for (size_t p = 0; p < planes_.size(); ++p) {
+        row_.read[p] = ring_row(p, y) + (out_.x0 - read_x0_);
+        if (planes_[p].column_sums.empty()) continue;
+        row_.above[p] = planes_[p].across[j & 1].data();
+        row_.below[p] = planes_[p].across[(j + 1) & 1].data();
+    }
+    return row_;
+}
+
+}  // namespace darkroom

@@ -1,0 +1,94 @@
+// A wide Gaussian on a coarser grid, for the fast tiers' smooth fields (halation's halo, the
+// DIR couplers' inhibitor): block means of the image (blocks of d x d pixels aligned to the
+// frame's origin, so every window and band agrees), extended past the frame by its edge
+// pixels (as the exact filter reads it), the Gaussian with its variance reduced by the
+// blocks' and the interpolation's (d^2/12 + d^2/6), then bilinear interpolation back to the
+// pixels.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "core/image.h"
+#include "core/stages/filters.h"
+
+namespace darkroom {
+
+// A Gaussian of sigma_px pixels, on a grid `decimation` times coarser where that exceeds 1.
+struct CoarseGaussian {
+    int decimation = 1;
+    std::vector<float> taps;  // pixel-integrated, unit sum, on the coarse grid
+    int radius_px = 0;        // what a pixel's result reads around it
+};
+CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation);
+
+// Planes' rows streamed down the rows of `out` for one thread, the blurred planes' Gaussians
+// (one decimation for all) on the coarse grid. The planes' rows come from
+// source(y, x_begin, x_end, rows), which writes each plane's row y (within the frame) at x in
+// [x_begin, x_end) (the columns the block means read, which lie within the frame, and out's);
+// they are read once each, in order, as far ahead as the Gaussian reaches (kept in a ring),
+// and the coarse grid's block means, blurred rows (a SeparableStream) and their
+// interpolation along x are built as they arrive. A plane without taps only passes through
+// the ring.
+class CoarseGaussianStream {
+public:
+    using Source = std::function<void(int y, int x_begin, int x_end, float* const* rows)>;
+    // A linear map of the blurred planes, applied to a row of their block means (in place) before
+    // the blur: the same, up to rounding, as applied to the result, on fewer values.
+    using MeansMap = std::function<void(float* const* means, int width)>;
+    // coarse_taps[p]: plane p's Gaussian on the coarse grid, null where it passes through.
+    CoarseGaussianStream(const std::vector<const std::vector<float>*>& coarse_taps, int decimation, const Window& out,
+                         const Window& frame, Source source, MeansMap map = {});
+    CoarseGaussianStream(const CoarseGaussianStream&) = delete;  // (its coarse streams hold `this`)
+    CoarseGaussianStream& operator=(const CoarseGaussianStream&) = delete;
+
+    // Row y of out (y increasing): each plane's row as read, on out's columns (in the ring: the
+    // caller's to change until the next call), and each blurred plane's Gaussian there as
+    // above[x] + t (below[x] - above[x]), its coarse rows either side interpolated along x.
+    struct Row {
+        std::vector<float*> read;
+        std::vector<const float*> above, below;  // null for the planes that pass through
+        float t = 0;
+    };
+    const Row& row(int y);
+
+private:
+    struct PlaneRows {
+        std::vector<float> column_sums;  // none: the plane passes through
+        std::vector<float> across[2];    // coarse rows j (by j's parity) interpolated to out's columns
+    };
+    float* ring_row(size_t plane, int y);
+    void read_to(int y);
+    void block_means(int by, float* const* means);
+    void interpolate(int j);
+    void interpolate_runs(const float* coarse, size_t first, size_t last, float* row) const;
+
+    Window out_, frame_;
+    Source source_;
+    MeansMap map_;
+    std::vector<PlaneRows> planes_;
+    std::vector<size_t> blurred_;  // the planes with a Gaussian
+    int d_ = 0;
+    Window means_window_, blurred_window_;
+    int inside0_ = 0, inside1_ = 0;  // the frame's columns the block means read
+    // Interpolation along x: out's column i (from out.x0) lies tx_[i] of the way from a coarse
+    // column to the next; the runs of columns between the same two (d columns each, within).
+    struct ColumnRun {
+        int begin, end;  // out's columns [begin, end), from out.x0
+        int block;       // the first coarse column, from blurred_window_.x0
+    };
+    std::vector<float> tx_;
+    std::vector<ColumnRun> column_runs_;
+    std::unique_ptr<SeparableStream> blur_;
+    int across_row_[2] = {INT32_MIN, INT32_MIN};
+    int read_x0_ = 0, read_x1_ = 0, slots_ = 0;
+    std::vector<std::vector<float, UnsetAllocator<float>>> ring_;  // per plane, the fine rows read (unset till then)
+    std::vector<float*> ring_rows_;
+    int next_ = 0;  // the next fine row to read
+    bool started_ = false;
+    Row row_;
+};
+
+}  // namespace darkroom
