@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <mutex>
 #include <random>
 #include <set>
@@ -486,48 +487,63 @@ TEST_CASE("the preview tier is the fast tier on a half-resolution proxy, upsampl
     // at twice the pixel pitch, and interpolated bilinearly at the frame's pixel centres. So
     // grain, MTF and halation are fast's at the proxy's pitch: their size on the film is kept
     // (the print-grain tests above hold fast's grain at the pitch it is given).
+    // The input as RGB and as RGBA, with values the film sees as others in some blocks (NaN
+    // and -Inf as no light, +Inf and 1e38 held at 1e30), inside and at the frame's edges.
     const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     constexpr int kWidth = 97, kHeight = 63, kProxyWidth = 49, kProxyHeight = 32;
-    const Image scene = demo_scene(kWidth, kHeight);
+    const Image rgb = demo_scene(kWidth, kHeight);
+    const float inf = std::numeric_limits<float>::infinity();
+    const std::pair<int, int> bad_at[] = {{10, 10}, {41, 20}, {96, 30}, {50, 62}, {96, 62}};
+    const float bad[] = {std::numeric_limits<float>::quiet_NaN(), -inf, inf, 1e38f, -1e38f};
+    const auto film_sees = [inf](float v) { return v != v || v == -inf ? 0.0f : std::clamp(v, -1e30f, 1e30f); };
     DevelopSettings s;
     s.quality = Quality::preview;
     s.seed = 7;
     s.frame = 1;
     s.frame_width_mm = kWidth * 0.006;  // a 4K frame's pitch: grain, MTF and halation all act
     s.print_width_mm = kWidth * 0.0054;
-    const Image preview = test::render(film, &paper, s, scene, 2);
+    for (int channels : {3, 4}) {
+        INFO(channels << " channels");
+        Image scene(kWidth, kHeight, channels, 0.5f);
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x)
+                for (int c = 0; c < 3; ++c) scene.at(x, y)[c] = rgb.at(x, y)[c];
+        for (size_t i = 0; i < std::size(bad_at); ++i) scene.at(bad_at[i].first, bad_at[i].second)[i % 3] = bad[i];
+        const Image preview = test::render(film, &paper, s, scene, 2);
 
-    Image small(kProxyWidth, kProxyHeight, 3);
-    for (int Y = 0; Y < kProxyHeight; ++Y)
-        for (int X = 0; X < kProxyWidth; ++X)
-            for (int c = 0; c < 3; ++c) {
-                float sum = 0;
-                int count = 0;
-                for (int y = 2 * Y; y < std::min(2 * Y + 2, kHeight); ++y)
-                    for (int x = 2 * X; x < std::min(2 * X + 2, kWidth); ++x, ++count) sum += scene.at(x, y)[c];
-                small.at(X, Y)[c] = sum / float(count);
-            }
-    DevelopSettings fast = s;
-    fast.quality = Quality::fast;
-    const double widen = double(kProxyWidth) * 2 / kWidth;  // (the proxy's pitch exactly twice the frame's)
-    fast.frame_width_mm = s.frame_width_mm * widen;
-    fast.print_width_mm = s.print_width_mm * widen;
-    const Image proxy = test::render(film, &paper, fast, small, 2);
+        Image small(kProxyWidth, kProxyHeight, 3);
+        for (int Y = 0; Y < kProxyHeight; ++Y)
+            for (int X = 0; X < kProxyWidth; ++X)
+                for (int c = 0; c < 3; ++c) {
+                    float sum = 0;
+                    int count = 0;
+                    for (int y = 2 * Y; y < std::min(2 * Y + 2, kHeight); ++y)
+                        for (int x = 2 * X; x < std::min(2 * X + 2, kWidth); ++x, ++count)
+                            sum += film_sees(scene.at(x, y)[c]);
+                    small.at(X, Y)[c] = sum / float(count);
+                }
+        DevelopSettings fast = s;
+        fast.quality = Quality::fast;
+        const double widen = double(kProxyWidth) * 2 / kWidth;  // (the proxy's pitch exactly twice the frame's)
+        fast.frame_width_mm = s.frame_width_mm * widen;
+        fast.print_width_mm = s.print_width_mm * widen;
+        const Image proxy = test::render(film, &paper, fast, small, 2);
 
-    auto taps = [](int x, int n) {  // the nearer and the farther proxy pixel of frame pixel x
-        const int near = x / 2, far = x % 2 == 0 ? near - 1 : near + 1;
-        return std::pair{std::clamp(near, 0, n - 1), std::clamp(far, 0, n - 1)};
-    };
-    for (int y = 0; y < kHeight; ++y)
-        for (int x = 0; x < kWidth; ++x) {
-            const auto [xn, xf] = taps(x, kProxyWidth);
-            const auto [yn, yf] = taps(y, kProxyHeight);
-            for (int c = 0; c < 3; ++c) {
-                const float near_row = 0.75f * proxy.at(xn, yn)[c] + 0.25f * proxy.at(xf, yn)[c];
-                const float far_row = 0.75f * proxy.at(xn, yf)[c] + 0.25f * proxy.at(xf, yf)[c];
-                REQUIRE(preview.at(x, y)[c] == 0.75f * near_row + 0.25f * far_row);
+        auto taps = [](int x, int n) {  // the nearer and the farther proxy pixel of frame pixel x
+            const int near = x / 2, far = x % 2 == 0 ? near - 1 : near + 1;
+            return std::pair{std::clamp(near, 0, n - 1), std::clamp(far, 0, n - 1)};
+        };
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x) {
+                const auto [xn, xf] = taps(x, kProxyWidth);
+                const auto [yn, yf] = taps(y, kProxyHeight);
+                for (int c = 0; c < 3; ++c) {
+                    const float near_row = 0.75f * proxy.at(xn, yn)[c] + 0.25f * proxy.at(xf, yn)[c];
+                    const float far_row = 0.75f * proxy.at(xn, yf)[c] + 0.25f * proxy.at(xf, yf)[c];
+                    REQUIRE(preview.at(x, y)[c] == 0.75f * near_row + 0.25f * far_row);
+                }
             }
-        }
+    }
 }
 
 TEST_CASE("the preview tier's pixels are the same for any thread count and window", "[quality][preview][determinism]") {
