@@ -161,11 +161,11 @@ __attribute__((always_inline)) inline void block_mean_lanes(const float* top, co
 int floor_half(int v) { return v >> 1; }
 int ceil_half(int v) { return -(-v >> 1); }
 
-// The mean colours of proxy pixel (X, Y)'s block, from what of it `image` holds.
-void edge_block_mean(const ConstImageView& in, const Window& image, int X, int Y, simd::Float1* c) {
+// The first `colours` mean colours of proxy pixel (X, Y)'s block (as channels_at reads a
+// pixel's), from what of it `image` holds.
+void edge_block_mean(const ConstImageView& in, const Window& image, int X, int Y, int colours, simd::Float1* c) {
     const Window block = Window{2 * X, 2 * Y, 2 * X + 2, 2 * Y + 2}.intersected(image);
     const bool grey_image = colour_channel_count(in) == 1;
-    const int colours = grey_image ? 1 : 3;
     for (int y = block.y0; y < block.y1; ++y)
         for (int x = block.x0; x < block.x1; ++x) {
             simd::Float1 p[3]{};
@@ -365,7 +365,7 @@ void block_mean_row(const ConstImageView& in, const Window& image, int Y, int X0
         if (X >= first && X < last)
             block_mean_lanes(in.at(2 * X, 2 * Y), in.at(2 * X, 2 * Y + 1), int(in.pixel_stride), n == 1, n, c);
         else
-            edge_block_mean(in, image, X, Y, c);
+            edge_block_mean(in, image, X, Y, n, c);
         for (int i = 0; i < n; ++i) colours[size_t(X - X0) * n + i] = c[i][0];
     }
 }
@@ -392,7 +392,7 @@ void FilmExposure::row(int y, int x0, int width, float* const* exposure) const {
     whole_blocks(*blocks_of_, y, x0, width, first, last);
     auto edge = [&](int X) {
         simd::Float1 c[3]{};
-        edge_block_mean(in_, *blocks_of_, X, y, c);
+        edge_block_mean(in_, *blocks_of_, X, y, colours_, c);
         layer_exposures(c, colours_, weights_.data(), grey_scale_.data(), layers_, scale_, X - x0, exposure);
     };
     for (int X = x0; X < first; ++X) edge(X);

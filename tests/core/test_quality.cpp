@@ -520,8 +520,9 @@ TEST_CASE("the preview tier is the fast tier on a half-resolution proxy, upsampl
     // at twice the pixel pitch, and interpolated bilinearly at the frame's pixel centres. So
     // grain, MTF and halation are fast's at the proxy's pitch: their size on the film is kept
     // (the print-grain tests above hold fast's grain at the pitch it is given).
-    // The input as RGB and as RGBA, with values the film sees as others in some blocks (NaN
-    // and -Inf as no light, +Inf and 1e38 held at 1e30), inside and at the frame's edges.
+    // The input as grey, grey and alpha, RGB and RGBA, with values the film sees as others in
+    // some blocks (NaN and -Inf as no light, +Inf and 1e38 held at 1e30), inside and at the
+    // frame's edges.
     const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     constexpr int kWidth = 97, kHeight = 63, kProxyWidth = 49, kProxyHeight = 32;
     const Image rgb = demo_scene(kWidth, kHeight);
@@ -535,19 +536,21 @@ TEST_CASE("the preview tier is the fast tier on a half-resolution proxy, upsampl
     s.frame = 1;
     s.frame_width_mm = kWidth * 0.006;  // a 4K frame's pitch: grain, MTF and halation all act
     s.print_width_mm = kWidth * 0.0054;
-    for (int channels : {3, 4}) {
+    for (int channels : {1, 2, 3, 4}) {
         INFO(channels << " channels");
+        const int colours = channels >= 3 ? 3 : 1;  // (grey: the green channel)
         Image scene(kWidth, kHeight, channels, 0.5f);
         for (int y = 0; y < kHeight; ++y)
             for (int x = 0; x < kWidth; ++x)
-                for (int c = 0; c < 3; ++c) scene.at(x, y)[c] = rgb.at(x, y)[c];
-        for (size_t i = 0; i < std::size(bad_at); ++i) scene.at(bad_at[i].first, bad_at[i].second)[i % 3] = bad[i];
+                for (int c = 0; c < colours; ++c) scene.at(x, y)[c] = rgb.at(x, y)[colours == 3 ? c : 1];
+        for (size_t i = 0; i < std::size(bad_at); ++i)
+            scene.at(bad_at[i].first, bad_at[i].second)[int(i) % colours] = bad[i];
         const Image preview = test::render(film, &paper, s, scene, 2);
 
-        Image small(kProxyWidth, kProxyHeight, 3);
+        Image small(kProxyWidth, kProxyHeight, colours);
         for (int Y = 0; Y < kProxyHeight; ++Y)
             for (int X = 0; X < kProxyWidth; ++X)
-                for (int c = 0; c < 3; ++c) {
+                for (int c = 0; c < colours; ++c) {
                     float sum = 0;
                     int count = 0;
                     for (int y = 2 * Y; y < std::min(2 * Y + 2, kHeight); ++y)
@@ -577,6 +580,21 @@ TEST_CASE("the preview tier is the fast tier on a half-resolution proxy, upsampl
                 }
             }
     }
+}
+
+TEST_CASE("the preview tier develops grey input as the same grey in RGB", "[quality][preview]") {
+    // A plan for colour input given a grey image reads its one channel as all three, in the
+    // proxy's whole blocks and in the partial ones at an odd frame's edges alike.
+    const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    const Image rgb = demo_scene(97, 63);
+    Image grey(rgb.window, 1), grey_rgb(rgb.window, 3);
+    for (size_t i = 0; i < grey.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) grey_rgb.pixels[3 * i + c] = grey.pixels[i] = rgb.pixels[3 * i + 1];
+    DevelopSettings s;
+    s.quality = Quality::preview;
+    s.frame_width_mm = 97 * 0.006;
+    s.print_width_mm = 97 * 0.0054;
+    CHECK(test::render(film, &paper, s, grey, 2).pixels == test::render(film, &paper, s, grey_rgb, 2).pixels);
 }
 
 TEST_CASE("the preview tier's pixels are the same for any thread count and window", "[quality][preview][determinism]") {
