@@ -453,29 +453,36 @@ std::shared_ptr<const PaperLogExposures> paper_log_exposures(const PrintExposure
     std::string key = unit.fingerprint();
     append_bytes(key, lo.data(), 3), append_bytes(key, hi.data(), 3), append_bytes(key, &nodes, 1);
     return recently_built<PaperLogExposures>(key, [&] {
-        // Each axis node's factor of the negative's transmittance, computed once.
+        // Each axis node's factor of the negative's transmittance, computed once; the x axis's
+        // transposed, for the rows of nodes along x in vectors (PrintExposure::expose_row).
         std::array<std::vector<Spectrum>, 3> transmittance;
         for (int a = 0; a < 3 && unit.spectral(); ++a)
             for (int i = 0; i < nodes; ++i)
                 transmittance[a].push_back(unit.layer_transmittance(a, Table3D::node_coordinate(lo[a], hi[a], nodes, i)));
+        std::vector<double> along_x(size_t(kSpectralSamples) * size_t(nodes));
+        for (int i = 0; i < nodes && unit.spectral(); ++i)
+            for (int s = 0; s < kSpectralSamples; ++s) along_x[size_t(s) * nodes + i] = transmittance[0][size_t(i)][size_t(s)];
         auto grid = std::make_shared<PaperLogExposures>();
         grid->log_h.resize(size_t(nodes) * nodes * nodes);
         parallel_for(0, nodes, threads, [&](int k_begin, int k_end) {
+            std::vector<double> h(3 * size_t(nodes));  // a row's exposures, paper layer after layer
             for (int k = k_begin; k < k_end; ++k)
-                for (int j = 0; j < nodes; ++j)
+                for (int j = 0; j < nodes; ++j) {
+                    if (unit.spectral())
+                        unit.expose_row(along_x.data(), nodes, transmittance[1][size_t(j)], transmittance[2][size_t(k)],
+                                        h.data());
                     for (int i = 0; i < nodes; ++i) {
-                        double h[3];
-                        if (unit.spectral()) {
-                            unit.expose({&transmittance[0][i], &transmittance[1][j], &transmittance[2][k]}, h);
-                        } else {
+                        double at[3] = {h[size_t(i)], h[size_t(nodes + i)], h[size_t(2 * nodes + i)]};
+                        if (!unit.spectral()) {
                             const double d[3] = {Table3D::node_coordinate(lo[0], hi[0], nodes, i),
                                                  Table3D::node_coordinate(lo[1], hi[1], nodes, j),
                                                  Table3D::node_coordinate(lo[2], hi[2], nodes, k)};
-                            unit.expose(d, h);
+                            unit.expose(d, at);
                         }
                         auto& out = grid->log_h[(size_t(k) * nodes + j) * nodes + i];
-                        for (int l = 0; l < 3; ++l) out[l] = std::log10(h[l]);  // (-inf for no light)
+                        for (int l = 0; l < 3; ++l) out[l] = std::log10(at[l]);  // (-inf for no light)
                     }
+                }
         });
         return std::shared_ptr<const PaperLogExposures>(std::move(grid));
     });

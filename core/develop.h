@@ -229,9 +229,11 @@ private:
                              StageTimes* times) const;
     std::vector<Plane> texture(const ConstImageView& in, const Window& out, int threads, StageTimes* times) const;
     // Every stage a row at a time (develop_one_pass.cpp): whether this plan can, and the run.
+    // With `blocks_of`, this is the preview's proxy and `in` the frame's pixels, read in 2x2
+    // blocks (develop_rows.h, block_mean_row), `blocks_of` its image window.
     bool runs_in_one_pass() const;
     void run_one_pass(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
-                      StageTimes* times) const;
+                      StageTimes* times, const Window* blocks_of = nullptr) const;
     // The preview tier (develop_proxy.cpp): the proxy's pixels an output window interpolates,
     // and the run: the input averaged down to the proxy, its plan, and the result upsampled.
     Window proxy_window(const Window& output) const;

@@ -185,7 +185,7 @@ bool Plan::runs_in_one_pass() const {
 }
 
 void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
-                        StageTimes* times) const {
+                        StageTimes* times, const Window* blocks_of) const {
     const MaterialStages& film = *film_stages_;
     const size_t layers = film.stock.layers.size();
     const int paper_halo = print_ ? paper_stages_->halo_px() : 0;
@@ -197,7 +197,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
     const Window scattered = film_window.grown(coupler_radius).intersected(frame_);
     // The exposure the film's scatter reads: its rows past the frame's edges are its edge pixels'.
     const int padded_x0 = scattered.x0 - film_radius, padded_x1 = scattered.x1 + film_radius;
-    const FilmExposure exposure(in, film.rgb_weights, monochrome_input_, film_exposure_scale_);
+    const FilmExposure exposure(in, film.rgb_weights, monochrome_input_, film_exposure_scale_, blocks_of);
     std::vector<const HalationKernel*> halation_kernels;  // per layer, null where it has none
     for (const auto& h : film.halation) halation_kernels.push_back(h ? &*h : nullptr);
     const bool halated = std::any_of(film.halation.begin(), film.halation.end(), [](const auto& h) { return bool(h); });

@@ -5,13 +5,19 @@
 // the same proxy pixels and gives the same output pixels as the whole frame.
 #include <algorithm>
 #include <chrono>
-#include <limits>
+#include <climits>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "core/develop.h"
 #include "core/develop_rows.h"
 #include "core/parallel.h"
+#include "core/simd.h"
+
+// GCC warns that a vector value would be passed differently without AVX; the vector
+// helpers here are inlined, so no vector crosses a call.
+#pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace darkroom {
 
@@ -25,12 +31,10 @@ int ceil_div(int v) { return -floor_div(-v); }
 // The proxy pixels that hold the frame's pixels of `w`.
 Window proxy_cover(const Window& w) { return {floor_div(w.x0), floor_div(w.y0), ceil_div(w.x1), ceil_div(w.y1)}; }
 
-// The frame's pixels a proxy window covers.
-Window frame_cover(const Window& w) { return {w.x0 * kScale, w.y0 * kScale, w.x1 * kScale, w.y1 * kScale}; }
-
 // Bilinear interpolation of the proxy at a frame pixel's centre: frame pixel 2X + 0.5 lies
 // at proxy coordinate X - 0.25, so an even pixel takes 3/4 of proxy pixel X and 1/4 of X - 1,
 // an odd one 3/4 of X and 1/4 of X + 1; at the proxy frame's edges the edge pixel repeats.
+// Along x, then y.
 struct Taps {
     int near, far;
 };
@@ -40,12 +44,50 @@ Taps taps(int x, int lo, int hi) {
     return {std::clamp(X, lo, hi - 1), std::clamp(other, lo, hi - 1)};
 }
 
-// An input value as the film sees it (develop_rows.h, sanitize): NaN and -Inf no light, the
-// rest held within +-kMaxInput.
-inline float film_value(float v) {
-    constexpr float max = float(kMaxInput);
-    return v > -std::numeric_limits<float>::infinity() ? std::clamp(v, -max, max) : 0.0f;
-}
+// One row of the proxy along x: proxy pixels X ... X + n - 1 of `row` (one channel, pixels X - 1
+// and X + n there too) into frame pixels 2X ... 2X + 2n - 1 of `wide`.
+struct AlongX {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* row, float* wide, int n) {
+        using V = typename simd::Lanes<lanes>::F;
+        int i = 0;
+        for (; i + lanes <= n; i += lanes) {
+            V left, centre, right;
+            simd::load(left, row + i - 1), simd::load(centre, row + i), simd::load(right, row + i + 1);
+            const V even = 0.75f * centre + 0.25f * left, odd = 0.75f * centre + 0.25f * right;
+            V first, second;
+            zip(even, odd, first, second, std::make_index_sequence<lanes>());
+            simd::store(wide + 2 * i, first), simd::store(wide + 2 * i + lanes, second);
+        }
+        for (; i < n; ++i) {
+            wide[2 * i] = 0.75f * row[i] + 0.25f * row[i - 1];
+            wide[2 * i + 1] = 0.75f * row[i] + 0.25f * row[i + 1];
+        }
+    }
+    // The lanes of a and b alternately: the first half's into `first`, the second's into `second`.
+    template <typename V, size_t... J>
+    __attribute__((always_inline)) static void zip(const V& a, const V& b, V& first, V& second,
+                                                   std::index_sequence<J...>) {
+        constexpr int lanes = sizeof...(J);
+        first = __builtin_shufflevector(a, b, int(J / 2 + J % 2 * lanes)...);
+        second = __builtin_shufflevector(a, b, int((J + lanes) / 2 + J % 2 * lanes)...);
+    }
+};
+
+// Along y: 3/4 of the nearer row and 1/4 of the farther, `n` values.
+struct AlongY {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* near, const float* far, float* out, int n) {
+        using V = typename simd::Lanes<lanes>::F;
+        int i = 0;
+        for (; i + lanes <= n; i += lanes) {
+            V a, b;
+            simd::load(a, near + i), simd::load(b, far + i);
+            simd::store(out + i, 0.75f * a + 0.25f * b);
+        }
+        for (; i < n; ++i) out[i] = 0.75f * near[i] + 0.25f * far[i];
+    }
+};
 
 // An interleaved image whose pixels come recycled and unset, as a Plane's (image.h): a 4K
 // frame's proxy is 26 MB, which fresh pages would fault in zeroed at every run.
@@ -80,82 +122,66 @@ Window Plan::proxy_window(const Window& output) const {
 
 void Plan::run_proxy(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
                      StageTimes* times) const {
+    // Down: the proxy's exposure reads the frame's pixels in 2x2 blocks as it goes; a run
+    // stage after stage reads them from an image of the proxy's pixels instead, the same values.
     const Window proxy_out = proxy_window(out_window);
-    const Window proxy_in = proxy_->input_window(proxy_out);
-    // Down: each proxy pixel the mean of the frame pixels of its block that the image holds,
-    // as the film sees them (NaN as no light), so an image's edge block is its own pixels'.
-    auto start = std::chrono::steady_clock::now();
-    const int colours = colour_channel_count(in);
-    UnsetImage small(proxy_in, colours);
-    parallel_for(proxy_in.y0, proxy_in.y1, threads, [&](int y0, int y1) {
-        for (int Y = y0; Y < y1; ++Y) {
-            const Window rows = frame_cover({proxy_in.x0, Y, proxy_in.x1, Y + 1}).intersected(frame_);
-            const float* first = in.at(rows.x0, rows.y0);
-            const float* second = rows.height() == 2 ? in.at(rows.x0, rows.y0 + 1) : nullptr;
-            float* px = small.view.at(proxy_in.x0, Y);
-            for (int X = proxy_in.x0; X < proxy_in.x1; ++X, px += colours) {
-                const int x0 = std::max(X * kScale, frame_.x0), x1 = std::min(X * kScale + kScale, frame_.x1);
-                const std::ptrdiff_t at = (x0 - rows.x0) * in.pixel_stride;
-                const std::ptrdiff_t next = x1 - x0 == 2 ? in.pixel_stride : -1;  // (-1: no second column)
-                // 1, 2 or 4 pixels: the reciprocal is exact, so this is the sum over the count.
-                const float share = 1.0f / float((x1 - x0) * rows.height());
-                for (int c = 0; c < colours; ++c) {
-                    float sum = film_value(first[at + c]);
-                    if (next > 0) sum += film_value(first[at + next + c]);
-                    if (second) {
-                        sum += film_value(second[at + c]);
-                        if (next > 0) sum += film_value(second[at + next + c]);
-                    }
-                    px[c] = sum * share;
-                }
-            }
-        }
-    });
-    add_time(times, "downsample", start);
-
     UnsetImage result(proxy_out, 3);  // (the proxy's run writes every pixel of it)
-    proxy_->run(small.view, result.view, threads, times);
+    if (proxy_->runs_in_one_pass()) {
+        proxy_->run_one_pass(in, result.view, proxy_out, threads, times, &frame_);
+    } else {
+        const auto start = std::chrono::steady_clock::now();
+        const Window proxy_in = proxy_->input_window(proxy_out);
+        UnsetImage small(proxy_in, colour_channel_count(in));
+        parallel_for(proxy_in.y0, proxy_in.y1, threads, [&](int y0, int y1) {
+            for (int Y = y0; Y < y1; ++Y)
+                block_mean_row(in, frame_, Y, proxy_in.x0, proxy_in.width(), small.view.at(proxy_in.x0, Y));
+        });
+        add_time(times, "downsample", start);
+        proxy_->run(small.view, result.view, threads, times);
+    }
 
-    // Up: bilinear, along x then y (each proxy row along x once); the input's alpha (the channel after its colour) copied
-    // at the frame's pixels, as the other tiers do.
-    start = std::chrono::steady_clock::now();
+    // Up: each proxy row a band reads along x once, into the frame's columns from the even one
+    // at or before out_window's first, each channel a row (and a pixel past each end, the edge
+    // repeated, for the taps at the proxy frame's edges); each output row then along y and
+    // written as the other tiers write, the input's alpha copied.
+    const auto start = std::chrono::steady_clock::now();
     const Window& pf = proxy_->frame_;
-    const bool copy_alpha = colours < in.channels && out.channels >= 4;
-    std::vector<Taps> columns;
-    for (int x = out_window.x0; x < out_window.x1; ++x) columns.push_back(taps(x, pf.x0, pf.x1));
-    const int width = out_window.width();
+    const int X0 = floor_div(out_window.x0), X1 = ceil_div(out_window.x1), n = X1 - X0;
+    const int skip = out_window.x0 - kScale * X0;  // (0 or 1 column)
     parallel_for(out_window.y0, out_window.y1, threads, [&](int band_y0, int band_y1) {
-        // In bands of rows, each proxy row a band reads upsampled along x once (a row serves
-        // up to four).
-        constexpr int kRows = 32;
-        std::vector<float> along_x(size_t(kRows / 2 + 3) * size_t(width) * 3);
-        for (int y0 = band_y0; y0 < band_y1; y0 += kRows) {
-            const int y1 = std::min(band_y1, y0 + kRows);
-            const Taps top = taps(y0, pf.y0, pf.y1), bottom = taps(y1 - 1, pf.y0, pf.y1);
-            const int first = std::min(top.near, top.far), last = std::max(bottom.near, bottom.far);
-            for (int Y = first; Y <= last; ++Y) {
-                const float* row = result.view.at(proxy_out.x0, Y);
-                float* wide = &along_x[size_t(Y - first) * size_t(width) * 3];
-                for (int i = 0; i < width; ++i) {
-                    const int n = (columns[size_t(i)].near - proxy_out.x0) * 3;
-                    const int f = (columns[size_t(i)].far - proxy_out.x0) * 3;
-                    for (int c = 0; c < 3; ++c) wide[3 * i + c] = 0.75f * row[n + c] + 0.25f * row[f + c];
+        // The proxy rows along x, in a ring of four slots by row (an output row reads its
+        // nearer row and the one above or below).
+        constexpr int kSlots = 4;
+        const size_t wide_size = size_t(kScale) * size_t(n);
+        std::vector<float> padded(size_t(n) + 2), wide(kSlots * 3 * wide_size), rows(3 * wide_size);
+        int held[kSlots] = {INT_MIN, INT_MIN, INT_MIN, INT_MIN};
+        auto along_x = [&](int Y) {
+            const int slot = ((Y % kSlots) + kSlots) % kSlots;
+            float* into = &wide[size_t(slot) * 3 * wide_size];
+            if (held[slot] != Y) {
+                held[slot] = Y;
+                // (The columns past the proxy's are at the proxy frame's edges: the edge repeats.)
+                const int first = std::max(X0 - 1, proxy_out.x0), last = std::min(X1, proxy_out.x1 - 1);
+                for (int c = 0; c < 3; ++c) {
+                    const float* row = result.view.at(proxy_out.x0, Y) + c;
+                    auto at = [&](int X) { return row[3 * (X - proxy_out.x0)]; };
+                    auto column = [&](int X) -> float& { return padded[size_t(X - X0 + 1)]; };
+                    for (int X = first; X <= last; ++X) column(X) = at(X);
+                    for (int X = X0 - 1; X < first; ++X) column(X) = at(first);
+                    for (int X = last + 1; X <= X1; ++X) column(X) = at(last);
+                    simd::dispatch<AlongX>(static_cast<const float*>(&padded[1]), into + c * wide_size, n);
                 }
             }
-            for (int y = y0; y < y1; ++y) {
-                const Taps ty = taps(y, pf.y0, pf.y1);
-                const float* near = &along_x[size_t(ty.near - first) * size_t(width) * 3];
-                const float* far = &along_x[size_t(ty.far - first) * size_t(width) * 3];
-                float* px = out.at(out_window.x0, y);
-                if (out.pixel_stride == 3) {
-                    for (int i = 0; i < 3 * width; ++i) px[i] = 0.75f * near[i] + 0.25f * far[i];
-                    continue;
-                }
-                for (int i = 0; i < width; ++i, px += out.pixel_stride) {
-                    for (int c = 0; c < 3; ++c) px[c] = 0.75f * near[3 * i + c] + 0.25f * far[3 * i + c];
-                    if (copy_alpha) px[3] = in.at(out_window.x0 + i, y)[colours];
-                }
-            }
+            return into;
+        };
+        for (int y = band_y0; y < band_y1; ++y) {
+            const Taps ty = taps(y, pf.y0, pf.y1);
+            const float* near = along_x(ty.near);
+            const float* far = along_x(ty.far);
+            simd::dispatch<AlongY>(near, far, rows.data(), int(3 * wide_size));
+            const float* planes[3] = {&rows[size_t(skip)], &rows[wide_size + size_t(skip)],
+                                      &rows[2 * wide_size + size_t(skip)]};
+            write_row(planes, 3, in, out, y, out_window.x0, out_window.width());
         }
     });
     add_time(times, "upsample", start);

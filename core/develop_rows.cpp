@@ -101,15 +101,13 @@ __attribute__((always_inline)) inline void channels_at(const float* px, int stri
         for (int k = 0; k < lanes; ++k) c[i][k] = px[size_t(k) * stride + (grey_image ? 0 : i)];
 }
 
-// Each layer's exposure at the lanes' pixels: the colours sanitised, then
+// Each layer's exposure from the lanes' colours c: sanitised, then
 // clamp((w . rgb) * scale, 0, kMaxInput), or for grey input (colours 1) clamp(grey * grey_scale).
 template <typename V>
-__attribute__((always_inline)) inline void exposure_lanes(const float* px, int stride, bool grey_image, int colours,
-                                                          const float* weights, const float* grey_scale, int layers,
-                                                          float scale, int x, float* const* exposure) {
+__attribute__((always_inline)) inline void layer_exposures(V* c, int colours, const float* weights,
+                                                           const float* grey_scale, int layers, float scale, int x,
+                                                           float* const* exposure) {
     constexpr float max = float(kMaxInput);
-    V c[3]{};  // (only the first `colours` are read; zeroed so the compiler need not prove it)
-    channels_at(px + size_t(x) * stride, stride, grey_image, colours, c);
     for (int i = 0; i < colours; ++i) sanitize_lanes(c[i]);
     for (int l = 0; l < layers; ++l) {
         const float* w = weights + 3 * l;
@@ -119,6 +117,107 @@ __attribute__((always_inline)) inline void exposure_lanes(const float* px, int s
         simd::store(exposure[l] + x, e);
     }
 }
+
+// Each layer's exposure at the lanes' pixels.
+template <typename V>
+__attribute__((always_inline)) inline void exposure_lanes(const float* px, int stride, bool grey_image, int colours,
+                                                          const float* weights, const float* grey_scale, int layers,
+                                                          float scale, int x, float* const* exposure) {
+    V c[3]{};  // (only the first `colours` are read; zeroed so the compiler need not prove it)
+    channels_at(px + size_t(x) * stride, stride, grey_image, colours, c);
+    layer_exposures(c, colours, weights, grey_scale, layers, scale, x, exposure);
+}
+
+// The even (first = 0) or odd (1) lanes of a followed by those of b.
+template <int first, typename V, size_t... J>
+__attribute__((always_inline)) inline V every_other(const V& a, const V& b, std::index_sequence<J...>) {
+    return __builtin_shufflevector(a, b, int(2 * J + first)...);
+}
+
+// The mean colours of the lanes' whole 2x2 blocks (block_mean_row), their first pixels at
+// top and bottom (a row apart), from 2 lanes of pixels of each row: their left pixels the
+// even lanes, their right the odd.
+template <typename V>
+__attribute__((always_inline)) inline void block_mean_lanes(const float* top, const float* bottom, int stride,
+                                                            bool grey_image, int colours, V* c) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    const auto j = std::make_index_sequence<lanes>();
+    V row[2][2][3]{};  // top and bottom, their first and second lanes of pixels
+    for (int r = 0; r < 2; ++r)
+        for (int half = 0; half < 2; ++half)
+            channels_at((r ? bottom : top) + size_t(half * lanes) * stride, stride, grey_image, colours, row[r][half]);
+    for (int i = 0; i < colours; ++i) {
+        V v[4];  // top left, top right, bottom left, bottom right
+        for (int r = 0; r < 2; ++r) {
+            for (int half = 0; half < 2; ++half) sanitize_lanes(row[r][half][i]);
+            v[2 * r] = every_other<0>(row[r][0][i], row[r][1][i], j);
+            v[2 * r + 1] = every_other<1>(row[r][0][i], row[r][1][i], j);
+        }
+        c[i] = (((v[0] + v[1]) + v[2]) + v[3]) * 0.25f;
+    }
+}
+
+// Floor and ceiling of v / 2 for any sign.
+int floor_half(int v) { return v >> 1; }
+int ceil_half(int v) { return -(-v >> 1); }
+
+// The first `colours` mean colours of proxy pixel (X, Y)'s block (as channels_at reads a
+// pixel's), from what of it `image` holds.
+void edge_block_mean(const ConstImageView& in, const Window& image, int X, int Y, int colours, simd::Float1* c) {
+    const Window block = Window{2 * X, 2 * Y, 2 * X + 2, 2 * Y + 2}.intersected(image);
+    const bool grey_image = colour_channel_count(in) == 1;
+    for (int y = block.y0; y < block.y1; ++y)
+        for (int x = block.x0; x < block.x1; ++x) {
+            simd::Float1 p[3]{};
+            channels_at(in.at(x, y), int(in.pixel_stride), grey_image, colours, p);
+            for (int i = 0; i < colours; ++i) {
+                sanitize_lanes(p[i]);
+                c[i] = x == block.x0 && y == block.y0 ? p[i] : c[i] + p[i];
+            }
+        }
+    // 1, 2 or 4 pixels: the reciprocal is exact, so this is the sum over the count.
+    const float share = 1.0f / float(block.pixel_count());
+    for (int i = 0; i < colours; ++i) c[i] *= share;
+}
+
+// The proxy pixels from X on of a row of whole blocks (top and bottom: the frame's pixels of
+// proxy pixel X's block), each layer's exposure into exposure[layer] from x on.
+template <int lanes>
+__attribute__((always_inline)) inline void block_exposure_row(const float* top, const float* bottom, int stride,
+                                                              bool grey_image, int colours, const float* weights,
+                                                              const float* grey_scale, int layers, float scale, int x,
+                                                              int width, float* const* exposure) {
+    for (; x + lanes <= width; x += lanes) {
+        const size_t at = size_t(2 * x) * stride;
+        simd::prefetch_ahead(top + at, 2 * lanes * stride * int(sizeof(float)));
+        simd::prefetch_ahead(bottom + at, 2 * lanes * stride * int(sizeof(float)));
+        typename simd::Lanes<lanes>::F c[3]{};
+        block_mean_lanes(top + at, bottom + at, stride, grey_image, colours, c);
+        layer_exposures(c, colours, weights, grey_scale, layers, scale, x, exposure);
+    }
+    for (; x < width; ++x) {
+        const size_t at = size_t(2 * x) * stride;
+        simd::Float1 c[3]{};
+        block_mean_lanes(top + at, bottom + at, stride, grey_image, colours, c);
+        layer_exposures(c, colours, weights, grey_scale, layers, scale, x, exposure);
+    }
+}
+
+struct BlockExposureRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* top, const float* bottom, int stride, bool grey_image,
+                                                   int colours, const float* weights, const float* grey_scale,
+                                                   int layers, float scale, int x, int width, float* const* exposure) {
+        // (As ExposureRow: the common shapes with their sizes as constants.)
+        if (colours == 3 && !grey_image && layers == 3 && stride == 3)
+            block_exposure_row<lanes>(top, bottom, 3, false, 3, weights, grey_scale, 3, scale, x, width, exposure);
+        else if (colours == 3 && !grey_image && layers == 3 && stride == 4)
+            block_exposure_row<lanes>(top, bottom, 4, false, 3, weights, grey_scale, 3, scale, x, width, exposure);
+        else
+            block_exposure_row<lanes>(top, bottom, stride, grey_image, colours, weights, grey_scale, layers, scale, x,
+                                      width, exposure);
+    }
+};
 
 // Stores a vector of 4, 8 or 16 floats to p, 16-byte aligned, past the caches (a non-temporal
 // store): the pass never reads the result back, and its cache line need not be read from
@@ -249,9 +348,31 @@ double sanitize(float v) {
     return lane[0];
 }
 
+// The proxy columns of row Y from X0 on whose blocks `image` holds whole: [first, last), or
+// none (first = last) in a row of the frame's last odd one.
+static void whole_blocks(const Window& image, int Y, int X0, int width, int& first, int& last) {
+    const bool two_rows = 2 * Y >= image.y0 && 2 * Y + 2 <= image.y1;
+    first = std::clamp(ceil_half(image.x0), X0, X0 + width);
+    last = two_rows ? std::clamp(floor_half(image.x1), first, X0 + width) : first;
+}
+
+void block_mean_row(const ConstImageView& in, const Window& image, int Y, int X0, int width, float* colours) {
+    int first, last;
+    whole_blocks(image, Y, X0, width, first, last);
+    const int n = colour_channel_count(in);
+    for (int X = X0; X < X0 + width; ++X) {
+        simd::Float1 c[3]{};
+        if (X >= first && X < last)
+            block_mean_lanes(in.at(2 * X, 2 * Y), in.at(2 * X, 2 * Y + 1), int(in.pixel_stride), n == 1, n, c);
+        else
+            edge_block_mean(in, image, X, Y, n, c);
+        for (int i = 0; i < n; ++i) colours[size_t(X - X0) * n + i] = c[i][0];
+    }
+}
+
 FilmExposure::FilmExposure(const ConstImageView& in, const std::vector<std::array<double, 3>>& weights,
-                           bool grey_input, double scale)
-    : in_(in), layers_(int(weights.size())), colours_(grey_input ? 1 : 3), scale_(float(scale)) {
+                           bool grey_input, double scale, const Window* blocks_of)
+    : in_(in), layers_(int(weights.size())), colours_(grey_input ? 1 : 3), scale_(float(scale)), blocks_of_(blocks_of) {
     for (const auto& w : weights) {
         for (double v : w) weights_.push_back(float(v));
         grey_scale_.push_back(float((w[0] + w[1] + w[2]) * scale));
@@ -259,8 +380,31 @@ FilmExposure::FilmExposure(const ConstImageView& in, const std::vector<std::arra
 }
 
 void FilmExposure::row(int y, int x0, int width, float* const* exposure) const {
-    simd::dispatch<ExposureRow>(in_.at(x0, y), int(in_.pixel_stride), colour_channel_count(in_) == 1,
-                                colours_, weights_.data(), grey_scale_.data(), layers_, scale_, width, exposure);
+    const bool grey_image = colour_channel_count(in_) == 1;
+    if (!blocks_of_) {
+        simd::dispatch<ExposureRow>(in_.at(x0, y), int(in_.pixel_stride), grey_image, colours_, weights_.data(),
+                                    grey_scale_.data(), layers_, scale_, width, exposure);
+        return;
+    }
+    // The blocks the image holds whole in vectors (from the row's first pixel: the rows as
+    // the kernel indexes them from x0), the partial ones at its edges one at a time.
+    int first, last;
+    whole_blocks(*blocks_of_, y, x0, width, first, last);
+    auto edge = [&](int X) {
+        simd::Float1 c[3]{};
+        edge_block_mean(in_, *blocks_of_, X, y, colours_, c);
+        layer_exposures(c, colours_, weights_.data(), grey_scale_.data(), layers_, scale_, X - x0, exposure);
+    };
+    for (int X = x0; X < first; ++X) edge(X);
+    if (first < last) {
+        float* from_first[3];
+        for (int l = 0; l < layers_; ++l) from_first[l] = exposure[l] + (first - x0);
+        simd::dispatch<BlockExposureRow>(in_.at(2 * first, 2 * y), in_.at(2 * first, 2 * y + 1),
+                                         int(in_.pixel_stride), grey_image, colours_, weights_.data(),
+                                         grey_scale_.data(), layers_, scale_, 0, last - first,
+                                         static_cast<float* const*>(from_first));
+    }
+    for (int X = last; X < x0 + width; ++X) edge(X);
 }
 
 void convert_row(OutputMode output, double base_density, float* row, int width) {

@@ -5,6 +5,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/simd.h"
+
+// GCC warns that a vector value would be passed differently without AVX; the vector
+// helpers here are inlined, so no vector crosses a call.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 namespace darkroom {
 
 namespace {
@@ -78,6 +84,33 @@ double slide_mid_grey_luminance(const Stock& film) {
     for (size_t l = 0; l < film.layers.size() && l < 3; ++l) density[l] = film.layers[l].density_curve(log_h);
     return luminance(reflectance_to_linear_srgb(transmittance_of(spectral_density(film, density))));
 }
+
+// Dot products of `count` spectra, given transposed (spectra[s * count + i]), with one
+// spectrum, each summed over the samples in their order: four vectors of spectra at a time (four
+// chains of sums in flight), then one, then one spectrum.
+struct DotsWithOne {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const double* spectra, int count, const double* with, double* out) {
+        using D = typename simd::Lanes<lanes>::D;
+        int i = 0;
+        for (; i + 4 * lanes <= count; i += 4 * lanes) dots<D, 4>(spectra, count, with, out, i);
+        for (; i + lanes <= count; i += lanes) dots<D, 1>(spectra, count, with, out, i);
+        for (; i < count; ++i) dots<simd::Double1, 1>(spectra, count, with, out, i);
+    }
+    template <typename D, int vectors>
+    __attribute__((always_inline)) static void dots(const double* spectra, int count, const double* with, double* out,
+                                                    int i) {
+        constexpr int lanes = sizeof(D) / sizeof(double);
+        D sum[vectors]{};
+        for (int s = 0; s < kSpectralSamples; ++s)
+            for (int v = 0; v < vectors; ++v) {
+                D t;
+                simd::load(t, spectra + size_t(s) * size_t(count) + size_t(i + v * lanes));
+                sum[v] += t * with[s];
+            }
+        for (int v = 0; v < vectors; ++v) simd::store(out + i + v * lanes, sum[v]);
+    }
+};
 
 }  // namespace
 
@@ -171,6 +204,16 @@ void PrintExposure::expose(const std::array<const Spectrum*, 3>& layer_transmitt
     for (int l = 1; l < film_layers_; ++l)
         for (int i = 0; i < kSpectralSamples; ++i) t[i] *= (*layer_transmittance[l])[i];
     for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = dot(weighted_light_[j], t);
+}
+
+void PrintExposure::expose_row(const double* layer0, int count, const Spectrum& layer1, const Spectrum& layer2,
+                               double* paper_exposure) const {
+    for (int j = 0; j < paper_layers_; ++j) {
+        Spectrum through;  // layer j's light through the negative's layers 1 and 2
+        for (int s = 0; s < kSpectralSamples; ++s) through[s] = weighted_light_[j][s] * layer1[s] * layer2[s];
+        simd::dispatch_doubles<DotsWithOne>(layer0, count, static_cast<const double*>(through.data()),
+                                            paper_exposure + size_t(j) * size_t(count));
+    }
 }
 
 std::string PrintExposure::fingerprint() const {

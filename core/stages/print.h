@@ -71,6 +71,13 @@ public:
     Spectrum layer_transmittance(int layer, double density) const;
     // and expose() of the negative whose layers' factors these are (spectral() only).
     void expose(const std::array<const Spectrum*, 3>& layer_transmittance, double* paper_exposure_lux_s) const;
+    // The same for `count` negatives that share their layers 1 and 2's factors, layer 0's
+    // given transposed (layer0[s * count + i]: sample s of negative i's), into
+    // paper_exposure_lux_s[j * count + i] for paper layer j: a row of the print table's grid,
+    // in vectors of negatives (each one's sum over the samples in their order, so any vector
+    // width gives the same values). spectral() and three film layers only.
+    void expose_row(const double* layer0, int count, const Spectrum& layer1, const Spectrum& layer2,
+                    double* paper_exposure_lux_s) const;
 
     int paper_layers() const { return paper_layers_; }
     bool spectral() const { return !neutral_negative_; }

@@ -338,7 +338,7 @@ Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& h
                     for (int a = 0; a < 3; ++a) in[a] = node_coordinate(lo[a], hi[a], nodes, node[a]);
                     f(node, in, out);
                     if (cubed_)
-                        for (double& v : out) v = std::cbrt(v);
+                        for (double& v : out) v = cube_root(v);
                     values_[(size_t(k) * nodes + j) * nodes + i] = {float(out[0]), float(out[1]), float(out[2]), 0.0f};
                 }
     });

@@ -4,8 +4,11 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "core/curve.h"
@@ -59,6 +62,28 @@ private:
     uint32_t first_bits_ = 0, last_bits_ = 0;  // float bit patterns of the first and last sample
     int shift_ = 0;                             // 23 - mantissa_bits
 };
+
+// The cube root of v, within 4 ulp of std::cbrt's (tested), for Table3D's cube-root nodes: from
+// an estimate made of v's bits (the exponent divided by 3), two steps of Halley's iteration
+// y <- y (y^3 + 2v) / (2y^3 + v) (each cubes the relative error: 3 % -> 1e-5 -> 1e-15) and
+// one of Newton's, in plain double arithmetic, so every processor gives the same values.
+// std::cbrt took a third of a print table's build. Zero, negative, subnormal and non-finite
+// v as std::cbrt.
+inline double cube_root(double v) {
+    if (!(v >= std::numeric_limits<double>::min() && v <= std::numeric_limits<double>::max())) return std::cbrt(v);
+    uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    // The exponent divided by 3, with the bias's third added back (a third of 1023 << 52, less a
+    // little, which centres the estimate's error: within 3.2 % over a binade).
+    bits = bits / 3 + 0x2A9F7893782DA1CEull;
+    double y;
+    std::memcpy(&y, &bits, sizeof y);
+    for (int step = 0; step < 2; ++step) {
+        const double cube = y * y * y;
+        y *= (cube + 2 * v) / (2 * cube + v);  // (the ratio first: y times the sum would leave the range)
+    }
+    return y - (y * y * y - v) / (3 * y * y);
+}
 
 // A function of three variables on a uniform grid (nodes^3 over [lo, hi] per axis),
 // interpolated tetrahedrally; inputs outside the grid are clamped to its faces.

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <functional>
+#include <limits>
 #include <mutex>
 #include <random>
 #include <set>
@@ -210,6 +212,38 @@ TEST_CASE("a 3D table interpolates tetrahedrally, is exact for linear functions 
     require_row_as_points(table, 1000 + 5, [&] { return float(-2 + 6 * u(rng)); });
 }
 
+TEST_CASE("the tables' cube root is std::cbrt's within 4 ulp, and std::cbrt's where that is exact or special",
+          "[quality][tables]") {
+    auto ulps_apart = [](double a, double b) {
+        int64_t ia, ib;
+        std::memcpy(&ia, &a, sizeof ia);
+        std::memcpy(&ib, &b, sizeof ib);
+        return ia > ib ? ia - ib : ib - ia;
+    };
+    // Every 1e-4 of a decade from 1e-300 to 1e300, and random values over the print's range.
+    int64_t worst = 0;
+    for (double e = -300; e <= 300; e += 1e-4) {
+        const double v = std::pow(10.0, e);
+        worst = std::max(worst, ulps_apart(cube_root(v), std::cbrt(v)));
+    }
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> u(0.0, 2.0);
+    for (int i = 0; i < 1000000; ++i) {
+        const double v = u(rng);
+        worst = std::max(worst, ulps_apart(cube_root(v), std::cbrt(v)));
+    }
+    INFO("largest distance: " << worst << " ulp");
+    CHECK(worst <= 4);
+    // Exact cubes give their root; zero, negatives, subnormals and the non-finite as std::cbrt.
+    for (double root : {1.0, 2.0, 3.0, 0.5, 10.0, 1e-5, 1024.0}) CHECK(cube_root(root * root * root) == root);
+    const double inf = std::numeric_limits<double>::infinity();
+    for (double v : {0.0, -0.0, -8.0, -1e-3, 1e-310, -1e-310, inf, -inf}) {
+        INFO(v);
+        CHECK(ulps_apart(cube_root(v), std::cbrt(v)) == 0);
+    }
+    CHECK(std::isnan(cube_root(std::numeric_limits<double>::quiet_NaN())));
+}
+
 TEST_CASE("a 3D table of cube roots reads back its function at the nodes and the cube of its interpolant between",
           "[quality][tables]") {
     // Values over six decades and of either sign, as a print's light and an out-of-gamut channel.
@@ -224,7 +258,7 @@ TEST_CASE("a 3D table of cube roots reads back its function at the nodes and the
                         Table3D::Encoding::cube_root);
     const Table3D roots(lo, hi, nodes, 1, [&](const int*, const double* v, double* out) {
         f(v, out);
-        for (int c = 0; c < 3; ++c) out[c] = std::cbrt(out[c]);
+        for (int c = 0; c < 3; ++c) out[c] = cube_root(out[c]);
     });
     // At every node the function, to a few float roundings of its magnitude.
     for (int k = 0; k < nodes; ++k)
@@ -486,48 +520,81 @@ TEST_CASE("the preview tier is the fast tier on a half-resolution proxy, upsampl
     // at twice the pixel pitch, and interpolated bilinearly at the frame's pixel centres. So
     // grain, MTF and halation are fast's at the proxy's pitch: their size on the film is kept
     // (the print-grain tests above hold fast's grain at the pitch it is given).
+    // The input as grey, grey and alpha, RGB and RGBA, with values the film sees as others in
+    // some blocks (NaN and -Inf as no light, +Inf and 1e38 held at 1e30), inside and at the
+    // frame's edges.
     const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     constexpr int kWidth = 97, kHeight = 63, kProxyWidth = 49, kProxyHeight = 32;
-    const Image scene = demo_scene(kWidth, kHeight);
+    const Image rgb = demo_scene(kWidth, kHeight);
+    const float inf = std::numeric_limits<float>::infinity();
+    const std::pair<int, int> bad_at[] = {{10, 10}, {41, 20}, {96, 30}, {50, 62}, {96, 62}};
+    const float bad[] = {std::numeric_limits<float>::quiet_NaN(), -inf, inf, 1e38f, -1e38f};
+    const auto film_sees = [inf](float v) { return v != v || v == -inf ? 0.0f : std::clamp(v, -1e30f, 1e30f); };
     DevelopSettings s;
     s.quality = Quality::preview;
     s.seed = 7;
     s.frame = 1;
     s.frame_width_mm = kWidth * 0.006;  // a 4K frame's pitch: grain, MTF and halation all act
     s.print_width_mm = kWidth * 0.0054;
-    const Image preview = test::render(film, &paper, s, scene, 2);
+    for (int channels : {1, 2, 3, 4}) {
+        INFO(channels << " channels");
+        const int colours = channels >= 3 ? 3 : 1;  // (grey: the green channel)
+        Image scene(kWidth, kHeight, channels, 0.5f);
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x)
+                for (int c = 0; c < colours; ++c) scene.at(x, y)[c] = rgb.at(x, y)[colours == 3 ? c : 1];
+        for (size_t i = 0; i < std::size(bad_at); ++i)
+            scene.at(bad_at[i].first, bad_at[i].second)[int(i) % colours] = bad[i];
+        const Image preview = test::render(film, &paper, s, scene, 2);
 
-    Image small(kProxyWidth, kProxyHeight, 3);
-    for (int Y = 0; Y < kProxyHeight; ++Y)
-        for (int X = 0; X < kProxyWidth; ++X)
-            for (int c = 0; c < 3; ++c) {
-                float sum = 0;
-                int count = 0;
-                for (int y = 2 * Y; y < std::min(2 * Y + 2, kHeight); ++y)
-                    for (int x = 2 * X; x < std::min(2 * X + 2, kWidth); ++x, ++count) sum += scene.at(x, y)[c];
-                small.at(X, Y)[c] = sum / float(count);
-            }
-    DevelopSettings fast = s;
-    fast.quality = Quality::fast;
-    const double widen = double(kProxyWidth) * 2 / kWidth;  // (the proxy's pitch exactly twice the frame's)
-    fast.frame_width_mm = s.frame_width_mm * widen;
-    fast.print_width_mm = s.print_width_mm * widen;
-    const Image proxy = test::render(film, &paper, fast, small, 2);
+        Image small(kProxyWidth, kProxyHeight, colours);
+        for (int Y = 0; Y < kProxyHeight; ++Y)
+            for (int X = 0; X < kProxyWidth; ++X)
+                for (int c = 0; c < colours; ++c) {
+                    float sum = 0;
+                    int count = 0;
+                    for (int y = 2 * Y; y < std::min(2 * Y + 2, kHeight); ++y)
+                        for (int x = 2 * X; x < std::min(2 * X + 2, kWidth); ++x, ++count)
+                            sum += film_sees(scene.at(x, y)[c]);
+                    small.at(X, Y)[c] = sum / float(count);
+                }
+        DevelopSettings fast = s;
+        fast.quality = Quality::fast;
+        const double widen = double(kProxyWidth) * 2 / kWidth;  // (the proxy's pitch exactly twice the frame's)
+        fast.frame_width_mm = s.frame_width_mm * widen;
+        fast.print_width_mm = s.print_width_mm * widen;
+        const Image proxy = test::render(film, &paper, fast, small, 2);
 
-    auto taps = [](int x, int n) {  // the nearer and the farther proxy pixel of frame pixel x
-        const int near = x / 2, far = x % 2 == 0 ? near - 1 : near + 1;
-        return std::pair{std::clamp(near, 0, n - 1), std::clamp(far, 0, n - 1)};
-    };
-    for (int y = 0; y < kHeight; ++y)
-        for (int x = 0; x < kWidth; ++x) {
-            const auto [xn, xf] = taps(x, kProxyWidth);
-            const auto [yn, yf] = taps(y, kProxyHeight);
-            for (int c = 0; c < 3; ++c) {
-                const float near_row = 0.75f * proxy.at(xn, yn)[c] + 0.25f * proxy.at(xf, yn)[c];
-                const float far_row = 0.75f * proxy.at(xn, yf)[c] + 0.25f * proxy.at(xf, yf)[c];
-                REQUIRE(preview.at(x, y)[c] == 0.75f * near_row + 0.25f * far_row);
+        auto taps = [](int x, int n) {  // the nearer and the farther proxy pixel of frame pixel x
+            const int near = x / 2, far = x % 2 == 0 ? near - 1 : near + 1;
+            return std::pair{std::clamp(near, 0, n - 1), std::clamp(far, 0, n - 1)};
+        };
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x) {
+                const auto [xn, xf] = taps(x, kProxyWidth);
+                const auto [yn, yf] = taps(y, kProxyHeight);
+                for (int c = 0; c < 3; ++c) {
+                    const float near_row = 0.75f * proxy.at(xn, yn)[c] + 0.25f * proxy.at(xf, yn)[c];
+                    const float far_row = 0.75f * proxy.at(xn, yf)[c] + 0.25f * proxy.at(xf, yf)[c];
+                    REQUIRE(preview.at(x, y)[c] == 0.75f * near_row + 0.25f * far_row);
+                }
             }
-        }
+    }
+}
+
+TEST_CASE("the preview tier develops grey input as the same grey in RGB", "[quality][preview]") {
+    // A plan for colour input given a grey image reads its one channel as all three, in the
+    // proxy's whole blocks and in the partial ones at an odd frame's edges alike.
+    const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    const Image rgb = demo_scene(97, 63);
+    Image grey(rgb.window, 1), grey_rgb(rgb.window, 3);
+    for (size_t i = 0; i < grey.pixels.size(); ++i)
+        for (int c = 0; c < 3; ++c) grey_rgb.pixels[3 * i + c] = grey.pixels[i] = rgb.pixels[3 * i + 1];
+    DevelopSettings s;
+    s.quality = Quality::preview;
+    s.frame_width_mm = 97 * 0.006;
+    s.print_width_mm = 97 * 0.0054;
+    CHECK(test::render(film, &paper, s, grey, 2).pixels == test::render(film, &paper, s, grey_rgb, 2).pixels);
 }
 
 TEST_CASE("the preview tier's pixels are the same for any thread count and window", "[quality][preview][determinism]") {

@@ -52,6 +52,26 @@ TEST_CASE("every instruction set develops the same pixels at every tier that use
         }
 }
 
+TEST_CASE("every instruction set builds the same print table", "[simd][determinism][print]") {
+    // The table's grid of the paper's exposures is summed in vectors of negatives
+    // (PrintExposure::expose_row); each plan here builds its table afresh at its instruction set.
+    IsaScope scope;
+    const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    const Image scene = demo_scene(67, 45);
+    DevelopSettings s;
+    s.filtration_ymc = {20, 10, 0};
+    std::vector<Image> results;
+    for (simd::Isa isa : runnable_isas()) {
+        simd::set_isa(isa);
+        forget_print_tables();
+        Image out(67, 45, 3);
+        Plan::compile(film, &paper, s, {67, 45}).run(scene.view(), out.view(), 2);
+        results.push_back(std::move(out));
+    }
+    INFO("instruction sets " << results.size());
+    for (size_t i = 1; i < results.size(); ++i) CHECK(results[i].pixels == results[0].pixels);
+}
+
 namespace {
 
 // How many doubles lie between a and b (both >= 0): their bit patterns' distance.
