@@ -1,6 +1,7 @@
 #include "core/stages/grain_boolean.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -17,6 +18,7 @@ const double kLn10 = std::log(10.0);
 constexpr int kTableNodes = 301;           // net density step 0.01
 constexpr double kCellLimitUm = 8.0;       // cells are at most this wide
 constexpr double kFootprintReachSigmas = 5.0;
+constexpr int kBandsPerWorker = 8, kMinBandRows = 32;  // apply_boolean_grain's load balance
 
 // Overlap area of two unit disks whose centres are u apart.
 double unit_disk_overlap(double u) {
@@ -491,16 +493,26 @@ void apply_boolean_grain(Plane& density, const BooleanGrain& g, int threads) {
     if (g.is_noop() || density.window.empty()) return;
     const Plane input = density;
     const Window w = density.window;
-    parallel_for(w.y0, w.y1, threads, [&](int y0, int y1) {
-        BandRenderer renderer(input, g);
-        const std::vector<double> transmittance = renderer.render(y0, y1);
-        for (int y = y0; y < y1; ++y)
-            for (int x = w.x0; x < w.x1; ++x) {
-                const double d = sanitized_density(input.at(x, y), g.d_min);
-                const double t = transmittance[size_t(y - y0) * w.width() + (x - w.x0)];
-                density.at(x, y) =
-                    float(d - boolean_net(d, g.d_min) - std::log10(std::max(t, BooleanGrain::kMinTransmittance)));
-            }
+    // Bands claimed in turn, not one per thread: a print's blacks, where the cost lies, fill
+    // some rows and not others. Each band also renders the cell rows its footprint reaches
+    // beyond it (a pixel or so each side), so bands stay tens of rows tall.
+    const int workers = std::min(resolve_thread_count(threads), w.height());
+    const int band_rows = std::max(kMinBandRows, w.height() / (kBandsPerWorker * workers));
+    const int bands = (w.height() + band_rows - 1) / band_rows;
+    std::atomic<int> next_band{0};
+    parallel_for(0, workers, workers, [&](int, int) {
+        for (int band = next_band++; band < bands; band = next_band++) {
+            const int y0 = w.y0 + band * band_rows, y1 = std::min(w.y1, y0 + band_rows);
+            BandRenderer renderer(input, g);
+            const std::vector<double> transmittance = renderer.render(y0, y1);
+            for (int y = y0; y < y1; ++y)
+                for (int x = w.x0; x < w.x1; ++x) {
+                    const double d = sanitized_density(input.at(x, y), g.d_min);
+                    const double t = transmittance[size_t(y - y0) * w.width() + (x - w.x0)];
+                    density.at(x, y) = float(d - boolean_net(d, g.d_min) -
+                                             std::log10(std::max(t, BooleanGrain::kMinTransmittance)));
+                }
+        }
     });
 }
 
