@@ -65,9 +65,15 @@ FrameWrite develop_frame(const DevelopOptions& o, const Renderer& renderer, Plan
     const Window out_window = window_flag(o.window, in.pixels.window, "--window").moved(dx, dy);
     // The output's channels: the developed colour's three, then the input's past its colour.
     require_format_holds(job.output, "", 3 + in.spec.nchannels - view.colour_channels);
-    // Before the render starts, that a reference render will take long (core/develop.h).
-    if (const std::string w = long_reference_render_warning(plan, out_window, "--quality "); !w.empty())
-        progress.warn_once("long reference render", report, w);
+    // Before the render starts, a reference render over its budget is refused, and one that
+    // will take long said so (core/develop.h).
+    std::string long_render;
+    try {
+        long_render = check_reference_render_budget(plan, out_window, "--quality ");
+    } catch (const std::invalid_argument& e) {
+        throw UserError(e.what());
+    }
+    if (!long_render.empty()) progress.warn_once("long reference render", report, long_render);
     for (const std::string& w : non_finite_warnings(plan, view, out_window, premultiplied_alpha))
         progress.warn(report, w);
     Image out = renderer.develop(plan, view, out_window, job.frame, premultiplied_alpha, threads);

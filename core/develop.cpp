@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <functional>
+#include <iomanip>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -1106,22 +1107,43 @@ double Plan::silver_grains_per_pixel() const {
     return grains;
 }
 
-// The reference tier's grain costs about this much CPU time per silver grain drawn: 0.75 us
-// on a 2-core machine, in the benchmark (its 4K reference frame, extrapolated from
-// its sample windows: 24 700 s on 2 threads for 7 500 grains a pixel).
-constexpr double kCpuSecondsPerSilverGrain = 0.75e-6;
-constexpr double kLongRenderCpuSeconds = 900;
+double Plan::silver_grains_drawn(const Window& output) const {
+    double grains = 0;
+    auto add = [&](const MaterialStages* m, const Window& out) {
+        if (!m) return;
+        for (size_t i = 0; i < m->boolean_grain.size(); ++i)
+            if (const auto& g = m->boolean_grain[i]) {
+                // Its cells reach the footprint's width beyond the developed window.
+                const int footprint_px = int(std::ceil(g->footprint_reach_um / g->pixel_pitch_um));
+                const Window rendered = m->developed_window(i, out, frame_).grown(footprint_px);
+                grains += g->grains_per_pixel_at(1.0) * double(rendered.pixel_count());
+            }
+    };
+    if (print_) add(paper_stages_.get(), output);
+    add(film_stages_.get(), film_output_window(output));
+    return grains;
+}
 
-std::string long_reference_render_warning(const Plan& plan, const Window& out, const std::string& quality_setting) {
-    const double per_pixel = plan.silver_grains_per_pixel();
-    const double grains = per_pixel * double(out.width()) * double(out.height());
-    const double cpu_seconds = grains * kCpuSecondsPerSilverGrain;
-    if (cpu_seconds < kLongRenderCpuSeconds) return {};
+double reference_cpu_seconds(const Plan& plan, const Window& out) {
+    return plan.silver_grains_drawn(out) * kReferenceCpuSecondsPerSilverGrain;
+}
+
+std::string check_reference_render_budget(const Plan& plan, const Window& out, const std::string& quality_setting) {
+    const double grains = plan.silver_grains_drawn(out);
+    const double cpu_seconds = grains * kReferenceCpuSecondsPerSilverGrain;
+    if (cpu_seconds < kReferenceWarningCpuSeconds) return {};
     std::ostringstream message;
     message.precision(2);
-    message << quality_setting << "reference draws every silver grain: about " << grains << " here ("
-            << per_pixel << " a pixel), roughly " << cpu_seconds / 3600 << " CPU hours; "
-            << quality_setting << "high gives the same grain statistics as filtered noise";
+    message << quality_setting << "reference draws every silver grain: about " << grains << " for the window "
+            << out.x0 << "," << out.y0 << "," << out.width() << "," << out.height() << " ("
+            << plan.silver_grains_per_pixel() << " a pixel), roughly " << std::fixed << std::setprecision(1)
+            << cpu_seconds / 3600 << " CPU hours";
+    if (cpu_seconds > kReferenceCpuBudgetSeconds)
+        throw std::invalid_argument(message.str() + ", over its budget of " +
+                                    std::to_string(int(kReferenceCpuBudgetSeconds / 3600)) +
+                                    " CPU hours; render a smaller window or " + quality_setting +
+                                    "high, which gives the same grain statistics as filtered noise");
+    message << "; " << quality_setting << "high gives the same grain statistics as filtered noise";
     return message.str();
 }
 

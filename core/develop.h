@@ -202,6 +202,10 @@ public:
     // the layers it draws them for (0 at the other tiers). Its time per pixel grows with
     // them, so with the film's area a pixel covers, not with the pixel count.
     double silver_grains_per_pixel() const;
+    // The silver grains it draws to render `output`, at net density 1: each layer's grains a
+    // pixel over the whole window its grain is rendered on (the output's, or on the negative
+    // the print's input window, each grown by the grain's halo and its footprint's reach).
+    double silver_grains_drawn(const Window& output) const;
 
     // The stages in order and those left out, one line each, for -v.
     std::vector<std::string> describe() const;
@@ -279,11 +283,20 @@ private:
 void forget_print_tables();
 
 // The reference tier's time grows with the film's area a pixel covers, not the pixel count
-// (a thumbnail of a whole film frame draws millions of silver grains a pixel): a warning
-// with the estimate when rendering `out` through `plan` would take more than a quarter of
-// an hour of CPU, else empty. The program, the Python module and the plugin give it before
-// they render, each naming the tiers its own way: `quality_setting` + "reference"
-// ("--quality reference", "Quality reference").
-std::string long_reference_render_warning(const Plan& plan, const Window& out, const std::string& quality_setting);
+// (a thumbnail of a whole film frame draws millions of silver grains a pixel). Its budget,
+// checked before a render starts: the estimated CPU time of rendering `out` through `plan`
+// (Plan::silver_grains_drawn at kReferenceCpuSecondsPerSilverGrain). Above
+// kReferenceCpuBudgetSeconds it throws std::invalid_argument, its message naming the tier,
+// the window and the estimate; above kReferenceWarningCpuSeconds it returns a warning with
+// the estimate; else empty. The program, the Python module and the plugin check it, each
+// naming the tiers its own way: `quality_setting` + "reference" ("--quality reference",
+// "Quality reference").
+// Measured on the benchmark's whole 1024x683 frame at the 4K pitch: 5.3e9 grains drawn,
+// about 1 270 s of CPU (0.24 us a grain; a black print's grains cost more, a light one's less).
+constexpr double kReferenceCpuSecondsPerSilverGrain = 0.25e-6;
+constexpr double kReferenceWarningCpuSeconds = 15 * 60.0;
+constexpr double kReferenceCpuBudgetSeconds = 24 * 3600.0;  // a night on a few cores
+double reference_cpu_seconds(const Plan& plan, const Window& out);
+std::string check_reference_render_budget(const Plan& plan, const Window& out, const std::string& quality_setting);
 
 }  // namespace darkroom

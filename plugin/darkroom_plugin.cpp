@@ -499,9 +499,10 @@ OfxStatus render(OfxImageEffectHandle effect, const Props& args) {
     for (int y = out_core.y0; y < out_core.y1; y += band_rows)
         job.bands.push_back({out_core.x0, y, out_core.x1, std::min(out_core.y1, y + band_rows)});
     // A reference render that will take hours says so on the node before it starts (the user
-    // can abort it), and so does a config that another stands in for (a host's ocio:// name
-    // this OCIO cannot load): the message stays while the node renders that way.
-    std::string warning = long_reference_render_warning(plan, out_core, "Quality ");
+    // can abort it; one over the tier's budget is refused, an error on the node), and so does
+    // a config that another stands in for (a host's ocio:// name this OCIO cannot load): the
+    // message stays while the node renders that way.
+    std::string warning = check_reference_render_budget(plan, out_core, "Quality ");
     if (warning.empty()) warning = development.renderer->colour().converter().config().warning;
     if (!warning.empty()) post_warning(effect, "Darkroom: " + warning);
     run_bands(job);

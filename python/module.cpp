@@ -92,9 +92,10 @@ py::array_t<float> develop(FloatArray pixels, const std::string& look_file, int 
     const int alpha = darkroom::colour_channel_count(channels);
     const int premultiplied_alpha = premultiplied && alpha < channels ? alpha : -1;
     // Before a render that will take hours (a filter set to "error" refuses it), and of
-    // non-finite input, as the program warns.
+    // non-finite input, as the program warns; one over the reference tier's budget raises
+    // ValueError.
     std::vector<std::string> warnings = darkroom::non_finite_warnings(*plan, in, full, premultiplied_alpha);
-    warnings.push_back(darkroom::long_reference_render_warning(*plan, full, "quality="));
+    warnings.push_back(darkroom::check_reference_render_budget(*plan, full, "quality="));
     for (const std::string& warning : warnings)
         if (!warning.empty() && PyErr_WarnEx(PyExc_RuntimeWarning, ("darkroom: " + warning).c_str(), 1) < 0)
             throw py::error_already_set();

@@ -1,6 +1,7 @@
 #include "core/stages/grain_boolean.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -17,6 +18,7 @@ const double kLn10 = std::log(10.0);
 constexpr int kTableNodes = 301;           // net density step 0.01
 constexpr double kCellLimitUm = 8.0;       // cells are at most this wide
 constexpr double kFootprintReachSigmas = 5.0;
+constexpr int kBandsPerWorker = 8, kMinBandRows = 32;  // apply_boolean_grain's load balance
 
 // Overlap area of two unit disks whose centres are u apart.
 double unit_disk_overlap(double u) {
@@ -163,7 +165,9 @@ private:
     // Grains of (2 reach + 1) cell rows, columns [grain_x0_, grain_x0_ + width), by row mod.
     std::vector<std::vector<CellGrains>> ring_;
     int grain_x0_ = 0;
-    std::vector<uint64_t> covered_;  // one bit per sample, rows of words_ words
+    // One bit per sample, 64 samples of a row a word; word w of row j at [w m + j], so that the
+    // rows a disk spans are neighbours in memory.
+    std::vector<uint64_t> covered_;
     int words_ = 0;
     std::vector<double> contribution_, row_sum_;
     std::vector<float> interior_x_, interior_y_;
@@ -178,8 +182,6 @@ private:
 
     void generate(CellGrains& cell, int cx, int cy) {
         const double net = boolean_net(sanitized_density(density_of_cell(cx, cy), g_.d_min), g_.d_min);
-        cell.x_um.clear();
-        cell.y_um.clear();
         cell.uncovered = std::exp(-kLn10 * net);
         cell.radius_um = g_.radius_at(net);
         cell.samples_per_um = net > 0 ? table_at(g_.samples_per_um, net) : 0.0;
@@ -188,19 +190,25 @@ private:
         // Uniform centres, 16-bit coordinates (c / 65536 is under 0.2 nm): four per draw.
         // Disks wholly inside the cell come after those that may reach its neighbours,
         // which only scan the first `border`.
-        interior_x_.clear();
-        interior_y_.clear();
+        cell.x_um.resize(count);
+        cell.y_um.resize(count);
+        interior_x_.resize(count);
+        interior_y_.resize(count);
+        size_t border = 0, interior = 0;
         for (uint32_t i = 0; i < count; ++i) {
             if (i % 4 == 0) bits_ = philox4x32_10({uint32_t(cx), uint32_t(cy), i / 4, position_tag_}, key0_, key1_);
             const uint32_t xy = bits_[i % 4];
             const float x = float(c * ((xy & 0xffffu) + 0.5) / 65536.0), y = float(c * ((xy >> 16) + 0.5) / 65536.0);
             const bool inside = x >= r && y >= r && x <= c - r && y <= c - r;
-            (inside ? interior_x_ : cell.x_um).push_back(x);
-            (inside ? interior_y_ : cell.y_um).push_back(y);
+            // Both written, one kept (no branch on the disk's position).
+            cell.x_um[border] = interior_x_[interior] = x;
+            cell.y_um[border] = interior_y_[interior] = y;
+            border += !inside;
+            interior += inside;
         }
-        cell.border = cell.x_um.size();
-        cell.x_um.insert(cell.x_um.end(), interior_x_.begin(), interior_x_.end());
-        cell.y_um.insert(cell.y_um.end(), interior_y_.begin(), interior_y_.end());
+        cell.border = border;
+        std::copy_n(interior_x_.begin(), interior, cell.x_um.begin() + border);
+        std::copy_n(interior_y_.begin(), interior, cell.y_um.begin() + border);
     }
 
     // The cell's grain count, Poisson of mean `mean`: products of uniforms below 10, else
@@ -302,7 +310,7 @@ private:
         contribution_.assign(size_t(ky1 - ky0 + 1) * columns, 0.0);  // [ky - ky0][kx - kx0]
         row_sum_.resize(size_t(columns));
         for (int j = 0; j < m; ++j) {
-            const uint64_t* row = covered_.data() + size_t(j) * words_;
+            const uint64_t* row = covered_.data() + j;
             std::fill(row_sum_.begin(), row_sum_.end(), 0.0);
             // Uncovered runs [i0, i1) add their footprint weight.
             for (int i0 = next_sample(row, 0, false, m); i0 < m;) {
@@ -347,40 +355,73 @@ private:
             const double gx = (ox + cell.x_um[k]) * inv_h - 0.5, gy = (oy + cell.y_um[k]) * inv_h - 0.5;
             if (gx + r < -0.5 || gx - r > extent || gy + r < -0.5 || gy - r > extent) continue;
             const int j0 = first_index_at_or_above(gy - r), j1 = std::min(m - 1, last_index_at_or_below(gy + r));
+            // The disk's bounding columns (widened by a rounding margin): a row whose samples
+            // there are all covered already cannot change, which in dark areas is most rows.
+            const int b0 = first_index_at_or_above(gx - r - kRoundingMargin),
+                      b1 = std::min(m - 1, last_index_at_or_below(gx + r + kRoundingMargin));
+            if (b1 < b0) continue;
+            const RowSpan box(b0, b1);
+            if (box.all_set_in_rows(covered_.data(), j0, j1, m)) continue;
             for (int j = j0; j <= j1; ++j) {
+                uint64_t* row = covered_.data() + j;
+                if (box.all_set(row, m)) continue;
                 const double dy = j - gy, half2 = r2 - dy * dy;
                 if (half2 < 0) continue;
                 const double half = std::sqrt(half2);
                 const int i0 = first_index_at_or_above(gx - half), i1 = std::min(m - 1, last_index_at_or_below(gx + half));
-                if (i1 >= i0) cover(covered_.data() + size_t(j) * words_, i0, i1);
+                if (i1 >= i0) RowSpan(i0, i1).set(row, m);
             }
         }
     }
-    // Sets bits i0..i1 (inclusive) of a row.
-    static void cover(uint64_t* row, int i0, int i1) {
-        const int w0 = i0 >> 6, w1 = i1 >> 6;
-        const uint64_t first = ~0ull << (i0 & 63), last = ~0ull >> (63 - (i1 & 63));
-        if (w0 == w1) {
-            row[w0] |= first & last;
-            return;
+    // Bits i0..i1 (inclusive) of a row, i0 <= i1.
+    struct RowSpan {
+        int w0, w1;  // first and last word
+        uint64_t first, last;  // their masks
+        RowSpan(int i0, int i1)
+            : w0(i0 >> 6), w1(i1 >> 6), first(~0ull << (i0 & 63)), last(~0ull >> (63 - (i1 & 63))) {
+            if (w0 == w1) first &= last;
         }
-        row[w0] |= first;
-        for (int w = w0 + 1; w < w1; ++w) row[w] = ~0ull;
-        row[w1] |= last;
-    }
+        // `row` is the row's first word; its words are `stride` apart.
+        void set(uint64_t* row, size_t stride) const {
+            row[w0 * stride] |= first;
+            if (w0 == w1) return;
+            for (int w = w0 + 1; w < w1; ++w) row[w * stride] = ~0ull;
+            row[w1 * stride] |= last;
+        }
+        // all_set in each row j0..j1 of the raster (words m apart), without a branch per row.
+        bool all_set_in_rows(const uint64_t* raster, int j0, int j1, int m) const {
+            for (int w = w0; w <= w1; ++w) {
+                const uint64_t* word = raster + size_t(w) * m;
+                uint64_t all = ~0ull;
+                for (int j = j0; j <= j1; ++j) all &= word[j];
+                const uint64_t mask = w == w0 ? first : w == w1 ? last : ~0ull;
+                if ((all & mask) != mask) return false;
+            }
+            return true;
+        }
+        bool all_set(const uint64_t* row, size_t stride) const {
+            if ((row[w0 * stride] & first) != first) return false;
+            if (w0 == w1) return true;
+            for (int w = w0 + 1; w < w1; ++w)
+                if (row[w * stride] != ~0ull) return false;
+            return (row[w1 * stride] & last) == last;
+        }
+    };
     // The first sample at or after i that is covered (or not), m if none.
+    // (`row` as in RowSpan, its words m apart.)
     int next_sample(const uint64_t* row, int i, bool covered, int m) const {
         int w = i >> 6;
-        uint64_t bits = (covered ? row[w] : ~row[w]) & (~0ull << (i & 63));
+        uint64_t bits = (covered ? row[size_t(w) * m] : ~row[size_t(w) * m]) & (~0ull << (i & 63));
         while (!bits) {
             if (++w == words_) return m;
-            bits = covered ? row[w] : ~row[w];
+            bits = covered ? row[size_t(w) * m] : ~row[size_t(w) * m];
         }
         return std::min(m, w * 64 + __builtin_ctzll(bits));
     }
     // max(0, ceil(v)) and floor(v), branch-free (the comparisons are unpredictable): the
     // offset makes the truncation a floor for |v| below it (v is within m + 2 r samples).
     static constexpr double kFloorOffset = 1 << 20;
+    static constexpr double kRoundingMargin = 1e-6;  // samples; sqrt(r^2) may exceed r by an ulp
     static int first_index_at_or_above(double v) { return std::max(0, int(kFloorOffset) - int(kFloorOffset - v)); }
     static int last_index_at_or_below(double v) { return int(v + kFloorOffset) - int(kFloorOffset); }
 };
@@ -452,16 +493,26 @@ void apply_boolean_grain(Plane& density, const BooleanGrain& g, int threads) {
     if (g.is_noop() || density.window.empty()) return;
     const Plane input = density;
     const Window w = density.window;
-    parallel_for(w.y0, w.y1, threads, [&](int y0, int y1) {
-        BandRenderer renderer(input, g);
-        const std::vector<double> transmittance = renderer.render(y0, y1);
-        for (int y = y0; y < y1; ++y)
-            for (int x = w.x0; x < w.x1; ++x) {
-                const double d = sanitized_density(input.at(x, y), g.d_min);
-                const double t = transmittance[size_t(y - y0) * w.width() + (x - w.x0)];
-                density.at(x, y) =
-                    float(d - boolean_net(d, g.d_min) - std::log10(std::max(t, BooleanGrain::kMinTransmittance)));
-            }
+    // Bands claimed in turn, not one per thread: a print's blacks, where the cost lies, fill
+    // some rows and not others. Each band also renders the cell rows its footprint reaches
+    // beyond it (a pixel or so each side), so bands stay tens of rows tall.
+    const int workers = std::min(resolve_thread_count(threads), w.height());
+    const int band_rows = std::max(kMinBandRows, w.height() / (kBandsPerWorker * workers));
+    const int bands = (w.height() + band_rows - 1) / band_rows;
+    std::atomic<int> next_band{0};
+    parallel_for(0, workers, workers, [&](int, int) {
+        for (int band = next_band++; band < bands; band = next_band++) {
+            const int y0 = w.y0 + band * band_rows, y1 = std::min(w.y1, y0 + band_rows);
+            BandRenderer renderer(input, g);
+            const std::vector<double> transmittance = renderer.render(y0, y1);
+            for (int y = y0; y < y1; ++y)
+                for (int x = w.x0; x < w.x1; ++x) {
+                    const double d = sanitized_density(input.at(x, y), g.d_min);
+                    const double t = transmittance[size_t(y - y0) * w.width() + (x - w.x0)];
+                    density.at(x, y) = float(d - boolean_net(d, g.d_min) -
+                                             std::log10(std::max(t, BooleanGrain::kMinTransmittance)));
+                }
+        }
     });
 }
 

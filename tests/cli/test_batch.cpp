@@ -382,6 +382,21 @@ TEST_CASE("a reference render that will take hours says so before it starts", "[
     CHECK(quick.output.find("warning") == std::string::npos);
 }
 
+TEST_CASE("a reference render over its budget is refused before it starts", "[cli][batch][quality]") {
+    fs::path dir = fresh_dir("reference-budget");
+    const std::string in = make_input("reference-budget.exr", 32, 24);
+    // 32 px across a 150 mm frame: 30 times a Super 35 frame's silver grains, days of CPU.
+    const fs::path out = dir / "refused.exr";
+    Result r = darkroom("develop " + in + " -o " + out.string() +
+                       " --quality reference --frame-width-mm 150 --print-width-mm 150 --threads 1");
+    INFO(r.output);
+    CHECK(r.exit_code != 0);
+    CHECK(r.output.find("--quality reference") != std::string::npos);
+    CHECK(r.output.find("window 0,0,32,24") != std::string::npos);
+    CHECK(r.output.find("budget of 24 CPU hours") != std::string::npos);
+    CHECK_FALSE(fs::exists(out));
+}
+
 // Alpha (OpenImageIO's convention: premultiplied) is not read as colour: the grey, divided by
 // it, develops as the grey alone would, and is multiplied by it again. A grey plate with
 // alpha and depth (Y, A, Z: three channels, which by their count alone would be RGB) is grey

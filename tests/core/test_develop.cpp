@@ -497,3 +497,32 @@ TEST_CASE("a result row is written to RGB and RGBA pixels, with the input's alph
                     }
                 }
 }
+
+TEST_CASE("the reference tier's budget refuses a render of more than a day before it starts", "[develop][quality]") {
+    const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    DevelopSettings s;
+    s.quality = Quality::reference;
+    // A 150 mm frame in 48 x 32 px: 3 mm of film a pixel, billions of silver grains each, and
+    // about 30 times a Super 35 frame's area in all.
+    s.frame_width_mm = s.print_width_mm = 150;
+    const Window frame{0, 0, 48, 32};
+    const Plan plan = Plan::compile(film, &paper, s, {frame.width(), frame.height()}, 1);
+    REQUIRE(reference_cpu_seconds(plan, frame) > kReferenceCpuBudgetSeconds);
+    CHECK_THROWS_WITH(check_reference_render_budget(plan, frame, "--quality "),
+                      Catch::Contains("--quality reference") && Catch::Contains("window 0,0,48,32") &&
+                          Catch::Contains("budget of 24 CPU hours"));
+    // The estimate counts every pixel whose grain is drawn: an interior window's halo too.
+    const Window inner{20, 12, 24, 16};
+    CHECK(plan.silver_grains_drawn(inner) > 2 * plan.silver_grains_per_pixel() * inner.pixel_count());
+    // One pixel of it is within the budget, and still long enough to be warned of.
+    const Window one{24, 16, 25, 17};
+    REQUIRE(reference_cpu_seconds(plan, one) < kReferenceCpuBudgetSeconds);
+    std::string warning;
+    CHECK_NOTHROW(warning = check_reference_render_budget(plan, one, "--quality "));
+    CHECK_THAT(warning, Catch::Contains("CPU hours") && Catch::Contains("--quality high"));
+    // The other tiers draw no silver grains: nothing to refuse or warn of.
+    s.quality = Quality::high;
+    const Plan high = Plan::compile(film, &paper, s, {frame.width(), frame.height()}, 1);
+    CHECK(high.silver_grains_drawn(frame) == 0);
+    CHECK(check_reference_render_budget(high, frame, "--quality ").empty());
+}

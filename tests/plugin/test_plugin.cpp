@@ -561,6 +561,15 @@ TEST_CASE("a reference render that will take hours says so on the node before it
     CHECK(inst->user_edited("printWidthMm") == kOfxStatOK);  // the host clears the node's message
     CHECK(inst->render(1, {0, 0, w, h}).status == kOfxStatFailed);
     CHECK(inst->effect().persistent_message.empty());
+
+    // Across a 150 mm frame it would take days: refused before it starts, an error on the node.
+    inst->set_double("frameWidthMm", 150);
+    inst->set_double("printWidthMm", 150);
+    CHECK(inst->render(1, {0, 0, w, h}).status == kOfxStatFailed);
+    INFO(inst->effect().persistent_message);
+    CHECK(inst->effect().persistent_message_type == kOfxMessageError);
+    CHECK(inst->effect().persistent_message.find("Quality reference") != std::string::npos);
+    CHECK(inst->effect().persistent_message.find("budget of 24 CPU hours") != std::string::npos);
 }
 
 TEST_CASE("abort stops a render", "[plugin]") {

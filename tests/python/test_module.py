@@ -142,6 +142,11 @@ class ModuleEqualsProgram(unittest.TestCase):
             with self.assertRaisesRegex(RuntimeWarning, "draws every silver grain.*CPU hours"):
                 darkroom.develop(self.plate, quality="reference")
 
+    def test_a_reference_render_over_its_budget_is_refused_as_an_error(self):
+        # The same plate across a 150 mm frame: days of CPU, refused before it starts.
+        with self.assertRaisesRegex(ValueError, "quality=reference.*budget of 24 CPU hours"):
+            darkroom.develop(self.plate, quality="reference", frame_width_mm=150, print_width_mm=150)
+
     def test_non_finite_input_is_warned_of_as_the_program_does(self):
         # Colour and the premultiplying alpha are counted; the result stays finite.
         plate = self.plate.copy()
