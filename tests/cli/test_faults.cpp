@@ -486,6 +486,8 @@ TEST_CASE("faults: flags, files and sizes past their limits are refused before t
         big << "{\"format\": \"darkroom-look\", \"version\": 1, \"settings\": {}, \"pad\": \"";
         big << std::string(17u << 20, 'x') << "\"}";
     }
+    // A header that promises 36000x36000 pixels (73 GB to develop) over a few bytes of them.
+    std::ofstream((dir / "huge.ppm").string(), std::ios::binary) << "P6\n36000 36000\n255\n" << std::string(300, '\0');
     std::ofstream((dir / "both.json").string())
         << R"({"format": "darkroom-look", "version": 1, "settings": {"tocolorspace": "ACEScg", "ociodisplay": ["sRGB", ""]}})";
     struct Case {
@@ -503,6 +505,7 @@ TEST_CASE("faults: flags, files and sizes past their limits are refused before t
              {develop + " --grain-profile " + (dir / "big.json").string(), "more than the 16 MB a grain profile may be", 1},
              {develop + " --look " + (dir / "both.json").string(), "both say where the result goes", 1},
              {"develop " + (dir / "corrupt.exr").string() + " -o " + out, "cannot read", 1},
+             {"develop " + (dir / "huge.ppm").string() + " -o " + out, "GB of memory", 1},
              {develop + " --log " + (dir / "no-folder" / "log.json").string(), "does not exist", 1},
              {develop + " --window 0,0,2147483647,5", "is not inside the 64x64 image", 1},
              {develop + " --seed 18446744073709551616", "--seed: must be a whole number", 105},
