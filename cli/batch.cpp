@@ -221,6 +221,13 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+void check_output_holds_parts(const FrameJob& job, const LoadedImage& input, FrameReport& report,
+                              Progress& progress) {
+    require_holds_parts(job.output, job.input, input);
+    if (const std::string w = uint32_channels_warning(job.output, input); !w.empty())
+        progress.warn_once("uint32", report, w);
+}
+
 void add_batch_flags(CLI::App& cmd, BatchOptions& o, const std::string& input_help, const std::string& output_help) {
     auto run_option = [](CLI::Option* opt) { return opt->configurable(false); };
     run_option(cmd.add_option("input", o.input, input_help + " (plate.####.exr, plate.%04d.exr, plate.@@@@.exr)"));

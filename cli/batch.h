@@ -48,6 +48,11 @@ std::string output_flag_hint(const CLI::App& cmd);
 
 double seconds_since(std::chrono::steady_clock::time_point start);
 
+// That job's output can hold the parts of `input` (refused before the work, as
+// require_holds_parts), and a warning once a run where it cannot keep their uint32 channels.
+void check_output_holds_parts(const FrameJob& job, const LoadedImage& input, FrameReport& report,
+                              Progress& progress);
+
 // A frame's output, once the frame is developed: written under its temporary name
 // (write_image_to_temp), which the batch commits in frame order.
 using FrameWrite = std::function<std::unique_ptr<TempFile>()>;

@@ -48,9 +48,7 @@ FrameWrite develop_frame(const DevelopOptions& o, const Renderer& renderer, Plan
     if (const std::string w = colour.input_tag_warning(job.input, in.spec.get_string_attribute("oiio:ColorSpace"));
         !w.empty())
         progress.warn_once("input tag", report, w);
-    require_holds_parts(job.output, job.input, in);
-    if (const std::string w = uint32_channels_warning(job.output, in); !w.empty())
-        progress.warn_once("uint32", report, w);
+    check_output_holds_parts(job, in, report, progress);
     const int premultiplied_alpha = premultiplied_alpha_channel(in.spec);
 
     start = std::chrono::steady_clock::now();
@@ -124,9 +122,7 @@ void run_develop(DevelopOptions& o) {
               },
               [&](const FrameJob& job, FrameReport& report, Progress& progress) {
                   const LoadedImage input = read_image_header(job.input, o.layer);
-                  require_holds_parts(job.output, job.input, input);
-                  if (const std::string w = uint32_channels_warning(job.output, input); !w.empty())
-                      progress.warn_once("uint32", report, w);
+                  check_output_holds_parts(job, input, report, progress);
                   require_format_holds(job.output, "", 3 + input.spec.nchannels - colour_channel_count(input.spec));
                   frame_write_options(o, renderer.colour(), output, input.spec, job, report, progress);
               });

@@ -268,9 +268,7 @@ FrameWrite apply_frame(const ApplyOptions& o, const GrainSynthesisPlan& grain, c
                        FrameReport& report, Progress& progress) {
     auto start = std::chrono::steady_clock::now();
     LoadedImage in = read_plate(job.input, o.layer, true);
-    require_holds_parts(job.output, job.input, in);
-    if (const std::string w = uint32_channels_warning(job.output, in); !w.empty())
-        progress.warn_once("uint32", report, w);
+    check_output_holds_parts(job, in, report, progress);
     report.read_seconds = seconds_since(start);
     // Grain levels are code values of the profile's encoding: another encoding's pixels would
     // get grain of the wrong amount at the wrong levels.
