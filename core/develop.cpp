@@ -154,8 +154,17 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
                 continue;
             }
         }
-        GrainModel g = design_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um, key,
-                                    tier.grain == GrainMethod::hashed_noise);
+        const bool fast_grain = tier.grain == GrainMethod::hashed_noise;
+        GrainModel g = design_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um, key, fast_grain);
+        // The preview's proxy: its grain, drawn at the proxy's pitch and upsampled, keeps the
+        // frame's per-pixel standard deviation (averaging a 2x2 block and interpolating each
+        // lower it: to 0.375 for grain finer than a pixel); its texture stays the coarser one.
+        if (tier.proxy_scale > 1 && !g.is_noop()) {
+            const GrainModel frame_grain = design_grain(spec, layer.density_curve.y_min(),
+                                                        m.pixel_pitch_um / tier.proxy_scale, key, fast_grain);
+            g.sigma_per_pixel *= frame_grain.pixel_sigma_at_unit_density() /
+                                 (g.pixel_sigma_at_unit_density() * proxy_upsampled_sigma_ratio(g.lag1_correlation()));
+        }
         if (!structure.skip_noop_stages)
             m.grain.back() = g;
         else if (!s.grain)

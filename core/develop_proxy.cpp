@@ -106,6 +106,12 @@ void add_time(StageTimes* times, const char* stage, std::chrono::steady_clock::t
 
 }  // namespace
 
+double proxy_upsampled_sigma_ratio(double lag1_correlation) {
+    // Along one axis a frame pixel is 3/4 a + 1/4 b of two neighbours: variance
+    // (9/16 + 1/16 + 2 (3/16) rho) of theirs. The two axes multiply, and so does the square root.
+    return 0.625 + 0.375 * lag1_correlation;
+}
+
 FrameGeometry proxy_geometry(const FrameGeometry& frame) {
     const Window image = proxy_cover({frame.x0, frame.y0, frame.x0 + frame.width, frame.y0 + frame.height});
     FrameGeometry proxy = frame;

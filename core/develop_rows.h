@@ -29,6 +29,11 @@ double sanitize(float v);
 // `colours` interleaved.
 void block_mean_row(const ConstImageView& in, const Window& image, int Y, int X, int width, float* colours);
 
+// The standard deviation of a field after the proxy's upsample over the field's own (its
+// bilinear taps, 3/4 and 1/4 along each axis, at every frame pixel), for a field whose
+// neighbouring pixels correlate by lag1_correlation along x and along y.
+double proxy_upsampled_sigma_ratio(double lag1_correlation);
+
 // Each film layer's exposure from rows of the input: the row's colour channels sanitised,
 // then each layer's weighted sum times `scale`, held within [0, kMaxInput], in float. Grey
 // input (grey_input: its first channel alone is read) weighs it by the sum of a layer's

@@ -144,6 +144,13 @@ double GrainModel::field_sigma() const {
     return k2;
 }
 
+double GrainModel::lag1_correlation() const {
+    double lagged = 0;
+    for (size_t i = 0; i + 1 < kernel.size(); ++i) lagged += double(kernel[i]) * kernel[i + 1];
+    const double k2 = field_sigma();
+    return k2 > 0 ? lagged / k2 : 0.0;
+}
+
 double GrainModel::pixel_sigma_at_unit_density() const { return sigma_per_pixel * field_sigma(); }
 
 GrainModel design_grain(const GrainSpec& spec, double d_min, double pitch_um, NoiseKey key, bool fast) {

@@ -65,6 +65,8 @@ struct GrainModel {
     // The standard deviation per pixel of unit white noise through the kernel in x and y: the
     // sum of the 1D kernel's squares (the 2D kernel's squares sum to its square).
     double field_sigma() const;
+    // The correlation of the filtered field between neighbouring pixels along x (or y).
+    double lag1_correlation() const;
     // What the unit noise is scaled by at a developed density: sigma_per_pixel (D - d_min)^exponent.
     double amplitude_at(double density) const;
 };

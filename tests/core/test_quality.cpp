@@ -381,18 +381,8 @@ TEST_CASE("the fast tiers print through one table, the paper's MTF on the negati
 
 namespace {
 
-// The RMS of log10 of the print's R, G and B on a flat patch of scene-linear `level`, at a
-// 4K frame's pixel pitch on Super 35.
-std::array<double, 3> print_grain_rms(const Stock& film, const Stock& paper, Quality quality, float level) {
-    constexpr int kSide = 256;
-    Image flat(Window{0, 0, kSide, kSide}, 3);
-    std::fill(flat.pixels.begin(), flat.pixels.end(), level);
-    DevelopSettings s;
-    s.quality = quality;
-    s.frame_width_mm = 4096 * 0.00608;
-    Plan plan = Plan::compile(film, &paper, s, {kSide, kSide, false, 0, 0, 4096});
-    Image out(flat.window, 3);
-    plan.run(flat.view(), out.view(), 2);
+// The RMS of log10 of an RGB image's R, G and B.
+std::array<double, 3> log_rms(const Image& out) {
     std::array<double, 3> rms;
     for (int c = 0; c < 3; ++c) {
         double sum = 0, sum2 = 0;
@@ -405,6 +395,21 @@ std::array<double, 3> print_grain_rms(const Stock& film, const Stock& paper, Qua
         rms[size_t(c)] = std::sqrt(sum2 / n - mean * mean);
     }
     return rms;
+}
+
+// The RMS of log10 of the print's R, G and B on a flat patch of scene-linear `level`, at a
+// 4K frame's pixel pitch on Super 35.
+std::array<double, 3> print_grain_rms(const Stock& film, const Stock& paper, Quality quality, float level) {
+    constexpr int kSide = 256;
+    Image flat(Window{0, 0, kSide, kSide}, 3);
+    std::fill(flat.pixels.begin(), flat.pixels.end(), level);
+    DevelopSettings s;
+    s.quality = quality;
+    s.frame_width_mm = 4096 * 0.00608;
+    Plan plan = Plan::compile(film, &paper, s, {kSide, kSide, false, 0, 0, 4096});
+    Image out(flat.window, 3);
+    plan.run(flat.view(), out.view(), 2);
+    return log_rms(out);
 }
 
 }  // namespace
@@ -421,14 +426,18 @@ TEST_CASE("the fast tiers' print has the grain of both film and paper, the paper
     // layers' variances rather than the channels' left green 9 % high at scene 0.005.)
     for (float level : {0.005f, 0.05f, 0.18f, 0.9f, 4.0f, 16.0f}) {
         const std::array<double, 3> high = print_grain_rms(film, paper, Quality::high, level);
-        // (The preview tier is this one at twice the pitch: "the preview tier is the fast tier ...".)
-        for (Quality quality : {Quality::fast}) {
+        // The preview tier draws it at twice the pitch and upsamples it, its amplitude raised
+        // so that each pixel's spread is the frame's (develop.cpp): without that, 0.375 of it.
+        // The raise leaves out the paper's MTF, which takes less of the negative's grain at the
+        // proxy's pitch: measured up to 9.5 % high (red at 0.05), within 1 % with the MTF off.
+        for (Quality quality : {Quality::fast, Quality::preview}) {
+            const double tolerance = quality == Quality::preview ? 0.12 : 0.05;
             const std::array<double, 3> folded = print_grain_rms(film, paper, quality, level);
             const double film_alone = print_grain_rms(film, grainless, quality, level)[1];
             for (int c = 0; c < 3; ++c) {
                 INFO("scene " << level << ", channel " << c << ": high " << high[c] << ", " << quality_name(quality)
                               << " " << folded[c] << ", green without the paper's grain " << film_alone);
-                CHECK(folded[c] == Approx(high[c]).epsilon(0.05));
+                CHECK(folded[c] == Approx(high[c]).epsilon(tolerance));
             }
             CHECK(film_alone < 0.97 * folded[1]);  // the paper's grain is worth folding in
         }
@@ -518,8 +527,9 @@ TEST_CASE("the preview tier is the fast tier on a half-resolution proxy, upsampl
     // Independently of develop_proxy.cpp: the scene averaged over 2x2 blocks of the film
     // frame's pixels (an odd frame's last blocks hold what it has), developed at the fast tier
     // at twice the pixel pitch, and interpolated bilinearly at the frame's pixel centres. So
-    // grain, MTF and halation are fast's at the proxy's pitch: their size on the film is kept
-    // (the print-grain tests above hold fast's grain at the pitch it is given).
+    // MTF and halation are fast's at the proxy's pitch: their size on the film is kept. So is
+    // the grain's, but its amplitude is raised to the frame's (the print-grain test above), so
+    // it is off here.
     // The input as grey, grey and alpha, RGB and RGBA, with values the film sees as others in
     // some blocks (NaN and -Inf as no light, +Inf and 1e38 held at 1e30), inside and at the
     // frame's edges.
@@ -532,9 +542,8 @@ TEST_CASE("the preview tier is the fast tier on a half-resolution proxy, upsampl
     const auto film_sees = [inf](float v) { return v != v || v == -inf ? 0.0f : std::clamp(v, -1e30f, 1e30f); };
     DevelopSettings s;
     s.quality = Quality::preview;
-    s.seed = 7;
-    s.frame = 1;
-    s.frame_width_mm = kWidth * 0.006;  // a 4K frame's pitch: grain, MTF and halation all act
+    s.grain = false;
+    s.frame_width_mm = kWidth * 0.006;  // a 4K frame's pitch: MTF and halation act
     s.print_width_mm = kWidth * 0.0054;
     for (int channels : {1, 2, 3, 4}) {
         INFO(channels << " channels");
@@ -579,6 +588,31 @@ TEST_CASE("the preview tier is the fast tier on a half-resolution proxy, upsampl
                     REQUIRE(preview.at(x, y)[c] == 0.75f * near_row + 0.25f * far_row);
                 }
             }
+    }
+}
+
+TEST_CASE("the preview tier's negative has the frame's grain per pixel, coarser", "[quality][preview][grain]") {
+    // Averaging 2x2 blocks quarters fine grain's variance and the bilinear upsample keeps
+    // (0.625 + 0.375 rho)^2 of the rest: the proxy's amplitude is raised by both. On a flat
+    // field the negative's grain is the filtered noise alone (its MTF acts before the grain).
+    const Stock film = find_stock("kodak-vision3-250d");
+    constexpr int kSide = 256;
+    Image flat(Window{0, 0, kSide, kSide}, 3);
+    std::fill(flat.pixels.begin(), flat.pixels.end(), 0.18f);
+    std::array<std::array<double, 3>, 2> rms{};
+    for (int tier = 0; tier < 2; ++tier) {
+        DevelopSettings s;
+        s.quality = tier == 0 ? Quality::fast : Quality::preview;
+        s.output = OutputMode::negative;
+        s.frame_width_mm = 4096 * 0.00608;
+        Plan plan = Plan::compile(film, nullptr, s, {kSide, kSide, false, 0, 0, 4096});
+        Image out(flat.window, 3);
+        plan.run(flat.view(), out.view(), 2);
+        rms[size_t(tier)] = log_rms(out);
+    }
+    for (int c = 0; c < 3; ++c) {
+        INFO("channel " << c << ": fast " << rms[0][size_t(c)] << ", preview " << rms[1][size_t(c)]);
+        CHECK(rms[1][size_t(c)] == Approx(rms[0][size_t(c)]).epsilon(0.03));
     }
 }
 
