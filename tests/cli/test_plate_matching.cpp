@@ -178,22 +178,41 @@ TEST_CASE("known grain on a CG render with sharp detail analyses back within the
         }
 }
 
+TEST_CASE("the independent estimator removes each block's least-squares plane", "[plate]") {
+    // A picture that is a plane leaves no residual in any block: the estimator reads no grain
+    // (float rounding only) at every level, and so no picture gradient passes as grain.
+    Image plane(512, 512, 3);
+    for (int y = 0; y < 512; ++y)
+        for (int x = 0; x < 512; ++x)
+            for (int c = 0; c < 3; ++c) plane.at(x, y)[c] = float(0.1 + 0.0012 * x + (0.0004 + 0.0002 * c) * y);
+    const independent::Estimate e = independent::estimate(plane);
+    for (int c = 0; c < 3; ++c) {
+        int measured = 0;
+        for (double sigma : e.sigma[c])
+            if (std::isfinite(sigma)) {
+                INFO("RGB"[c] << ": sigma " << sigma);
+                CHECK(sigma < 1e-5);
+                ++measured;
+            }
+        CHECK(measured >= independent::kBins / 2);
+    }
+}
+
 TEST_CASE("grain analysed from the real plates resynthesises to the plate's by an independent estimator",
           "[plate][reference]") {
     if (!fs::exists(kPlates / "kodim23.png")) {
         WARN("reference plates in " << kPlates << " not found: skipped");
         return;
     }
-    // The figures of the guide's table (tools/plate_report: seed 7, 64 px patches). Bounds:
-    // kodim10 within the targets of a match by eye (15 %, 0.1, 0.1; measured 4.2-6.6 %, lag-1
-    // 0.00-0.03 apart, correlation 0.06 apart); kodim23, whose quiet areas hold more power at
-    // low frequencies than its analysed grain (see the guide), within its measured figures
-    // plus a margin (measured 14.6-22.6 %, lag-1 0.09-0.13 apart, correlation 0.05 apart).
+    // The figures of the guide's table (tools/plate_report: seed 7, 64 px patches), inside the
+    // targets of a match by eye (15 %, 0.1, 0.1) with a margin. Measured: kodim10 3.3-5.1 %,
+    // lag-1 0.00-0.01 apart, correlation 0.06 apart; kodim23 3.4-7.2 %, lag-1 0.02-0.03
+    // apart, correlation 0.07 apart.
     struct Bound {
         const char* name;
         double response, lag1, correlation;
     };
-    for (const Bound& bound : {Bound{"kodim10", 0.15, 0.1, 0.1}, Bound{"kodim23", 0.25, 0.18, 0.1}}) {
+    for (const Bound& bound : {Bound{"kodim10", 0.10, 0.05, 0.1}, Bound{"kodim23", 0.10, 0.05, 0.1}}) {
         const Image plate = independent::read_rgb(kPlates / (std::string(bound.name) + ".png"));
         const GrainProfile profile = analyse(plate);
         const independent::Estimate on_plate = independent::estimate(plate);
