@@ -1,6 +1,7 @@
 #include "core/plate/grain_analysis.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 
@@ -45,6 +46,15 @@ constexpr double kWeakTextureZ = 2.3263478740408408;  // standard normal quantil
 // The curve and the weak-texture selection are iterated until the curve's variances settle.
 constexpr int kWeakTextureIterations = 8;
 constexpr double kWeakTextureSettled = 1e-3;
+// The low-band test's cells: a grid of this many a side over the block.
+constexpr int kLowBandCellsPerSide = 8;
+
+// The quantile at standard normal quantile z of a Gamma variable of this shape, over its mean
+// (Wilson-Hilferty).
+double gamma_quantile_over_mean(double shape, double z) {
+    const double h = 1.0 / (9 * shape);
+    return std::pow(1 - h + z * std::sqrt(h), 3.0);
+}
 
 // Lags |dx|, |dy| <= radius, row-major from (-radius, -radius).
 struct LagGrid {
@@ -87,6 +97,22 @@ std::vector<double> autocorrelation(const double* f, int size, const LagGrid& la
 }
 
 double pair_count(int size, int dx, int dy) { return double(size - std::abs(dx)) * (size - std::abs(dy)); }
+
+// R v: the covariance (in units of sigma^2) of grain of autocorrelation rho applied to v, an
+// n x n block.
+std::vector<double> apply_autocorrelation(const std::vector<double>& rho, const LagGrid& lags, int n,
+                                          const std::vector<double>& v) {
+    std::vector<double> out((size_t)n * n, 0.0);
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+            double sum = 0;
+            for (int dy = std::max(-lags.radius, -y); dy <= std::min(lags.radius, n - 1 - y); ++dy)
+                for (int dx = std::max(-lags.radius, -x); dx <= std::min(lags.radius, n - 1 - x); ++dx)
+                    sum += rho[lags.index(dx, dy)] * v[(size_t)(y + dy) * n + x + dx];
+            out[(size_t)y * n + x] = sum;
+        }
+    return out;
+}
 
 // The least-squares quadratic surface on a block (1, x, y, x^2, xy, y^2), as an
 // orthonormal basis: it follows shading and gentle gradients, not edges or texture.
@@ -131,17 +157,7 @@ struct SurfaceFit {
     Bias bias(const std::vector<double>& rho, const LagGrid& lags) const {
         const int n = size;
         std::vector<double> applied[kTerms];  // R b_k
-        for (int k = 0; k < kTerms; ++k) {
-            applied[k].assign((size_t)n * n, 0.0);
-            for (int y = 0; y < n; ++y)
-                for (int x = 0; x < n; ++x) {
-                    double sum = 0;
-                    for (int dy = std::max(-lags.radius, -y); dy <= std::min(lags.radius, n - 1 - y); ++dy)
-                        for (int dx = std::max(-lags.radius, -x); dx <= std::min(lags.radius, n - 1 - x); ++dx)
-                            sum += rho[lags.index(dx, dy)] * basis[k][(size_t)(y + dy) * n + x + dx];
-                    applied[k][(size_t)y * n + x] = sum;
-                }
-        }
+        for (int k = 0; k < kTerms; ++k) applied[k] = apply_autocorrelation(rho, lags, n, basis[k]);
         double m[kTerms][kTerms];
         for (int k = 0; k < kTerms; ++k)
             for (int l = 0; l < kTerms; ++l) {
@@ -164,6 +180,95 @@ struct SurfaceFit {
     }
 };
 
+// A block's low frequencies: the means of its residual over a grid of square cells. Picture
+// content a few pixels across (gradients, soft texture, a defocused background) that the
+// surface cannot follow keeps its power there, while grain's averages out: a block whose
+// cell means hold more power than grain of the curve's sigma and the measured
+// autocorrelation gives (a chi-square test, as libaom's noise model compares each block's
+// spectrum with the noise's) holds content. A residual's cell mean is u_c . g for grain g,
+// with u_c = (I - P) 1_c / m^2 (P the surface fit, m the cell's side), so its covariance is
+// exactly u_c . R u_c'.
+struct LowBand {
+    const SurfaceFit& fit;
+    int cells_per_side = 0, cell_px = 0;
+    std::vector<std::array<double, SurfaceFit::kTerms>> basis_weight;  // per cell c, b_k . 1_c / m^2
+
+    LowBand(const SurfaceFit& surface, int cells) : fit(surface), cells_per_side(cells), cell_px(surface.size / cells) {
+        for (int c = 0; c < cell_count(); ++c) {
+            std::array<double, SurfaceFit::kTerms> dots{};
+            for (int k = 0; k < SurfaceFit::kTerms; ++k) dots[k] = cell_mean(fit.basis[k].data(), c);
+            basis_weight.push_back(dots);
+        }
+    }
+
+    int cell_count() const { return cells_per_side * cells_per_side; }
+
+    // The mean of v (a block, row-major) over cell c.
+    double cell_mean(const double* v, int c) const {
+        const int x0 = c % cells_per_side * cell_px, y0 = c / cells_per_side * cell_px;
+        double sum = 0;
+        for (int y = y0; y < y0 + cell_px; ++y)
+            for (int x = x0; x < x0 + cell_px; ++x) sum += v[(size_t)y * fit.size + x];
+        return sum / (cell_px * cell_px);
+    }
+
+    // The sum of squares of a residual's cell means.
+    double power(const double* residual) const {
+        double sum = 0;
+        for (int c = 0; c < cell_count(); ++c) sum += cell_mean(residual, c) * cell_mean(residual, c);
+        return sum;
+    }
+
+    // For grain of unit variance and autocorrelation rho: the power's mean (the trace of the
+    // cell means' covariance C) and its degrees of freedom as a scaled chi-square
+    // (Satterthwaite: tr(C)^2 / tr(C^2)). R u_c is R 1_c / m^2 (a sum of rho over a
+    // rectangle of lags, from its summed-area table) less the projection's R b_k.
+    struct Expectation {
+        double mean = 0, dof = 0;
+    };
+    Expectation expectation(const std::vector<double>& rho, const LagGrid& lags) const {
+        const int n = fit.size, side = lags.side(), r = lags.radius;
+        std::vector<double> area((size_t)(side + 1) * (side + 1), 0.0);  // sums of rho over lags below and left
+        for (int j = 0; j < side; ++j)
+            for (int i = 0; i < side; ++i)
+                area[(size_t)(j + 1) * (side + 1) + i + 1] = rho[(size_t)j * side + i] + area[(size_t)j * (side + 1) + i + 1] +
+                                                             area[(size_t)(j + 1) * (side + 1) + i] - area[(size_t)j * (side + 1) + i];
+        std::vector<double> applied_basis[SurfaceFit::kTerms];
+        for (int k = 0; k < SurfaceFit::kTerms; ++k) applied_basis[k] = apply_autocorrelation(rho, lags, n, fit.basis[k]);
+        std::vector<std::vector<double>> applied(cell_count(), std::vector<double>((size_t)n * n));  // R u_c
+        for (int c = 0; c < cell_count(); ++c) {
+            const int x0 = c % cells_per_side * cell_px, y0 = c / cells_per_side * cell_px;
+            for (int y = 0; y < n; ++y) {
+                const int dy0 = std::max(-r, y0 - y), dy1 = std::min(r, y0 + cell_px - 1 - y);
+                for (int x = 0; x < n; ++x) {
+                    const int dx0 = std::max(-r, x0 - x), dx1 = std::min(r, x0 + cell_px - 1 - x);
+                    double sum = 0;
+                    if (dy0 <= dy1 && dx0 <= dx1)
+                        sum = area[(size_t)(dy1 + r + 1) * (side + 1) + dx1 + r + 1] - area[(size_t)(dy0 + r) * (side + 1) + dx1 + r + 1] -
+                              area[(size_t)(dy1 + r + 1) * (side + 1) + dx0 + r] + area[(size_t)(dy0 + r) * (side + 1) + dx0 + r];
+                    sum /= cell_px * cell_px;
+                    for (int k = 0; k < SurfaceFit::kTerms; ++k) sum -= basis_weight[c][k] * applied_basis[k][(size_t)y * n + x];
+                    applied[c][(size_t)y * n + x] = sum;
+                }
+            }
+        }
+        // C_ab = u_a . R u_b = (R u_b summed over cell a) / m^2 - sum_k (b_k . 1_a / m^2) (b_k . R u_b).
+        double trace = 0, trace_squared = 0;
+        for (int b = 0; b < cell_count(); ++b) {
+            double projection[SurfaceFit::kTerms] = {};
+            for (int k = 0; k < SurfaceFit::kTerms; ++k)
+                for (size_t p = 0; p < applied[b].size(); ++p) projection[k] += fit.basis[k][p] * applied[b][p];
+            for (int a = 0; a < cell_count(); ++a) {
+                double c = cell_mean(applied[b].data(), a);
+                for (int k = 0; k < SurfaceFit::kTerms; ++k) c -= basis_weight[a][k] * projection[k];
+                trace += a == b ? c : 0.0;
+                trace_squared += c * c;
+            }
+        }
+        return {trace, trace_squared > 0 ? trace * trace / trace_squared : 0.0};
+    }
+};
+
 struct Block {
     std::vector<double> residual;  // channel-planar: [c][y][x]
     std::vector<double> level;     // mean per channel
@@ -171,6 +276,7 @@ struct Block {
     std::vector<double> quadrant_squares;  // per channel, that of each quadrant
     std::vector<double> shape;     // per channel, the block's autocorrelation at kShapeLags
     std::vector<double> gradient;  // per channel, mean gh^2, gv^2, gh gv (forward differences)
+    std::vector<double> low_band;  // per channel, LowBand::power of the residual
 };
 
 // The largest eigenvalue of the symmetric 2x2 matrix [[a, b], [b, c]].
@@ -301,6 +407,7 @@ struct ChannelState {
     std::vector<int> bin;           // per block
     LevelCurve curve;
     double dof = 0;                 // N - trace: expected residual sum of squares / sigma^2
+    LowBand::Expectation low_band;  // of a grain-only block's LowBand::power / sigma^2
     double relative_sd = 0;         // of a grain-only block's variance estimate
 };
 
@@ -345,6 +452,7 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
     const LagGrid lags{bs / 4};
     a.lags = lags;
     SurfaceFit surface(bs, lags);
+    const LowBand low_band(surface, kLowBandCellsPerSide);
 
     // Cut every frame into blocks and fit the surface in each; blocks with a non-finite pixel
     // are left out.
@@ -395,6 +503,7 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                 const double gradient_px = double(bs - 1) * (bs - 1);
                 b.gradient.insert(b.gradient.end(), {gh2 / gradient_px, gv2 / gradient_px, ghv / gradient_px});
                 b.quadrant_squares.insert(b.quadrant_squares.end(), quadrant, quadrant + 4);
+                b.low_band.push_back(low_band.power(r));
                 for (const auto& lag : kShapeLags) {
                     const int dx = lag[0], dy = lag[1];
                     double sum = 0;
@@ -505,13 +614,26 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                 }
             shape = std::min(shape, double(m) * m * m * m / (2 * sum));
         }
-        // Its 0.99 quantile over its mean (Wilson-Hilferty).
-        const double h = 1.0 / (9 * shape), quantile = std::pow(1 - h + kWeakTextureZ * std::sqrt(h), 3.0);
+        const double quantile = gamma_quantile_over_mean(shape, kWeakTextureZ);
         for (int i = 0; i < nblocks; ++i) {
             const double* g = &blocks[i].gradient[(size_t)c * 3];
             weak[i] = largest_eigenvalue(g[0], g[2], g[1]) <= quantile * expected * s.curve.at(blocks[i].level[c]);
         }
         return weak;
+    };
+
+    // Whether each block's low-band power is within what grain of the curve's sigma at its level
+    // gives (the 0.99 quantile of a chi-square with LowBand's degrees of freedom); every block
+    // while no curve or no autocorrelation (the first pass: grain's low band grows with its
+    // correlation, so white grain's would reject correlated grain everywhere).
+    auto low_band_blocks = [&](int c, int pass) {
+        const ChannelState& s = state[c];
+        std::vector<char> smooth(nblocks, 1);
+        if (pass == 0 || s.curve.level.empty() || !(s.low_band.dof > 0)) return smooth;
+        const double limit = gamma_quantile_over_mean(0.5 * s.low_band.dof, kWeakTextureZ) * s.low_band.mean;
+        for (int i = 0; i < nblocks; ++i)
+            smooth[i] = blocks[i].low_band[c] <= limit * s.curve.at(blocks[i].level[c]);
+        return smooth;
     };
 
     // The response through the candidates of each bin that has enough of them.
@@ -542,6 +664,7 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
     auto update_statistics = [&](ChannelState& s) {
         s.dof = npx - surface.bias(s.rho, lags).trace;
         s.relative_sd = std::sqrt(2.0 * sum_rho2(s.rho, lags, bs)) / s.dof;
+        s.low_band = low_band.expectation(s.rho, lags);
     };
 
     for (int pass = 0; pass < 3; ++pass) {
@@ -563,8 +686,9 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                 const std::vector<char> typical = typical_blocks(c, reference), stationary = stationary_blocks(c);
                 // The curve and the weak-texture selection, each from the other until the curve settles.
                 for (int iteration = 0; iteration < kWeakTextureIterations; ++iteration) {
-                    const std::vector<char> weak = weak_textured_blocks(c);
-                    for (int i = 0; i < nblocks; ++i) s.candidate[i] = typical[i] && stationary[i] && weak[i];
+                    const std::vector<char> weak = weak_textured_blocks(c), smooth = low_band_blocks(c, pass);
+                    for (int i = 0; i < nblocks; ++i)
+                        s.candidate[i] = typical[i] && stationary[i] && weak[i] && smooth[i];
                     LevelCurve next = fit_curve(c);
                     bool settled = next.bin == s.curve.bin;
                     for (size_t k = 0; settled && k < next.variance.size(); ++k)

@@ -9,8 +9,11 @@
 // - its own autocorrelation at a few short lags is typical of the kept blocks,
 // - its four quadrants' variances agree (stationary), and
 // - its gradient covariance's largest eigenvalue is within what grain of the curve's sigma
-//   and the measured autocorrelation gives (weak texture, after Liu, Tanaka and Okutomi);
-//   the curve and this selection are iterated until the curve settles.
+//   and the measured autocorrelation gives (weak texture, after Liu, Tanaka and Okutomi),
+// - the power of its residual's means over an 8 x 8 grid of cells (its low frequencies:
+//   gradients and soft shapes a few pixels across) is within what that grain gives, a
+//   chi-square test as libaom's noise model makes of block spectra;
+//   the curve and these two selections are iterated until the curve settles.
 // From the kept blocks:
 // - sigma per level: residual sum of squares / (N - tr(P R)), the exact expectation of a
 //   fit residual for grain with autocorrelation R (P projects onto the surface);

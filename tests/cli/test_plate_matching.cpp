@@ -80,19 +80,24 @@ double correlation_at(const Image& a, const Image& b, int c, int lag) {
 
 }  // namespace
 
-TEST_CASE("real plates: textured ones are reported unreliable, flat-sky ones good", "[plate][reference]") {
+TEST_CASE("real plates: textured ones are reported unreliable, flat-sky ones trusted", "[plate][reference]") {
     if (!fs::exists(kPlates / "kodim23.png")) {
         WARN("reference plates in " << kPlates << " not found: skipped");
         return;
     }
     // kodim01 and kodim05 are textured nearly everywhere (brick, foliage, engines): the
     // analysis must say its profile is unreliable rather than pass picture texture off as grain.
+    // kodim23 is good. kodim10's R shows grain alone at 7 of its 16 levels (good needs half):
+    // at its brightest sky level one of four blocks holds content (its low band 1.9 times
+    // grain's), which leaves that level 3 grain-only blocks, so it is usable.
     for (const char* name : {"kodim01", "kodim05", "kodim10", "kodim23"}) {
         const ProfileAssessment trust =
             assess_grain_profile(analyse(independent::read_rgb(kPlates / (std::string(name) + ".png"))));
         INFO(name << ": " << quality_name(trust.quality) << " " << trust.reason);
-        const bool textured = name == std::string("kodim01") || name == std::string("kodim05");
-        CHECK(trust.quality == (textured ? ProfileQuality::unreliable : ProfileQuality::good));
+        const std::string plate = name;
+        if (plate == "kodim01" || plate == "kodim05") CHECK(trust.quality == ProfileQuality::unreliable);
+        else if (plate == "kodim10") CHECK(trust.quality != ProfileQuality::unreliable);
+        else CHECK(trust.quality == ProfileQuality::good);
     }
 }
 
@@ -113,25 +118,25 @@ TEST_CASE("known grain put on the real pictures analyses back to the known grain
     const std::vector<double> correlation = {1, 0.5, 0.3, 0.5, 1, 0.4, 0.3, 0.4, 1};
     const Case cases[] = {
         // White grain about the plates' own amount (2-4 code values of 255). Measured (seed
-        // 11): 2.5-5.1 % (2.5-7.0 % over seeds 11-13), 0.57-0.78 dB, correlation 0.010-0.014.
+        // 11): 1.3-4.0 % (1.3-5.7 % over seeds 11-13), 0.34-0.60 dB, correlation 0.003-0.016.
         {"white grain, the plates' amount",
          known_profile({{0.0075, 0.005, 1.0, 0}, {0.0075, 0.00375, 1.0, 0}, {0.00875, 0.005, 1.0, 0}}, correlation,
                        SignalEncoding::display, 0, 1),
-         8, 1.2, 0.05},
+         6, 1.0, 0.05},
         // Grain of 1 px (lag-1 0.7-0.8), the plates' own amount: the size of the pictures'
-        // fine texture (water, feathers), which the weak-texture test rejects. Measured 4.2-8.6 %
-        // (4.2-11.3 % over seeds 11-13), 0.26-0.68 dB, correlation 0.013-0.032.
+        // fine texture (water, feathers), which the weak-texture test rejects. Measured 2.2-5.4 %
+        // (2.2-9.7 % over seeds 11-13), 0.19-0.39 dB, correlation 0.016-0.020.
         {"1 px grain, the plates' amount",
          known_profile({{0.0075, 0.005, 1.0, 1.0}, {0.0075, 0.00375, 1.0, 0.8}, {0.00875, 0.005, 1.0, 1.2}}, correlation,
                        SignalEncoding::display, 0, 1),
-         12, 1.2, 0.05},
-        // The same 3-5x the plates' own. Measured 4.9-13.0 % (4.3-16.2 % over seeds 11-13;
-        // kodim23's B the worst: levels its parrots' feathers alone show), 0.26-1.04 dB,
-        // correlation 0.010-0.036.
+         8, 1.0, 0.05},
+        // The same 3-5x the plates' own. Measured 3.5-10.0 % (3.5-10.8 % over seeds 11-13;
+        // kodim23's B the worst: levels its parrots' feathers alone show), 0.23-0.67 dB,
+        // correlation 0.013-0.026.
         {"1 px grain, 3-5x the plates'",
          known_profile({{0.03, 0.02, 1.0, 1.0}, {0.03, 0.015, 1.0, 0.8}, {0.035, 0.02, 1.0, 1.2}}, correlation,
                        SignalEncoding::display, 0, 1),
-         17, 1.2, 0.05},
+         12, 1.0, 0.05},
     };
     for (const Case& k : cases)
         for (const char* name : {"kodim10", "kodim23"}) {
@@ -178,22 +183,41 @@ TEST_CASE("known grain on a CG render with sharp detail analyses back within the
         }
 }
 
+TEST_CASE("the independent estimator removes each block's least-squares plane", "[plate]") {
+    // A picture that is a plane leaves no residual in any block: the estimator reads no grain
+    // (float rounding only) at every level, and so no picture gradient passes as grain.
+    Image plane(512, 512, 3);
+    for (int y = 0; y < 512; ++y)
+        for (int x = 0; x < 512; ++x)
+            for (int c = 0; c < 3; ++c) plane.at(x, y)[c] = float(0.1 + 0.0012 * x + (0.0004 + 0.0002 * c) * y);
+    const independent::Estimate e = independent::estimate(plane);
+    for (int c = 0; c < 3; ++c) {
+        int measured = 0;
+        for (double sigma : e.sigma[c])
+            if (std::isfinite(sigma)) {
+                INFO("RGB"[c] << ": sigma " << sigma);
+                CHECK(sigma < 1e-5);
+                ++measured;
+            }
+        CHECK(measured >= independent::kBins / 2);
+    }
+}
+
 TEST_CASE("grain analysed from the real plates resynthesises to the plate's by an independent estimator",
           "[plate][reference]") {
     if (!fs::exists(kPlates / "kodim23.png")) {
         WARN("reference plates in " << kPlates << " not found: skipped");
         return;
     }
-    // The figures of the guide's table (tools/plate_report: seed 7, 64 px patches). Bounds:
-    // kodim10 within the targets of a match by eye (15 %, 0.1, 0.1; measured 4.2-6.6 %, lag-1
-    // 0.00-0.03 apart, correlation 0.06 apart); kodim23, whose quiet areas hold more power at
-    // low frequencies than its analysed grain (see the guide), within its measured figures
-    // plus a margin (measured 14.6-22.6 %, lag-1 0.09-0.13 apart, correlation 0.05 apart).
+    // The figures of the guide's table (tools/plate_report: seed 7, 64 px patches), inside the
+    // targets of a match by eye (15 %, 0.1, 0.1) with a margin. Measured: kodim10 4.8-5.9 %,
+    // lag-1 0.01 apart, correlation 0.07 apart; kodim23 5.2-7.1 %, lag-1 0.02-0.03 apart,
+    // correlation 0.06 apart.
     struct Bound {
         const char* name;
         double response, lag1, correlation;
     };
-    for (const Bound& bound : {Bound{"kodim10", 0.15, 0.1, 0.1}, Bound{"kodim23", 0.25, 0.18, 0.1}}) {
+    for (const Bound& bound : {Bound{"kodim10", 0.10, 0.05, 0.1}, Bound{"kodim23", 0.10, 0.05, 0.1}}) {
         const Image plate = independent::read_rgb(kPlates / (std::string(bound.name) + ".png"));
         const GrainProfile profile = analyse(plate);
         const independent::Estimate on_plate = independent::estimate(plate);
