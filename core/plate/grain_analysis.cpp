@@ -813,13 +813,6 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
         ch.name = c < (int)settings.channel_names.size() ? settings.channel_names[c]
                   : c < 3                                ? std::string(1, "RGB"[c])
                                                          : "C" + std::to_string(c);
-        for (size_t k = 0; k < s.curve.level.size(); ++k) {
-            ch.level.push_back(s.curve.level[k]);
-            ch.sigma.push_back(std::sqrt(s.curve.variance[k]));
-            ch.samples.push_back((long long)s.curve.blocks[k] * npx);
-            ch.sigma_error.push_back(s.curve.error[k]);
-        }
-        // The levels seen but not estimated: too few candidates, or dropped as content.
         std::vector<double> all_level(nbins, 0.0);
         std::vector<int> seen(nbins, 0), candidates(nbins, 0);
         for (int i = 0; i < nblocks; ++i) {
@@ -827,10 +820,19 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
             all_level[s.bin[i]] += blocks[i].level[c];
             candidates[s.bin[i]] += s.candidate[i];
         }
+        for (size_t k = 0; k < s.curve.level.size(); ++k) {
+            ch.level.push_back(s.curve.level[k]);
+            ch.sigma.push_back(std::sqrt(s.curve.variance[k]));
+            ch.samples.push_back((long long)s.curve.blocks[k] * npx);
+            ch.sigma_error.push_back(s.curve.error[k]);
+            ch.plate_samples.push_back((long long)seen[s.curve.bin[k]] * npx);
+        }
+        // The levels seen but not estimated: too few candidates, or dropped as content.
         std::vector<SparseLevel> sparse;
         for (int k = 0; k < nbins; ++k)
             if (seen[k] > 0 && std::find(s.curve.bin.begin(), s.curve.bin.end(), k) == s.curve.bin.end())
-                sparse.push_back({ch.name, all_level[k] / seen[k], (long long)candidates[k] * npx});
+                sparse.push_back(
+                    {ch.name, all_level[k] / seen[k], (long long)candidates[k] * npx, (long long)seen[k] * npx});
         // Below this fraction of the signal, what is left is float rounding, not grain.
         double signal = 1.0;
         for (double l : ch.level) signal = std::max(signal, std::abs(l));
@@ -911,23 +913,42 @@ ProfileAssessment assess_grain_profile(const GrainProfile& profile) {
     double worst_rank = 0;
     for (const GrainChannel& ch : profile.channels) {
         if (ch.samples.empty()) continue;
-        int within[2] = {0, 0}, seen = (int)ch.level.size();
-        for (const SparseLevel& s : profile.sparse_levels) seen += s.channel == ch.name;
-        for (size_t i = 0; i < ch.level.size(); ++i)
+        // Each level weighs by the plate's pixels at it (alike in a profile without the counts):
+        // levels the plate barely shows say little about whether it is grain or content.
+        const bool by_pixels = !ch.plate_samples.empty();
+        double shown = 0, within_share[2] = {0, 0};
+        int within[2] = {0, 0}, levels = (int)ch.level.size();
+        for (const SparseLevel& s : profile.sparse_levels)
+            if (s.channel == ch.name) {
+                shown += by_pixels ? double(s.plate_samples) : 1.0;
+                ++levels;
+            }
+        for (size_t i = 0; i < ch.level.size(); ++i) {
+            const double weight = by_pixels ? double(ch.plate_samples[i]) : 1.0;
+            shown += weight;
             for (int g = 0; g < 2; ++g)
-                within[g] += ch.sigma_error.empty() || ch.sigma_error[i] <= kGrades[g].max_error;
+                if (ch.sigma_error.empty() || ch.sigma_error[i] <= kGrades[g].max_error) {
+                    ++within[g];
+                    within_share[g] += weight;
+                }
+        }
+        for (double& share : within_share) share /= shown;
         int grade = 0;
-        while (grade < 2 && !(within[grade] >= kGrades[grade].min_levels && within[grade] >= kGrades[grade].min_fraction * seen))
+        while (grade < 2 && !(within[grade] >= kGrades[grade].min_levels && within_share[grade] >= kGrades[grade].min_fraction))
             ++grade;
-        // The weakest channel by grade, then by the share of levels it measured well.
-        const double rank = grade + 1.0 - double(within[std::min(grade, 1)]) / seen;
+        // The weakest channel by grade, then by the share of the plate it measured well.
+        const int shown_grade = std::min(grade, 1);
+        const double rank = grade + 1.0 - within_share[shown_grade];
         if (rank <= worst_rank) continue;
         worst_rank = rank;
         out.quality = grade < 2 ? kGrades[grade].quality : ProfileQuality::unreliable;
-        out.reason = "channel " + ch.name + ": " + std::to_string(within[std::min(grade, 1)]) + " of " +
-                     std::to_string(seen) + " levels measured within " +
-                     std::to_string(int(100 * kGrades[std::min(grade, 1)].max_error)) + " %" +
-                     (grade == 0 ? "" : " (the others hold picture content or too few flat blocks)");
+        out.reason = "channel " + ch.name + ": " + std::to_string(within[shown_grade]) + " of " +
+                     std::to_string(levels) + " levels measured within " +
+                     std::to_string(int(100 * kGrades[shown_grade].max_error)) + " %" +
+                     (by_pixels ? ", holding " + std::to_string(std::lround(100 * within_share[shown_grade])) +
+                                      " % of the plate's pixels"
+                                : "") +
+                     (grade == 0 ? "" : " (the rest holds picture content or too few flat blocks)");
     }
     if (out.reason.empty()) out.reason = "every level measured within 10 %";
     return out;

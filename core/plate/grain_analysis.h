@@ -54,10 +54,11 @@ struct GrainAnalysisError : std::runtime_error {
 GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const GrainAnalysisSettings& settings);
 
 // How far a measured profile can be trusted, from its levels' counts and errors:
-// - good: every channel measured at 4 or more levels, over half the levels the plate
-//   shows, each within 10 % (relative standard error of sigma);
-// - usable: every channel at 2 or more levels within 25 %, over a quarter of them;
+// - good: every channel measured at 4 or more levels within 10 % (relative standard error
+//   of sigma), levels that hold over half the plate's pixels;
+// - usable: every channel at 2 or more levels within 25 %, holding over a quarter of them;
 // - unreliable: less (the rest of the plate holds picture content or too few flat blocks).
+// A profile without the plate's pixel counts per level weighs its levels alike.
 // A profile without samples (predicted) is good. `reason` names the weakest channel.
 enum class ProfileQuality { good, usable, unreliable };
 struct ProfileAssessment {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <numeric>
+#include <utility>
 
 #include "core/json_file.h"
 #include "core/json_message.h"
@@ -124,6 +125,9 @@ void validate_grain_profile(const GrainProfile& p, const std::string& origin) {
         if (!ch.samples.empty() && ch.samples.size() != ch.level.size())
             fail(origin, at + ".response.samples",
                  std::to_string(ch.samples.size()) + " values for " + std::to_string(ch.level.size()) + " levels");
+        if (!ch.plate_samples.empty() && ch.plate_samples.size() != ch.level.size())
+            fail(origin, at + ".response.plate_samples",
+                 std::to_string(ch.plate_samples.size()) + " values for " + std::to_string(ch.level.size()) + " levels");
         if (!ch.sigma_error.empty() && ch.sigma_error.size() != ch.level.size())
             fail(origin, at + ".response.relative_error",
                  std::to_string(ch.sigma_error.size()) + " values for " + std::to_string(ch.level.size()) + " levels");
@@ -193,13 +197,13 @@ GrainProfile parse_grain_profile_json(const std::string& text, const std::string
         const json& response = member(cj, "response", origin, at);
         ch.level = number_array(member(response, "level", origin, at + ".response"), origin, at + ".response.level");
         ch.sigma = number_array(member(response, "sigma", origin, at + ".response"), origin, at + ".response.sigma");
-        if (response.contains("samples")) {
-            const std::string field = at + ".response.samples";
-            const json& samples = response["samples"];
-            if (!samples.is_array()) fail(origin, field, "expected an array of pixel counts");
-            for (size_t i = 0; i < samples.size(); ++i)
-                ch.samples.push_back(
-                    integer_value(samples[i], 0, LLONG_MAX, origin, field + "[" + std::to_string(i) + "]"));
+        for (auto [key, counts] : {std::pair{"samples", &ch.samples}, std::pair{"plate_samples", &ch.plate_samples}}) {
+            if (!response.contains(key)) continue;
+            const std::string field = at + ".response." + key;
+            const json& values = response[key];
+            if (!values.is_array()) fail(origin, field, "expected an array of pixel counts");
+            for (size_t i = 0; i < values.size(); ++i)
+                counts->push_back(integer_value(values[i], 0, LLONG_MAX, origin, field + "[" + std::to_string(i) + "]"));
         }
         if (response.contains("relative_error"))
             ch.sigma_error = number_array(response["relative_error"], origin, at + ".response.relative_error");
@@ -237,6 +241,9 @@ GrainProfile parse_grain_profile_json(const std::string& text, const std::string
                 level.level = finite_number(member(sparse[i], "level", origin, at), origin, at + ".level");
                 level.samples =
                     integer_value(member(sparse[i], "samples", origin, at), 0, LLONG_MAX, origin, at + ".samples");
+                if (sparse[i].contains("plate_samples"))
+                    level.plate_samples =
+                        integer_value(sparse[i]["plate_samples"], 0, LLONG_MAX, origin, at + ".plate_samples");
                 p.sparse_levels.push_back(level);
             }
         }
@@ -259,6 +266,7 @@ std::string grain_profile_to_json(const GrainProfile& p) {
     for (const GrainChannel& ch : p.channels) {
         json response = {{"level", ch.level}, {"sigma", ch.sigma}};
         if (!ch.samples.empty()) response["samples"] = ch.samples;
+        if (!ch.plate_samples.empty()) response["plate_samples"] = ch.plate_samples;
         if (!ch.sigma_error.empty()) response["relative_error"] = ch.sigma_error;
         channels.push_back({{"name", ch.name},
                             {"response", response},
@@ -276,7 +284,8 @@ std::string grain_profile_to_json(const GrainProfile& p) {
     if (p.block_size_px > 0) {
         json sparse = json::array();
         for (const SparseLevel& s : p.sparse_levels)
-            sparse.push_back({{"channel", s.channel}, {"level", s.level}, {"samples", s.samples}});
+            sparse.push_back(
+                {{"channel", s.channel}, {"level", s.level}, {"samples", s.samples}, {"plate_samples", s.plate_samples}});
         doc["analysis"] = {{"block_size_px", p.block_size_px}, {"blocks_used", p.blocks_used}, {"sparse_levels", sparse}};
     }
     return doc.dump(1);

@@ -31,6 +31,9 @@ struct GrainChannel {
     // confidence); empty for a predicted profile.
     std::vector<long long> samples;
     std::vector<double> sigma_error;
+    // Pixels of the plate at each level, grain-only or not (the trust verdict weighs levels
+    // by them); empty for a predicted profile.
+    std::vector<long long> plate_samples;
     // Normalised autocorrelation, (2 radius + 1)^2 values, row-major from (-r, -r).
     int acf_radius = 0;
     std::vector<double> autocorrelation{1.0};
@@ -47,6 +50,7 @@ struct SparseLevel {
     std::string channel;
     double level = 0;
     long long samples = 0;
+    long long plate_samples = 0;  // the plate's pixels at the level, grain-only or not
 };
 
 struct GrainProfile {

@@ -87,16 +87,14 @@ TEST_CASE("real plates: textured ones are reported unreliable, flat-sky ones tru
     }
     // kodim01 and kodim05 are textured nearly everywhere (brick, foliage, engines): the
     // analysis must say its profile is unreliable rather than pass picture texture off as grain.
-    // kodim23 is good. kodim10's R shows grain alone at 7 of its 16 levels (good needs half):
-    // at its brightest sky level one of four blocks holds content (its low band 1.9 times
-    // grain's), which leaves that level 3 grain-only blocks, so it is usable.
+    // kodim23 and kodim10 are good: kodim10's R shows grain alone at 7 of its 16 levels, but
+    // those levels hold 84 % of the plate (the sky); the rest is crew, water and highlights.
     for (const char* name : {"kodim01", "kodim05", "kodim10", "kodim23"}) {
         const ProfileAssessment trust =
             assess_grain_profile(analyse(independent::read_rgb(kPlates / (std::string(name) + ".png"))));
         INFO(name << ": " << quality_name(trust.quality) << " " << trust.reason);
         const std::string plate = name;
         if (plate == "kodim01" || plate == "kodim05") CHECK(trust.quality == ProfileQuality::unreliable);
-        else if (plate == "kodim10") CHECK(trust.quality != ProfileQuality::unreliable);
         else CHECK(trust.quality == ProfileQuality::good);
     }
 }

@@ -116,3 +116,27 @@ TEST_CASE("a plate that cannot be analysed gets a message saying what is missing
     CHECK_THAT(analysis_error({flat_patches(256, 256, 3, kLo, kHi).view()}, strict),
                Catch::Contains("channel R: no level has 1000 grain-only blocks") && Catch::Contains("levels seen"));
 }
+
+TEST_CASE("the trust verdict weighs each level by the plate's pixels at it", "[plate][analysis]") {
+    // Four levels measured within 10 % and six left out: good when the measured levels hold
+    // most of the plate (sky), unreliable when the left-out ones do (texture), although both
+    // measure the same 4 of 10 levels.
+    auto profile = [](long long measured_px, long long left_out_px) {
+        GrainProfile p;
+        p.block_size_px = 48;
+        GrainChannel ch;
+        ch.name = "G";
+        ch.level = {0.2, 0.3, 0.4, 0.5};
+        ch.sigma.assign(4, 0.01);
+        ch.samples.assign(4, 4 * 48 * 48);
+        ch.sigma_error.assign(4, 0.05);
+        ch.plate_samples.assign(4, measured_px);
+        p.channels.push_back(ch);
+        for (double level : {0.05, 0.1, 0.6, 0.7, 0.8, 0.9}) p.sparse_levels.push_back({"G", level, 0, left_out_px});
+        return assess_grain_profile(p);
+    };
+    const ProfileAssessment sky = profile(60 * 48 * 48, 4 * 48 * 48), texture = profile(10 * 48 * 48, 40 * 48 * 48);
+    INFO(sky.reason << " / " << texture.reason);
+    CHECK(sky.quality == ProfileQuality::good);  // 240 of 264 blocks
+    CHECK(texture.quality == ProfileQuality::unreliable);  // 40 of 280 blocks
+}

@@ -18,7 +18,8 @@ GrainProfile sample_profile() {
     p.block_size_px = 64;
     p.blocks_used = 12;
     p.channels[0].samples.assign(p.channels[0].level.size(), 4096);
-    p.sparse_levels.push_back({"G", 0.95, 2048});
+    p.channels[0].plate_samples.assign(p.channels[0].level.size(), 16384);
+    p.sparse_levels.push_back({"G", 0.95, 2048, 8192});
     return p;
 }
 
@@ -44,6 +45,7 @@ TEST_CASE("a grain profile survives writing and reading", "[plate][profile]") {
         CHECK(q.channels[c].level == p.channels[c].level);
         CHECK(q.channels[c].sigma == p.channels[c].sigma);
         CHECK(q.channels[c].samples == p.channels[c].samples);
+        CHECK(q.channels[c].plate_samples == p.channels[c].plate_samples);
         CHECK(q.channels[c].acf_radius == p.channels[c].acf_radius);
         CHECK(q.channels[c].autocorrelation == p.channels[c].autocorrelation);
     }
@@ -51,6 +53,7 @@ TEST_CASE("a grain profile survives writing and reading", "[plate][profile]") {
     CHECK(q.block_size_px == 64);
     REQUIRE(q.sparse_levels.size() == 1);
     CHECK(q.sparse_levels[0].channel == "G");
+    CHECK(q.sparse_levels[0].plate_samples == 8192);
 }
 
 TEST_CASE("the response curve interpolates linearly and holds its ends", "[plate][profile]") {
