@@ -86,29 +86,31 @@ double slide_mid_grey_luminance(const Stock& film) {
 }
 
 // Dot products of `count` spectra, given transposed (spectra[s * count + i]), with one
-// spectrum, each summed over the samples in their order: four vectors of spectra at a time (four
-// chains of sums in flight), then one, then one spectrum.
+// spectrum, in floats (twice the lanes of doubles), each summed over the samples in their
+// order: four vectors of spectra at a time (four chains of sums in flight), then one, then
+// one spectrum.
 struct DotsWithOne {
     template <int lanes>
-    __attribute__((always_inline)) static void run(const double* spectra, int count, const double* with, double* out) {
-        using D = typename simd::Lanes<lanes>::D;
+    __attribute__((always_inline)) static void run(const float* spectra, int count, const float* with, double* out) {
+        using F = typename simd::Lanes<lanes>::F;
         int i = 0;
-        for (; i + 4 * lanes <= count; i += 4 * lanes) dots<D, 4>(spectra, count, with, out, i);
-        for (; i + lanes <= count; i += lanes) dots<D, 1>(spectra, count, with, out, i);
-        for (; i < count; ++i) dots<simd::Double1, 1>(spectra, count, with, out, i);
+        for (; i + 4 * lanes <= count; i += 4 * lanes) dots<F, 4>(spectra, count, with, out, i);
+        for (; i + lanes <= count; i += lanes) dots<F, 1>(spectra, count, with, out, i);
+        for (; i < count; ++i) dots<simd::Float1, 1>(spectra, count, with, out, i);
     }
-    template <typename D, int vectors>
-    __attribute__((always_inline)) static void dots(const double* spectra, int count, const double* with, double* out,
+    template <typename F, int vectors>
+    __attribute__((always_inline)) static void dots(const float* spectra, int count, const float* with, double* out,
                                                     int i) {
-        constexpr int lanes = sizeof(D) / sizeof(double);
-        D sum[vectors]{};
+        constexpr int lanes = sizeof(F) / sizeof(float);
+        F sum[vectors]{};
         for (int s = 0; s < kSpectralSamples; ++s)
             for (int v = 0; v < vectors; ++v) {
-                D t;
+                F t;
                 simd::load(t, spectra + size_t(s) * size_t(count) + size_t(i + v * lanes));
                 sum[v] += t * with[s];
             }
-        for (int v = 0; v < vectors; ++v) simd::store(out + i + v * lanes, sum[v]);
+        for (int v = 0; v < vectors; ++v)
+            for (int l = 0; l < lanes; ++l) out[i + v * lanes + l] = double(sum[v][l]);
     }
 };
 
@@ -206,13 +208,13 @@ void PrintExposure::expose(const std::array<const Spectrum*, 3>& layer_transmitt
     for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = dot(weighted_light_[j], t);
 }
 
-void PrintExposure::expose_row(const double* layer0, int count, const Spectrum& layer1, const Spectrum& layer2,
+void PrintExposure::expose_row(const float* layer0, int count, const Spectrum& layer1, const Spectrum& layer2,
                                double* paper_exposure) const {
     for (int j = 0; j < paper_layers_; ++j) {
-        Spectrum through;  // layer j's light through the negative's layers 1 and 2
-        for (int s = 0; s < kSpectralSamples; ++s) through[s] = weighted_light_[j][s] * layer1[s] * layer2[s];
-        simd::dispatch_doubles<DotsWithOne>(layer0, count, static_cast<const double*>(through.data()),
-                                            paper_exposure + size_t(j) * size_t(count));
+        std::array<float, kSpectralSamples> through;  // layer j's light through the negative's layers 1 and 2
+        for (int s = 0; s < kSpectralSamples; ++s) through[size_t(s)] = float(weighted_light_[j][s] * layer1[s] * layer2[s]);
+        simd::dispatch<DotsWithOne>(layer0, count, static_cast<const float*>(through.data()),
+                                    paper_exposure + size_t(j) * size_t(count));
     }
 }
 
@@ -248,6 +250,16 @@ PrintView::PrintView(const Stock& paper, const ViewSettings& settings) : paper_(
         for (double& v : row) v *= gain;
     view_ = adaptation;
     mid_grey_ = gain * absolute_grey;
+    // reflectance_to_linear_srgb: kXyzToLinearSrgb's rows scaled so that white is (1, 1, 1).
+    const Rgb white = multiply(kXyzToLinearSrgb, white_point_xyz(illuminant_d65()));
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < 3; ++k) xyz_to_rgb_[r][c] += view_[r][k] * kXyzToLinearSrgb[k][c] / white[k];
+}
+
+Xyz PrintView::xyz(const double* paper_density) const {
+    static const Spectrum d65 = illuminant_d65();
+    return reflectance_to_xyz(reflectance(paper_density), d65);
 }
 
 Spectrum PrintView::reflectance(const double* paper_density) const {
@@ -264,6 +276,21 @@ void PrintView::rgb(const double* paper_density, double* rgb) const {
         if (settings_.compress_gamut) out = compress_to_gamut(out);
     }
     for (int k = 0; k < 3; ++k) rgb[k] = out[k];
+}
+
+PrintViewTable print_view_table(const Stock& paper, PrintViewing viewing, int nodes, int threads) {
+    const PrintView view(paper, {viewing, false});
+    std::array<double, 3> lo{}, hi{};
+    for (size_t a = 0; a < 3; ++a) {
+        const Curve& curve = paper.layers[a].density_curve;
+        lo[a] = curve.y_min();
+        hi[a] = std::max(curve.y_max(), lo[a] + 1e-3);  // (a flat curve: a grid that still has a spacing)
+    }
+    Table3D xyz(lo, hi, nodes, threads, [&](const int*, const double* density, double* out) {
+        const Xyz v = view.xyz(density);
+        std::copy(v.begin(), v.end(), out);
+    }, Table3D::Encoding::cube_root);
+    return {std::move(xyz), view.xyz_to_rgb()};
 }
 
 }  // namespace darkroom

@@ -320,27 +320,49 @@ void LogAxisTable::apply_row_with_noise(const float* in, const float* noise, flo
     simd::dispatch<LogAxisNoiseRow>(samples(), in, noise, floor, out, n);
 }
 
-Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, int threads,
-                 const Function& f, Encoding encoding)
+Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, Encoding encoding)
     : nodes_(nodes), lo_given_(lo), hi_given_(hi), cubed_(encoding == Encoding::cube_root) {
     for (int a = 0; a < 3; ++a) {
         lo_[a] = float(lo[a]);
         scale_[a] = float(1.0 / ((hi[a] - lo[a]) / (nodes - 1)));  // 1 / the node spacing
     }
     values_.resize(size_t(nodes) * nodes * nodes);
-    // Each node on its own: the planes of nodes along z shared among the threads.
-    parallel_for(0, nodes, threads, [&](int k_begin, int k_end) {
+}
+
+Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, int threads,
+                 const Function& f, Encoding encoding)
+    : Table3D(lo, hi, nodes, encoding) {
+    fill(threads, [&](int j, int k, double* out) {
+        for (int i = 0; i < nodes; ++i) {
+            const int node[3] = {i, j, k};
+            double in[3];
+            for (int a = 0; a < 3; ++a) in[a] = node_coordinate(lo[a], hi[a], nodes, node[a]);
+            f(node, in, out + 3 * i);
+        }
+    });
+}
+
+Table3D Table3D::by_rows(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, int threads,
+                         const RowFunction& f, Encoding encoding) {
+    Table3D table(lo, hi, nodes, encoding);
+    table.fill(threads, f);
+    return table;
+}
+
+void Table3D::fill(int threads, const RowFunction& f) {
+    // The planes of nodes along z shared among the threads, a row of nodes at a time.
+    parallel_for(0, nodes_, threads, [&](int k_begin, int k_end) {
+        std::vector<double> row(3 * size_t(nodes_));
         for (int k = k_begin; k < k_end; ++k)
-            for (int j = 0; j < nodes; ++j)
-                for (int i = 0; i < nodes; ++i) {
-                    const int node[3] = {i, j, k};
-                    double in[3], out[3];
-                    for (int a = 0; a < 3; ++a) in[a] = node_coordinate(lo[a], hi[a], nodes, node[a]);
-                    f(node, in, out);
-                    if (cubed_)
-                        for (double& v : out) v = cube_root(v);
-                    values_[(size_t(k) * nodes + j) * nodes + i] = {float(out[0]), float(out[1]), float(out[2]), 0.0f};
-                }
+            for (int j = 0; j < nodes_; ++j) {
+                f(j, k, row.data());
+                if (cubed_)
+                    for (double& v : row) v = cube_root(v);
+                for (int i = 0; i < nodes_; ++i)
+                    values_[(size_t(k) * nodes_ + j) * nodes_ + i] = {float(row[3 * size_t(i)]),
+                                                                       float(row[3 * size_t(i) + 1]),
+                                                                       float(row[3 * size_t(i) + 2]), 0.0f};
+            }
     });
 }
 

@@ -102,6 +102,11 @@ public:
     // call from several at once; the values do not depend on how many.
     Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, int threads, const Function& f,
             Encoding encoding = Encoding::linear);
+    // The same from f(j, k, out), the values at a row of nodes along x (node i of row j, k at
+    // out[3 i .. 3 i + 3)): for an f that computes a row's nodes together, in vectors.
+    using RowFunction = std::function<void(int j, int k, double* out)>;
+    static Table3D by_rows(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, int threads,
+                           const RowFunction& f, Encoding encoding = Encoding::linear);
     // Node i's coordinate on an axis over [lo, hi] (the in that f is given).
     static double node_coordinate(double lo, double hi, int nodes, int i) { return lo + i * ((hi - lo) / (nodes - 1)); }
     void operator()(const float* in, float* out) const;
@@ -114,6 +119,9 @@ public:
     const std::array<double, 3>& hi() const { return hi_given_; }
 
 private:
+    Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, Encoding encoding);
+    void fill(int threads, const RowFunction& f);
+
     int nodes_ = 0;
     std::array<double, 3> lo_given_{}, hi_given_{};
     std::array<float, 3> lo_{}, scale_{};

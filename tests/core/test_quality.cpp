@@ -17,6 +17,7 @@
 #include "core/simd.h"
 #include "core/spectral.h"
 #include "core/stages/halation.h"
+#include "core/stages/print.h"
 #include "core/stages/tables.h"
 #include "test_support.h"
 
@@ -676,10 +677,19 @@ TEST_CASE("a plan compiled after a print setting changed prints as one compiled 
         edited.print_exposure_ev = 0.37;
         edited.printer_lights = {27, 24, 25.5};
         forget_print_tables();
-        test::render(film, &paper, s, scene, 2);  // (keeps the parts)
+        const Image before_edit = test::render(film, &paper, s, scene, 2);  // (keeps the parts)
         const Image after_edit = test::render(film, &paper, edited, scene, 2);
         forget_print_tables();
         CHECK(test::render(film, &paper, edited, scene, 2).pixels == after_edit.pixels);
+        // The lights alone, from the parts the edited plan kept, and back: nothing of one
+        // plan's lights leaks into another's table.
+        DevelopSettings lights_only = s;
+        lights_only.printer_lights = {22, 26, 25};
+        const Image lights_edit = test::render(film, &paper, lights_only, scene, 2);
+        CHECK(test::render(film, &paper, s, scene, 2).pixels == before_edit.pixels);
+        forget_print_tables();
+        CHECK(test::render(film, &paper, lights_only, scene, 2).pixels == lights_edit.pixels);
+        CHECK(lights_edit.pixels != before_edit.pixels);
         // Filtration exposes the grid again: the same as from afresh.
         edited.filtration_ymc = {20, 10, 0};
         const Image filtered = test::render(film, &paper, edited, scene, 2);
@@ -689,12 +699,63 @@ TEST_CASE("a plan compiled after a print setting changed prints as one compiled 
     }
 }
 
+namespace {
+
+// CIEDE2000 between two linear Rec.709 colours, each compressed to the gamut first (as the
+// print table's nodes are).
+double delta_e_compressed(const Rgb& a, const Rgb& b) {
+    const Xyz white = white_point_xyz(illuminant_d65());
+    return ciede2000(xyz_to_lab(linear_srgb_to_xyz(compress_to_gamut(a)), white),
+                     xyz_to_lab(linear_srgb_to_xyz(compress_to_gamut(b)), white));
+}
+
+}  // namespace
+
+TEST_CASE("the paper's view table is the spectral view within its measured interpolation error", "[quality][print]") {
+    // The fast tiers' print tables view the paper's densities through a 65-node table of the
+    // print's XYZ cube roots (print_view_table). Tetrahedral interpolation is exact for linear
+    // functions; its error is the cube root's curvature within a cell, which has no closed
+    // bound over the dyes' spectra, so the bound is measured: at 200 000 densities uniform over
+    // every colour paper's and print film's ranges, CIEDE2000 max 0.084 (Kodak 2393) and
+    // mean at most 0.009, with a third of margin. Tabulating the rgb itself broke it by 0.48
+    // where a saturated colour's channel crosses 0 (its cube root turns vertical there).
+    std::mt19937_64 random(7);
+    for (const char* id : {"kodak-2383", "kodak-2393", "fujifilm-crystal-archive-typeii", "kodak-endura-premier"})
+        for (PrintViewing viewing : {PrintViewing::media_relative, PrintViewing::absolute}) {
+            const Stock paper = find_stock(id);
+            const PrintViewTable table = print_view_table(paper, viewing, 65, 2);
+            const PrintView view(paper, {viewing, false});
+            double worst = 0, sum = 0;
+            constexpr int kSamples = 20000;
+            for (int n = 0; n < kSamples; ++n) {
+                double density[3], expected[3];
+                float at[3], xyz[3];
+                for (size_t a = 0; a < 3; ++a) {
+                    density[a] = std::uniform_real_distribution<double>(table.xyz.lo()[a], table.xyz.hi()[a])(random);
+                    at[a] = float(density[a]);
+                }
+                view.rgb(density, expected);
+                // The matrix is the view's own: xyz_to_rgb() times xyz() is rgb().
+                const Rgb direct = multiply(view.xyz_to_rgb(), view.xyz(density));
+                for (int c = 0; c < 3; ++c) REQUIRE(direct[size_t(c)] == Approx(expected[c]).margin(1e-12));
+                table.xyz(at, xyz);
+                const double e = delta_e_compressed(multiply(table.xyz_to_rgb, {xyz[0], xyz[1], xyz[2]}),
+                                                    {expected[0], expected[1], expected[2]});
+                worst = std::max(worst, e), sum += e;
+            }
+            INFO(id << (viewing == PrintViewing::absolute ? ", absolute" : ", media-relative") << ": CIEDE2000 max "
+                    << worst << ", mean " << sum / kSamples);
+            CHECK(worst < 0.12);
+            CHECK(sum / kSamples < 0.012);
+        }
+}
+
 TEST_CASE("the print table's nodes are the spectral print within the view table's interpolation error",
           "[quality][print]") {
     // Each node: the paper's curves at the enlarger's exposure of the node's negative, viewed
-    // through a table of the view over the paper's densities, 4-point Lagrange interpolation
-    // per axis (error term h^4 f''''/24 x 9/16 at 0.06 D nodes: about 1e-5 of the view). The
-    // high tier prints the same negative by the spectral sums themselves.
+    // through the paper's view table (the test above bounds its error; at these nodes,
+    // measured, CIEDE2000 max 0.073 and mean 0.015, the nodes being denser at the paper's
+    // extremes). The high tier prints the same negative by the spectral sums themselves.
     const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     DevelopSettings s;
     s.print_exposure_ev = 0.3;
@@ -704,7 +765,8 @@ TEST_CASE("the print table's nodes are the spectral print within the view table'
     s.quality = Quality::high;
     const Plan high = Plan::compile(film, &paper, s, {16, 16});
     const Table3D& table = *fast.print_table();
-    double worst = 0;  // |difference| over the node's largest channel (linear Rec.709)
+    double worst = 0, sum = 0;
+    int count = 0;
     for (int i = 0; i < table.nodes(); i += 7)
         for (int j = 0; j < table.nodes(); j += 5)
             for (int k = 0; k < table.nodes(); k += 3) {
@@ -714,9 +776,10 @@ TEST_CASE("the print table's nodes are the spectral print within the view table'
                     d[a] = Table3D::node_coordinate(table.lo()[size_t(a)], table.hi()[size_t(a)], table.nodes(), node[a]);
                 high.result_of_negative(d, expected);
                 fast.result_of_negative(d, got);
-                const double largest = std::max({std::abs(expected[0]), std::abs(expected[1]), std::abs(expected[2])});
-                for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(got[c] - expected[c]) / largest);
+                const double e = delta_e_compressed({got[0], got[1], got[2]}, {expected[0], expected[1], expected[2]});
+                worst = std::max(worst, e), sum += e, ++count;
             }
-    INFO("largest difference at the nodes, of the node's largest channel: " << worst);
-    CHECK(worst < 1e-4);
+    INFO("CIEDE2000 at the nodes: max " << worst << ", mean " << sum / count);
+    CHECK(worst < 0.1);
+    CHECK(sum / count < 0.02);
 }
