@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -35,6 +36,68 @@ struct AddRow {
         int i = 0;
         for (; i + lanes <= n; i += lanes) lanes_of_sum<typename simd::Lanes<lanes>::F>(sums, in, i);
         for (; i < n; ++i) lanes_of_sum<simd::Float1>(sums, in, i);
+    }
+};
+
+// log2 v for v > 0 by the bits of its float, 2^-23 (bits(v) - bits(1)): e + m for
+// v = 2^e (1 + m), 0 <= m < 1, which is log2 v less log2(1 + m) - m, within [0, 0.0861]
+// (Mitchell's approximation: a conversion, no logarithm), on the lanes of a vector (v >= floor
+// after the selection). Its inverse by the same bits: so a mean of pseudo logarithms taken
+// back is the geometric mean within a factor 2^+-0.0861 (their errors' spread), and the value
+// itself where all are the same (up to the float's rounding of the bits, 2^-17 relative).
+constexpr int32_t kBitsOfOne = 0x3F800000;
+template <typename V>
+__attribute__((always_inline)) inline V pseudo_log2_lanes(V v, float floor) {
+    using I = typename simd::Lanes<int(sizeof(V) / sizeof(float))>::I;
+    v = v >= floor ? v : V{} + floor;  // (NaN too: its comparison is false)
+    I bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    return __builtin_convertvector(bits - kBitsOfOne, V) * 0x1p-23f;
+}
+template <typename V>
+__attribute__((always_inline)) inline V exp2_of_pseudo_log2_lanes(V l) {
+    using I = typename simd::Lanes<int(sizeof(V) / sizeof(float))>::I;
+    const I bits = __builtin_convertvector(l * 0x1p23f, I) + kBitsOfOne;
+    V v;
+    std::memcpy(&v, &bits, sizeof v);
+    return v;
+}
+
+// sums[i] = (first) or += pseudo_log2(max(in[i], floor)).
+template <typename V>
+__attribute__((always_inline)) inline void lanes_of_log_sum(float* sums, const float* in, float floor, bool first,
+                                                            int i) {
+    V v;
+    simd::load(v, in + i);
+    V l = pseudo_log2_lanes(v, floor);
+    if (!first) {
+        V s;
+        simd::load(s, sums + i);
+        l = s + l;
+    }
+    simd::store(sums + i, l);
+}
+struct AddPseudoLog2Row {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(float* sums, const float* in, float floor, bool first, int n) {
+        int i = 0;
+        for (; i + lanes <= n; i += lanes)
+            lanes_of_log_sum<typename simd::Lanes<lanes>::F>(sums, in, floor, first, i);
+        for (; i < n; ++i) lanes_of_log_sum<simd::Float1>(sums, in, floor, first, i);
+    }
+};
+
+// row[i] = exp2_of_pseudo_log2(row[i]).
+struct Exp2OfPseudoLog2Row {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(float* row, int n) {
+        int i = 0;
+        for (; i + lanes <= n; i += lanes) {
+            typename simd::Lanes<lanes>::F l;
+            simd::load(l, row + i);
+            simd::store(row + i, exp2_of_pseudo_log2_lanes(l));
+        }
+        for (; i < n; ++i) row[i] = exp2_of_pseudo_log2_lanes(simd::Float1{row[i]})[0];
     }
 };
 
@@ -121,11 +184,15 @@ CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation) {
 }
 
 CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<float>*>& coarse_taps, int decimation,
-                                           const Window& out, const Window& frame, Source source, MeansMap map)
+                                           const Window& out, const Window& frame, Source source,
+                                           CoarseMap means_map, CoarseMap blurred_map,
+                                           std::vector<float> geometric_floors)
     : out_(out),
       frame_(frame),
       source_(std::move(source)),
-      map_(std::move(map)),
+      means_map_(std::move(means_map)),
+      blurred_map_(std::move(blurred_map)),
+      geometric_floors_(std::move(geometric_floors)),
       planes_(coarse_taps.size()),
       d_(decimation) {
     if (d_ < 2) throw std::invalid_argument("coarse Gaussian: a decimation below 2");
@@ -136,6 +203,8 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
             blurred_.push_back(p);
         }
     if (blurred_.empty()) throw std::invalid_argument("coarse Gaussian: no plane is blurred");
+    if (!geometric_floors_.empty() && geometric_floors_.size() != blurred_.size())
+        throw std::invalid_argument("coarse Gaussian: a geometric mean's floor for each blurred plane");
     auto [cx0, cx1] = coarse_range(out.x0, out.x1, d_);
     auto [cy0, cy1] = coarse_range(out.y0, out.y1, d_);
     blurred_window_ = {cx0, cy0, cx1, cy1};
@@ -150,6 +219,15 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
         tx_.push_back(float(2 * x + 1 - d_ - 2 * d_ * i) / float(2 * d_));
         if (column_runs_.empty() || column_runs_.back().block != block) column_runs_.push_back({column, column, block});
         column_runs_.back().end = column + 1;
+    }
+    if (d_ == 2) {  // the runs of two columns, from the first on or the second
+        auto pair = [&](size_t r) {
+            return r < column_runs_.size() && column_runs_[r].end - column_runs_[r].begin == 2;
+        };
+        size_t r = pair(0) ? 0 : 1;
+        pair_runs_[0] = r;
+        while (pair(r)) ++r;
+        pair_runs_[1] = r;
     }
     std::vector<SeparableFilter> filters;
     for (size_t p : blurred_) {
@@ -197,16 +275,20 @@ void CoarseGaussianStream::read_to(int y) {
 // Block means of the image extended past the frame by its edge pixels, as the Gaussian on
 // the pixels reads it (blocks past the frame too, so that the coarse Gaussian clamps nothing
 // of its own): the block row's d rows summed column by column (whole rows, in vector
-// registers), then each block's d columns; for every blurred plane, means[i] its row.
+// registers), then each block's d columns; for every blurred plane, means[i] its row. Geometric
+// means likewise from the values' pseudo logarithms.
 void CoarseGaussianStream::block_means(int by, float* const* means) {
     const int d = d_, px_begin = means_window_.x0 * d, n = inside1_ - inside0_;
     for (int k = 0; k < d; ++k) {
         const int y = std::clamp(by * d + k, frame_.y0, frame_.y1 - 1);
         read_to(y);
-        for (size_t p : blurred_) {
+        for (size_t i = 0; i < blurred_.size(); ++i) {
+            const size_t p = blurred_[i];
             const float* in = ring_row(p, y) + (inside0_ - read_x0_);
             float* sums = planes_[p].column_sums.data() + (inside0_ - px_begin);
-            if (k == 0)
+            if (!geometric_floors_.empty())
+                simd::dispatch<AddPseudoLog2Row>(sums, in, geometric_floors_[i], k == 0, n);
+            else if (k == 0)
                 std::copy(in, in + n, sums);
             else
                 simd::dispatch<AddRow>(sums, in, n);
@@ -219,40 +301,36 @@ void CoarseGaussianStream::block_means(int by, float* const* means) {
         std::fill(sums.begin() + (inside1_ - px_begin), sums.end(), sums[inside1_ - 1 - px_begin]);
         if (d == 2) {
             simd::dispatch<PairMeans>(sums.data(), means_window_.width(), means[i]);
-            continue;
+        } else {
+            for (int bx = means_window_.x0; bx < means_window_.x1; ++bx) {
+                float sum = 0;
+                for (int x = bx * d; x < bx * d + d; ++x) sum += sums[size_t(x - px_begin)];
+                means[i][bx - means_window_.x0] = sum / float(d * d);
+            }
         }
-        for (int bx = means_window_.x0; bx < means_window_.x1; ++bx) {
-            float sum = 0;
-            for (int x = bx * d; x < bx * d + d; ++x) sum += sums[size_t(x - px_begin)];
-            means[i][bx - means_window_.x0] = sum / float(d * d);
-        }
+        if (!geometric_floors_.empty()) simd::dispatch<Exp2OfPseudoLog2Row>(means[i], means_window_.width());
     }
-    if (map_) map_(means, means_window_.width());
+    if (means_map_) means_map_(means, means_window_.width());
 }
 
 // Coarse row j of every plane's blurred means, interpolated along x to out's columns (the
 // last two rows are kept).
 void CoarseGaussianStream::interpolate(int j) {
     if (across_row_[j & 1] == j) return;
-    const float* const* blurred_rows = blur_->row(j);
+    float* const* blurred_rows = blur_->row(j);  // (the stream's to change: it reads them no more)
+    if (blurred_map_) blurred_map_(blurred_rows, blurred_window_.width());
     for (size_t b = 0; b < blurred_.size(); ++b) {
         float* row = planes_[blurred_[b]].across[j & 1].data();
         // A run's two coarse values once, then a loop without indirection (which vectorises);
         // with d = 2, the whole runs (two columns each) in vectors.
-        size_t first = 0, last = column_runs_.size();
-        if (d_ == 2) {
-            while (first < last && column_runs_[first].end - column_runs_[first].begin < 2) ++first;
-            size_t whole = first;
-            while (whole < last && column_runs_[whole].end - column_runs_[whole].begin == 2) ++whole;
-            if (whole > first) {
-                const ColumnRun& run = column_runs_[first];
-                simd::dispatch<InterpolatePairs>(blurred_rows[b] + run.block, tx_[size_t(run.begin)],
-                                                 tx_[size_t(run.begin) + 1], int(whole - first), row + run.begin);
-            }
-            interpolate_runs(blurred_rows[b], 0, first, row);
-            first = whole;
+        if (pair_runs_[1] > pair_runs_[0]) {
+            const ColumnRun& run = column_runs_[pair_runs_[0]];
+            simd::dispatch<InterpolatePairs>(blurred_rows[b] + run.block, tx_[size_t(run.begin)],
+                                             tx_[size_t(run.begin) + 1], int(pair_runs_[1] - pair_runs_[0]),
+                                             row + run.begin);
         }
-        interpolate_runs(blurred_rows[b], first, last, row);
+        interpolate_runs(blurred_rows[b], 0, pair_runs_[0], row);
+        interpolate_runs(blurred_rows[b], pair_runs_[1], column_runs_.size(), row);
     }
     across_row_[j & 1] = j;
 }

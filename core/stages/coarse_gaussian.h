@@ -35,12 +35,19 @@ CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation);
 class CoarseGaussianStream {
 public:
     using Source = std::function<void(int y, int x_begin, int x_end, float* const* rows)>;
-    // A linear map of the blurred planes, applied to a row of their block means (in place) before
-    // the blur: the same, up to rounding, as applied to the result, on fewer values.
-    using MeansMap = std::function<void(float* const* means, int width)>;
+    // A map of the blurred planes' coarse rows in place, each plane's row at rows[i] (in the
+    // order of the blurred planes).
+    using CoarseMap = std::function<void(float* const* rows, int width)>;
     // coarse_taps[p]: plane p's Gaussian on the coarse grid, null where it passes through.
+    // means_map: applied to each row of block means before the blur (a linear map there is
+    // the same, up to rounding, as on the result, on fewer values); blurred_map: to each
+    // blurred coarse row before its interpolation to the pixels. geometric_floors, one a
+    // blurred plane where given: its blocks' geometric means (within a factor 2^+-0.0861:
+    // coarse_gaussian.cpp) in place of their means, its values below the floor (> 0) counted
+    // as the floor.
     CoarseGaussianStream(const std::vector<const std::vector<float>*>& coarse_taps, int decimation, const Window& out,
-                         const Window& frame, Source source, MeansMap map = {});
+                         const Window& frame, Source source, CoarseMap means_map = {}, CoarseMap blurred_map = {},
+                         std::vector<float> geometric_floors = {});
     CoarseGaussianStream(const CoarseGaussianStream&) = delete;  // (its coarse streams hold `this`)
     CoarseGaussianStream& operator=(const CoarseGaussianStream&) = delete;
 
@@ -67,7 +74,8 @@ private:
 
     Window out_, frame_;
     Source source_;
-    MeansMap map_;
+    CoarseMap means_map_, blurred_map_;
+    std::vector<float> geometric_floors_;
     std::vector<PlaneRows> planes_;
     std::vector<size_t> blurred_;  // the planes with a Gaussian
     int d_ = 0;
@@ -81,6 +89,7 @@ private:
     };
     std::vector<float> tx_;
     std::vector<ColumnRun> column_runs_;
+    size_t pair_runs_[2] = {0, 0};  // with d = 2: the runs [first, last) of two columns each, in vectors
     std::unique_ptr<SeparableStream> blur_;
     int across_row_[2] = {INT32_MIN, INT32_MIN};
     int read_x0_ = 0, read_x1_ = 0, slots_ = 0;

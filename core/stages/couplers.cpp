@@ -139,17 +139,15 @@ __attribute__((always_inline)) inline void inhibit_by_rows(float* const* e, cons
     scale_by_powers_of_two<V>(e, a, x);
 }
 
-// The exponents between two coarse rows of them, interpolated along x: above + t (below - above).
+// The factors between two coarse rows of them, interpolated along y: e_i[x] *= above + t (below - above).
 template <typename V>
-__attribute__((always_inline)) inline void inhibit_between_rows(float* const* e, const float* const* above,
-                                                                const float* const* below, float t, int x) {
-    V a[3];
+__attribute__((always_inline)) inline void scale_between_rows(float* const* e, const float* const* above,
+                                                              const float* const* below, float t, int x) {
     for (int i = 0; i < 3; ++i) {
-        V lo, hi;
-        simd::load(lo, above[i] + x), simd::load(hi, below[i] + x);
-        a[i] = lo + t * (hi - lo);
+        V lo, hi, h;
+        simd::load(lo, above[i] + x), simd::load(hi, below[i] + x), simd::load(h, e[i] + x);
+        simd::store(e[i] + x, h * (lo + t * (hi - lo)));
     }
-    scale_by_powers_of_two<V>(e, a, x);
 }
 
 // The exponents in place of the net densities.
@@ -179,14 +177,34 @@ struct InhibitRows {
     }
 };
 
-struct InhibitBetweenRows {
+struct ScaleBetweenRows {
     template <int lanes>
     __attribute__((always_inline)) static void run(float* const* e, const float* const* above,
                                                    const float* const* below, float t, int width) {
         int x = 0;
         for (; x + lanes <= width; x += lanes)
-            inhibit_between_rows<typename simd::Lanes<lanes>::F>(e, above, below, t, x);
-        for (; x < width; ++x) inhibit_between_rows<simd::Float1>(e, above, below, t, x);
+            scale_between_rows<typename simd::Lanes<lanes>::F>(e, above, below, t, x);
+        for (; x < width; ++x) scale_between_rows<simd::Float1>(e, above, below, t, x);
+    }
+};
+
+// a = 2^a in place, on the rows of the three layers.
+template <typename V>
+__attribute__((always_inline)) inline void power_of_two_lanes(float* const* a, int x) {
+    using I = typename simd::Lanes<int(sizeof(V) / sizeof(float))>::I;
+    for (int i = 0; i < 3; ++i) {
+        V v;
+        simd::load(v, a[i] + x);
+        simd::store(a[i] + x, exp2_of_nonpositive<V, I>(v));
+    }
+}
+
+struct PowersOfTwo {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(float* const* a, int width) {
+        int x = 0;
+        for (; x + lanes <= width; x += lanes) power_of_two_lanes<typename simd::Lanes<lanes>::F>(a, x);
+        for (; x < width; ++x) power_of_two_lanes<simd::Float1>(a, x);
     }
 };
 
@@ -196,6 +214,15 @@ std::array<float, 9> log2_inhibition(const CouplerStage& c) {
     std::array<float, 9> m;
     for (size_t k = 0; k < 9; ++k) m[k] = -kLog2Of10 * c.matrix[k];
     return m;
+}
+
+// Below its curve's first sample a donor releases nothing (the curve is flat at Dmin there): the
+// floors of the geometric means, so that no light (0, or a scatter's negative lobe) counts as
+// that exposure, not as one far below it.
+std::vector<float> donor_floors(const CouplerStage& c) {
+    std::vector<float> floors;
+    for (const Curve& s : c.sheet) floors.push_back(float(std::pow(10.0, s.x_min())));
+    return floors;
 }
 
 }  // namespace
@@ -209,21 +236,22 @@ CoarseCouplerStream::CoarseCouplerStream(const CouplerStage& c, const Window& ou
     : c_(c),
       m_(log2_inhibition(c)),
       width_(out.width()),
-      source_(std::move(source)),
-      stream_({nullptr, nullptr, nullptr, &c.spread.taps, &c.spread.taps, &c.spread.taps}, c.spread.decimation, out,
-              frame,
-              [this](int y, int x_begin, int x_end, float* const* rows) {
-                  source_(y, x_begin, x_end, rows);
-                  for (size_t l = 0; l < 3; ++l) coupler_donor_row(c_, l, rows[l], rows[3 + l], x_end - x_begin);
+      stream_({&c.spread.taps, &c.spread.taps, &c.spread.taps}, c.spread.decimation, out, frame, std::move(source),
+              // The donors from each block's geometric mean exposure (its mean log exposure,
+              // which the curves take), and their exponents of 2 (the matrix is linear, so it
+              // goes before the Gaussian, on the coarse grid).
+              [this](float* const* means, int width) {
+                  for (size_t l = 0; l < 3; ++l) coupler_donor_row(c_, l, means[l], means[l], width);
+                  simd::dispatch<ExponentRows>(means, m_.data(), width);
               },
-              // The block means' exponents of 2 (the matrix is linear, so it goes before the
-              // Gaussian, on the coarse grid): the pixels then interpolate them and take 2^.
-              [this](float* const* means, int width) { simd::dispatch<ExponentRows>(means, m_.data(), width); }) {}
+              // The blurred exponents' powers of 2: the pixels then interpolate the factors.
+              [](float* const* exponents, int width) { simd::dispatch<PowersOfTwo>(exponents, width); },
+              donor_floors(c)) {}
 
 float* const* CoarseCouplerStream::row(int y) {
     const CoarseGaussianStream::Row& r = stream_.row(y);
     for (size_t l = 0; l < 3; ++l) out_[l] = r.read[l];
-    simd::dispatch<InhibitBetweenRows>(out_, &r.above[3], &r.below[3], r.t, width_);
+    simd::dispatch<ScaleBetweenRows>(out_, r.above.data(), r.below.data(), r.t, width_);
     return out_;
 }
 

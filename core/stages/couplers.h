@@ -31,7 +31,8 @@ std::array<Curve, 3> curves_before_inhibition(const std::array<const Curve*, 3>&
 struct CouplerStage {
     std::array<float, 9> matrix{};  // M_ij at [3 i + j], the stock's times the amount
     // The inhibitor's spread; in the fast tiers on a grid up to the Gaussian's standard
-    // deviation coarser (the spread net density is a smooth field: CoarseCouplerStream).
+    // deviation coarser (the spread net density is a smooth field: CoarseCouplerStream, which
+    // evaluates the donors and the inhibition there too).
     CoarseGaussian spread;
     std::array<Curve, 3> sheet;     // the donors' curves S_j
     std::array<Curve, 3> before;    // the receivers' curves before inhibition D0_i
@@ -53,12 +54,13 @@ void coupler_donor_row(const CouplerStage& c, size_t layer, const float* exposur
 void inhibit_rows(const CouplerStage& c, float* const* exposure, const float* const* spread_net_density, int width);
 
 // The couplers with their spread on the coarse grid (spread.decimation > 1), streamed down the
-// rows of `out` for one thread: the layers' exposure rows from
-// source(y, x_begin, x_end, rows) (as CoarseGaussianStream reads them: within the frame, each
-// once, in order), their donors' net densities' block means turned into each layer's exponent
-// of 2 (the matrix) and blurred on the coarse grid, and row(y) each layer's inhibited exposure
-// on out's columns (the stream's rows: the caller's to change until the next call), y
-// increasing.
+// rows of `out` for one thread: the layers' exposure rows from source(y, x_begin, x_end, rows)
+// (as CoarseGaussianStream reads them: within the frame, each once, in order); on the coarse
+// grid, each block's mean exposure through the donors' curves, the matrix (each layer's
+// exponent of 2), the Gaussian and 2^; and row(y) each layer's exposure times its factor
+// interpolated from the coarse nodes, on out's columns (the stream's rows: the caller's to
+// change until the next call), y increasing. Per pixel that is one interpolation and one
+// product a layer; what it costs in accuracy near edges: docs/model/dir-couplers.md.
 class CoarseCouplerStream {
 public:
     CoarseCouplerStream(const CouplerStage& c, const Window& out, const Window& frame,
@@ -69,8 +71,7 @@ private:
     const CouplerStage& c_;
     std::array<float, 9> m_;  // the matrix times -log2 10
     int width_;
-    CoarseGaussianStream::Source source_;
-    CoarseGaussianStream stream_;  // planes 0-2 the exposures (passed through), 3-5 the donors
+    CoarseGaussianStream stream_;  // the three layers' exposures, their inhibition's factors blurred
     float* out_[3];
 };
 

@@ -295,3 +295,182 @@ TEST_CASE("stock files give a colour negative's DIR couplers, and refuse them el
     s.dir_couplers = -1;
     CHECK_THROWS_WITH(Plan::compile(film, nullptr, s, {8, 8}), Catch::Contains("DIR couplers must be 0-3"));
 }
+
+namespace {
+
+// Each layer's inhibited exposure of three exposure planes on `frame`, by the stage's per-pixel
+// path (the donors at every pixel, the spread on the pixels, 2^ at every pixel) or, where its
+// spread is coarse, by CoarseCouplerStream.
+std::array<Plane, 3> inhibited(const CouplerStage& c, const std::array<Plane, 3>& exposure, const Window& frame) {
+    std::array<Plane, 3> out{Plane::unset(frame), Plane::unset(frame), Plane::unset(frame)};
+    if (c.spread.decimation > 1) {
+        CoarseCouplerStream stream(c, frame, frame, [&](int y, int x_begin, int x_end, float* const* rows) {
+            for (size_t l = 0; l < 3; ++l) std::copy(exposure[l].row(y) + x_begin, exposure[l].row(y) + x_end, rows[l]);
+        });
+        for (int y = frame.y0; y < frame.y1; ++y) {
+            float* const* rows = stream.row(y);
+            for (size_t l = 0; l < 3; ++l) std::copy_n(rows[l], frame.width(), out[l].row(y));
+        }
+        return out;
+    }
+    std::array<Plane, 3> spread{Plane::unset(frame), Plane::unset(frame), Plane::unset(frame)};
+    for (size_t l = 0; l < 3; ++l) {
+        Plane donor = Plane::unset(frame);
+        for (int y = frame.y0; y < frame.y1; ++y)
+            coupler_donor_row(c, l, exposure[l].row(y), donor.row(y), frame.width());
+        convolve_separable(donor, spread[l], c.spread.taps, frame, 1);
+        out[l] = exposure[l];
+    }
+    for (int y = frame.y0; y < frame.y1; ++y) {
+        float* rows[3] = {out[0].row(y), out[1].row(y), out[2].row(y)};
+        const float* spread_rows[3] = {spread[0].row(y), spread[1].row(y), spread[2].row(y)};
+        inhibit_rows(c, rows, spread_rows, frame.width());
+    }
+    return out;
+}
+
+// The largest |log10| of the coarse inhibited exposure over the per-pixel one, per layer.
+std::array<double, 3> worst_log_ratio(const std::array<Plane, 3>& coarse, const std::array<Plane, 3>& exact) {
+    std::array<double, 3> worst{};
+    for (size_t l = 0; l < 3; ++l)
+        for (size_t k = 0; k < exact[l].pixels.size(); ++k)
+            worst[l] = std::max(worst[l], std::abs(std::log10(double(coarse[l].pixels[k]) / exact[l].pixels[k])));
+    return worst;
+}
+
+}  // namespace
+
+TEST_CASE("the fast tiers' coarse inhibition stays within its bound of the per-pixel one", "[couplers][quality]") {
+    // The fast tier at a 4K frame's pitch (6.08 um: sigma 2.47 px, a grid of d = 2) against the
+    // per-pixel path with the same tables, as the log10 of the inhibited exposures' ratio. The
+    // coarse path differs from it in three ways, each bounded (log10 H, receiver i, donors j):
+    //  1. the spread of the blocks' mean net densities on the coarse grid, interpolated: within
+    //     phi(1) d^2 / (8 sigma^2) of the exact spread of a unit step (the test above), so
+    //     sum_j |M_ij| dn_j times that for a step of net densities dn_j;
+    //  2. a block's donor is its curve at the block's geometric mean exposure (by the floats'
+    //     bits: the mean log10 H within 0.0259, docs/model/dir-couplers.md), not its mean net
+    //     density: they differ by the curve's departure from its chord, delta_j, only in the
+    //     blocks a step crosses, each weighing at most the largest coarse tap w in any pixel
+    //     (the interpolation is a convex combination of nodes, each taking a column of blocks
+    //     by one tap): sum_j |M_ij| delta_j w;
+    //  3. the factors 10^-s interpolated between nodes, not s: by Hoeffding's lemma the log of
+    //     a linear interpolation of e^a exceeds the interpolated a by at most D^2/8, D the
+    //     nodes' difference in a; adjacent nodes of a step's spread differ by at most w dn_j,
+    //     so D <= ln 10 w sum_j |M_ij| dn_j, and the error is at most D^2 / (8 ln 10).
+    // A smooth field: the same three with (1) the exact shift's curvature in place of the
+    // step's, (2) every block's departure of its curve at its mean log exposure from its mean
+    // net density, with the pseudo logarithm's 0.0259 at the curve's steepest slope (every
+    // block: weights summing to 1), and (3) the nodes' differences at most d times the exact
+    // shift's largest gradient, in both directions.
+    const Stock film = find_stock("kodak-vision3-250d");
+    const double pitch_um = 6.08;
+    const CouplerStage coarse = design_couplers(film, 1, 1, pitch_um, 6, 8);
+    const CouplerStage exact = design_couplers(film, 1, 1, pitch_um, 6, 1);
+    const int d = coarse.spread.decimation;
+    REQUIRE(d == 2);
+    REQUIRE(exact.spread.decimation == 1);
+    const CouplerMatrix m = stock_dir_couplers(film).matrix;
+    const double sigma_px = stock_dir_couplers(film).diffusion_um / pitch_um;
+    const double ln10 = std::log(10.0), pseudo_log10 = 0.0861 * std::log10(2.0);
+    const Window frame{0, 0, 96, 96};
+    auto net = [&](size_t j, double log_h) { return film.layers[j].density_curve(log_h) - exact.d_min[j]; };
+    double w = 0;
+    for (float t : coarse.spread.taps) w = std::max(w, double(t));
+
+    SECTION("a step edge") {
+        const double log_lo = -2, log_hi = -0.5;  // 1.5 decades, at every place within a block, across x and y
+        std::array<double, 3> dn, delta{};
+        for (size_t j = 0; j < 3; ++j) {
+            dn[j] = net(j, log_hi) - net(j, log_lo);
+            for (int k = 1; k < d; ++k) {  // the step's share of a block it crosses
+                const double f = double(k) / d, chord = (1 - f) * net(j, log_lo) + f * net(j, log_hi);
+                for (double g = -pseudo_log10; g <= pseudo_log10; g += pseudo_log10 / 50)
+                    delta[j] = std::max(delta[j], std::abs(net(j, (1 - f) * log_lo + f * log_hi + g) - chord));
+            }
+        }
+        const double interpolation = std::exp(-0.5) / std::sqrt(2 * M_PI) * d * d / (8 * sigma_px * sigma_px);
+        for (int across_y = 0; across_y < 2; ++across_y)
+            for (int edge = 48; edge < 48 + d; ++edge) {
+                std::array<Plane, 3> h{Plane::unset(frame), Plane::unset(frame), Plane::unset(frame)};
+                for (auto& p : h)
+                    for (int y = 0; y < frame.y1; ++y)
+                        for (int x = 0; x < frame.x1; ++x)
+                            p.at(x, y) = float(std::pow(10.0, (across_y ? y : x) >= edge ? log_hi : log_lo));
+                const std::array<double, 3> worst =
+                    worst_log_ratio(inhibited(coarse, h, frame), inhibited(exact, h, frame));
+                for (size_t i = 0; i < 3; ++i) {
+                    double step = 0, crossed = 0;
+                    for (size_t j = 0; j < 3; ++j) {
+                        step += std::abs(m[i][j]) * dn[j];
+                        crossed += std::abs(m[i][j]) * delta[j];
+                    }
+                    const double nodes = ln10 * w * step;
+                    const double bound = step * interpolation + crossed * w + nodes * nodes / (8 * ln10) + 1e-5;
+                    INFO("edge " << edge << (across_y ? " across y" : " across x") << ", layer " << i << ": "
+                                 << worst[i] << " against " << bound << " (" << step * interpolation << " + "
+                                 << crossed * w << " + " << nodes * nodes / (8 * ln10) << ")");
+                    CHECK(worst[i] <= bound);
+                    CHECK(worst[i] > bound / 4);  // (the bound is not loose by orders)
+                }
+            }
+    }
+
+    SECTION("a smooth field") {
+        // A colour field: each layer's log10 H a product of sines of wavelength 32 px (13 sigma).
+        const double lambda = 32, amplitude = 0.5;
+        std::array<Plane, 3> h{Plane::unset(frame), Plane::unset(frame), Plane::unset(frame)};
+        std::array<Plane, 3> log_h{Plane::unset(frame), Plane::unset(frame), Plane::unset(frame)};
+        for (size_t l = 0; l < 3; ++l)
+            for (int y = 0; y < frame.y1; ++y)
+                for (int x = 0; x < frame.x1; ++x) {
+                    log_h[l].at(x, y) = float(-1.2 + amplitude * std::sin(2 * M_PI * x / lambda + 2.0 * l) *
+                                                       std::cos(2 * M_PI * y / lambda + 1.0 * l));
+                    h[l].at(x, y) = float(std::pow(10.0, log_h[l].at(x, y)));
+                }
+        const std::array<Plane, 3> exact_h = inhibited(exact, h, frame);
+        const std::array<double, 3> worst = worst_log_ratio(inhibited(coarse, h, frame), exact_h);
+        // Per donor: its curve's largest slope, and the largest departure of a block's curve at
+        // its mean log exposure from its mean net density.
+        std::array<double, 3> slope{}, departure{};
+        for (size_t j = 0; j < 3; ++j) {
+            const Curve& curve = film.layers[j].density_curve;
+            for (size_t k = 1; k < curve.x.size(); ++k)
+                slope[j] = std::max(slope[j], (curve.y[k] - curve.y[k - 1]) / (curve.x[k] - curve.x[k - 1]));
+            for (int by = 0; by < frame.y1 / d; ++by)
+                for (int bx = 0; bx < frame.x1 / d; ++bx) {
+                    double mean_log = 0, mean_net = 0;
+                    for (int y = by * d; y < by * d + d; ++y)
+                        for (int x = bx * d; x < bx * d + d; ++x)
+                            mean_log += log_h[j].at(x, y) / (d * d), mean_net += net(j, log_h[j].at(x, y)) / (d * d);
+                    departure[j] = std::max(departure[j], std::abs(net(j, mean_log) - mean_net));
+                }
+        }
+        for (size_t i = 0; i < 3; ++i) {
+            // The exact shift s_i = log10 H - log10 H_inhibited, its largest second derivatives and
+            // gradient inside the frame (central differences).
+            auto s_at = [&](int x, int y) {
+                return double(log_h[i].at(x, y)) - std::log10(double(exact_h[i].at(x, y)));
+            };
+            double curvature = 0, gradient = 0;
+            for (int y = 1; y + 1 < frame.y1; ++y)
+                for (int x = 1; x + 1 < frame.x1; ++x) {
+                    const double c = s_at(x, y);
+                    curvature = std::max(curvature, std::abs(s_at(x - 1, y) - 2 * c + s_at(x + 1, y)) +
+                                                        std::abs(s_at(x, y - 1) - 2 * c + s_at(x, y + 1)));
+                    gradient = std::max(gradient, std::max(std::abs(s_at(x + 1, y) - s_at(x - 1, y)),
+                                                           std::abs(s_at(x, y + 1) - s_at(x, y - 1))) / 2);
+                }
+            double donors = 0;
+            for (size_t j = 0; j < 3; ++j) donors += std::abs(m[i][j]) * (departure[j] + slope[j] * pseudo_log10);
+            // The coarse spread: its nodes' kernel (blocks and the narrowed Gaussian) is d^2/6
+            // narrower in variance than the Gaussian, a shift of d^2/12 of the second derivative a
+            // direction, which the interpolation (within d^2/8 of it) makes up on average.
+            const double spread = (1.0 / 12 + 1.0 / 8) * d * d * curvature;
+            const double nodes = ln10 * d * gradient;
+            const double bound = spread + donors + 2 * nodes * nodes / (8 * ln10);
+            INFO("layer " << i << ": " << worst[i] << " against " << bound << " (" << spread << " + " << donors << " + "
+                          << 2 * nodes * nodes / (8 * ln10) << ")");
+            CHECK(worst[i] <= bound);
+        }
+    }
+}
