@@ -13,18 +13,43 @@ namespace darkroom {
 
 using Philox4x32 = std::array<uint32_t, 4>;
 
-inline Philox4x32 philox4x32_10(Philox4x32 counter, uint32_t key0, uint32_t key1) {
-    constexpr uint32_t kMul0 = 0xD2511F53u, kMul1 = 0xCD9E8D57u;     // round multipliers
+// The product of a Philox word and a round multiplier, its high and low 32 bits: of one
+// word, and of each 64-bit lane of a vector of words (each below 2^32).
+inline void philox_multiply(uint32_t word, uint64_t multiplier, uint32_t& high, uint32_t& low) {
+    const uint64_t product = multiplier * word;
+    high = uint32_t(product >> 32);
+    low = uint32_t(product);
+}
+template <typename V>
+__attribute__((always_inline)) inline void philox_multiply(const V& word, uint64_t multiplier, V& high, V& low) {
+    const V product = word * multiplier;
+    high = product >> 32;
+    low = product & 0xffffffffu;
+}
+
+// Philox4x32-10's rounds on its four words: W is uint32_t, or a vector of 64-bit lanes for
+// draws with consecutive counters in its lanes.
+template <typename W>
+__attribute__((always_inline)) inline void philox4x32_10_rounds(W (&word)[4], uint32_t key0, uint32_t key1) {
+    constexpr uint64_t kMul0 = 0xD2511F53u, kMul1 = 0xCD9E8D57u;     // round multipliers
     constexpr uint32_t kWeyl0 = 0x9E3779B9u, kWeyl1 = 0xBB67AE85u;   // key schedule increments
     for (int round = 0; round < 10; ++round) {
-        uint64_t p0 = (uint64_t)kMul0 * counter[0];
-        uint64_t p1 = (uint64_t)kMul1 * counter[2];
-        counter = {uint32_t(p1 >> 32) ^ counter[1] ^ key0, uint32_t(p1), uint32_t(p0 >> 32) ^ counter[3] ^ key1,
-                   uint32_t(p0)};
+        W high0, low0, high1, low1;
+        philox_multiply(word[0], kMul0, high0, low0);
+        philox_multiply(word[2], kMul1, high1, low1);
+        word[0] = high1 ^ word[1] ^ key0;
+        word[1] = low1;
+        word[2] = high0 ^ word[3] ^ key1;
+        word[3] = low0;
         key0 += kWeyl0;
         key1 += kWeyl1;
     }
-    return counter;
+}
+
+inline Philox4x32 philox4x32_10(Philox4x32 counter, uint32_t key0, uint32_t key1) {
+    uint32_t word[4] = {counter[0], counter[1], counter[2], counter[3]};
+    philox4x32_10_rounds(word, key0, key1);
+    return {word[0], word[1], word[2], word[3]};
 }
 
 // Which independent noise field a draw belongs to (film layers, paper layers, ...).

@@ -8,6 +8,7 @@
 #include <map>
 
 #include "core/parallel.h"
+#include "core/simd.h"
 #include "core/stages/grain.h"
 
 namespace darkroom {
@@ -19,6 +20,9 @@ constexpr int kTableNodes = 301;           // net density step 0.01
 constexpr double kCellLimitUm = 8.0;       // cells are at most this wide
 constexpr double kFootprintReachSigmas = 5.0;
 constexpr int kBandsPerWorker = 8, kMinBandRows = 32;  // apply_boolean_grain's load balance
+// Below this E[U] (net above 2) a cell's disks are first checked for covering nothing new:
+// at lower densities few are, and the check costs more than it saves.
+constexpr double kSkipCoveredBelow = 0.01;
 
 // Overlap area of two unit disks whose centres are u apart.
 double unit_disk_overlap(double u) {
@@ -100,6 +104,186 @@ struct FootprintCdf {
     }
 };
 
+// max(0, ceil(v)) and floor(v), branch-free (the comparisons are unpredictable): the offset
+// makes the truncation a floor for |v| below it (v is within m + 2 r samples).
+constexpr double kFloorOffset = 1 << 20;
+constexpr double kRoundingMargin = 1e-6;  // samples; sqrt(r^2) may exceed r by an ulp
+int first_index_at_or_above(double v) { return std::max(0, int(kFloorOffset) - int(kFloorOffset - v)); }
+int last_index_at_or_below(double v) { return int(v + kFloorOffset) - int(kFloorOffset); }
+
+// Bits i0..i1 (inclusive) of a row of the raster, i0 <= i1.
+struct RowSpan {
+    int w0, w1;            // first and last word
+    uint64_t first, last;  // their masks
+    RowSpan(int i0, int i1) : w0(i0 >> 6), w1(i1 >> 6), first(~0ull << (i0 & 63)), last(~0ull >> (63 - (i1 & 63))) {
+        if (w0 == w1) first &= last;
+    }
+};
+
+// root = the square root of each lane, correctly rounded as std::sqrt, one instruction for
+// each register width the kernels run at. (By assembly: an intrinsic inlines only into a
+// function compiled for its instruction set, and the kernels' bodies are compiled for none.)
+__attribute__((always_inline)) inline void sqrt_lanes(const simd::Lanes<8>::D& x, simd::Lanes<8>::D& root) {
+    asm("vsqrtpd %1, %0" : "=v"(root) : "v"(x));
+}
+__attribute__((always_inline)) inline void sqrt_lanes(const simd::Lanes<4>::D& x, simd::Lanes<4>::D& root) {
+    asm("vsqrtpd %1, %0" : "=v"(root) : "v"(x));
+}
+__attribute__((always_inline)) inline void sqrt_lanes(const simd::Lanes<2>::D& x, simd::Lanes<2>::D& root) {
+    asm("sqrtpd %1, %0" : "=x"(root) : "x"(x));
+}
+
+constexpr int kMaxLanes = simd::kAvx512Doubles;  // the kernels' widest
+template <int lanes>
+struct UnsignedLanes {  // as many uint64 lanes as simd::Lanes<lanes>::L has int64
+    typedef uint64_t U __attribute__((vector_size(8 * lanes)));
+};
+
+// A cell's raster: one bit per sample, 64 samples of a row a word, word w of row j at
+// [w m + j], so that the rows a disk spans are neighbours in memory; then padding, which a
+// disk's last rows may read and write back unchanged.
+constexpr int kRasterPaddingWords = kMaxLanes;
+void clear_raster(std::vector<uint64_t>& raster, int m) {
+    raster.assign(size_t(m) * size_t((m + 63) / 64) + kRasterPaddingWords, 0);
+}
+
+// Sets the bits of the samples ((i + 0.5) h, (j + 0.5) h), i and j in [0, m), that disks of
+// `radius_um` cover, their centres (x_um, y_um) offset by (ox, oy) um from the raster's
+// corner. A disk's rows `lanes` at a time: each lane's span from its own square root, then
+// its bits in each of the disk's bounding words, ORed into `lanes` neighbouring words at
+// once. The raster is a union, so with skip_covered a disk whose bounding columns are set
+// in every row it spans is skipped (in a print's blacks, about 40 % of them).
+struct RasterizeDisks {
+    // mask = all ones in the lanes k <= n, zero beyond (lane_index holds k).
+    template <typename L>
+    __attribute__((always_inline)) static void lanes_up_to(int n, const L& lane_index, L& mask) {
+        mask = ~((int64_t(n) - lane_index) >> 63);
+    }
+    // Whether the box's bits are set in each row j0..j1, `lanes` rows a load, no branch a row.
+    template <typename L, typename U>
+    __attribute__((always_inline)) static bool all_set(const RowSpan& box, const uint64_t* raster, int j0, int j1, int m,
+                                                       const L& lane_index) {
+        constexpr int lanes = sizeof(L) / sizeof(int64_t);
+        U missing{};
+        for (int w = box.w0; w <= box.w1; ++w) {
+            const uint64_t mask = w == box.w0 ? box.first : w == box.w1 ? box.last : ~0ull;
+            for (int j = j0; j <= j1; j += lanes) {
+                U words;
+                L rows;
+                simd::load(words, raster + size_t(w) * m + j);
+                lanes_up_to(j1 - j, lane_index, rows);
+                missing |= ~words & mask & (U)rows;
+            }
+        }
+        uint64_t any = 0;
+        for (int k = 0; k < lanes; ++k) any |= missing[k];
+        return any == 0;
+    }
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const float* x_um, const float* y_um, size_t count, double ox,
+                                                   double oy, double inv_h, double radius_um, int m, uint64_t* raster,
+                                                   bool skip_covered) {
+        static_assert(lanes <= kMaxLanes, "a disk's last row group stays within the padding");
+        using L = typename simd::Lanes<lanes>::L;
+        using U = typename UnsignedLanes<lanes>::U;
+        const double r = radius_um * inv_h, r2 = r * r, extent = m;
+        L lane_index;
+        for (int k = 0; k < lanes; ++k) lane_index[k] = k;
+        for (size_t k = 0; k < count; ++k) {
+            // In sample units, sample (i, j) at (i + 0.5, j + 0.5): shifted by 0.5 to (i, j).
+            const double gx = (ox + x_um[k]) * inv_h - 0.5, gy = (oy + y_um[k]) * inv_h - 0.5;
+            if (gx + r < -0.5 || gx - r > extent || gy + r < -0.5 || gy - r > extent) continue;
+            const int j0 = first_index_at_or_above(gy - r), j1 = std::min(m - 1, last_index_at_or_below(gy + r));
+            // The disk's bounding columns, widened by a rounding margin so that they hold every
+            // sample a row of it sets.
+            const int b0 = first_index_at_or_above(gx - r - kRoundingMargin),
+                      b1 = std::min(m - 1, last_index_at_or_below(gx + r + kRoundingMargin));
+            if (b1 < b0 || j1 < j0) continue;
+            const RowSpan box(b0, b1);
+            if (skip_covered && all_set<L, U>(box, raster, j0, j1, m, lane_index)) continue;
+            for (int j = j0; j <= j1; j += lanes) set_rows<lanes>(raster, m, box, j, j1, gx, gy, r2);
+        }
+    }
+    // Sets the disk's rows j..min(j1, j + lanes - 1).
+    template <int lanes>
+    __attribute__((always_inline)) static void set_rows(uint64_t* raster, int m, const RowSpan& box, int j, int j1,
+                                                        double gx, double gy, double r2) {
+        using D = typename simd::Lanes<lanes>::D;
+        using L = typename simd::Lanes<lanes>::L;
+        using I = typename simd::Lanes<lanes>::I;
+        using U = typename UnsignedLanes<lanes>::U;
+        D lane_row;
+        L lane_index;
+        for (int k = 0; k < lanes; ++k) lane_row[k] = k, lane_index[k] = k;
+        const D dy = (lane_row + double(j)) - gy, half2 = r2 - dy * dy;
+        // Masks by sign bits, not comparisons (which GCC makes scalar in the kernels): the
+        // lanes whose row lies within the disk's (half2 is never -0).
+        L half2_bits;
+        std::memcpy(&half2_bits, &half2, sizeof half2);
+        L inside;
+        lanes_up_to(j1 - j, lane_index, inside);
+        inside &= ~(half2_bits >> 63);
+        half2_bits &= inside;
+        D half2_inside, half;
+        std::memcpy(&half2_inside, &half2_bits, sizeof half2);
+        sqrt_lanes(half2_inside, half);
+        // The row's span i0..i1 as first_index_at_or_above and last_index_at_or_below.
+        const I low = __builtin_convertvector(kFloorOffset - (gx - half), I),
+                high = __builtin_convertvector((gx + half) + kFloorOffset, I);
+        const L i0 = __builtin_convertvector(int(kFloorOffset) - low, L),
+                i1 = __builtin_convertvector(high - int(kFloorOffset), L);
+        for (int w = box.w0; w <= box.w1; ++w) {
+            // The span's bits within word w, a to b (max(i0, first) and min(i1, last) from
+            // it), none where b < a.
+            const int64_t first_bit = 64 * w, last_bit = std::min(64 * w + 63, m - 1);
+            const L from_first = i0 - first_bit, past_last = i1 - last_bit;
+            const L a = from_first & ~(from_first >> 63), b = last_bit - first_bit + (past_last & (past_last >> 63));
+            const L set = inside & ~((b - a) >> 63);
+            const U ones = ~U{};
+            const U bits = (ones << (U)(a & set)) & (ones >> (U)((63 - b) & set)) & (U)set;
+            uint64_t* words = raster + size_t(w) * m + j;
+            U old;
+            simd::load(old, words);
+            simd::store(words, old | bits);
+        }
+    }
+};
+
+// The centres of a cell's disks, uniform at 16-bit resolution: Philox's draw b at counter
+// (cx, cy, b, tag) gives disks 4 b to 4 b + 3 from its four words, x in each word's low 16
+// bits and y in its high 16, as x = c (bits + 0.5) / 65536 um. `lanes` draws at a time, so
+// the arrays hold whole multiples of 4 lanes.
+struct DrawCentres {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(uint32_t cx, uint32_t cy, uint32_t tag, uint32_t key0,
+                                                   uint32_t key1, uint32_t draws, double cell_um, float* x_um,
+                                                   float* y_um) {
+        using U = typename UnsignedLanes<lanes>::U;
+        using I = typename simd::Lanes<lanes>::I;
+        using D = typename simd::Lanes<lanes>::D;
+        using F = typename simd::Lanes<lanes>::F;
+        U lane_index;
+        for (int k = 0; k < lanes; ++k) lane_index[k] = uint64_t(k);
+        for (uint32_t b = 0; b < draws; b += lanes) {
+            U word[4] = {};  // the counter (cx, cy, b + lane, tag); zeroed first, or GCC 12 warns
+            word[0] += cx, word[1] += cy, word[2] = lane_index + b, word[3] += tag;
+            philox4x32_10_rounds(word, key0, key1);
+            float x[4][lanes], y[4][lanes];
+            for (int k = 0; k < 4; ++k) {
+                const D low = __builtin_convertvector(__builtin_convertvector(word[k] & 0xffffu, I), D),
+                        high = __builtin_convertvector(__builtin_convertvector(word[k] >> 16, I), D);
+                simd::store(x[k], __builtin_convertvector(cell_um * (low + 0.5) / 65536.0, F));
+                simd::store(y[k], __builtin_convertvector(cell_um * (high + 0.5) / 65536.0, F));
+            }
+            for (int l = 0; l < lanes; ++l)
+                for (int k = 0; k < 4; ++k) {
+                    x_um[4 * (b + l) + k] = x[k][l];
+                    y_um[4 * (b + l) + k] = y[k][l];
+                }
+        }
+    }
+};
+
 struct CellGrains {
     double uncovered = 1;  // E[U] = 10^-net at the cell's density
     double radius_um = 0;
@@ -165,12 +349,10 @@ private:
     // Grains of (2 reach + 1) cell rows, columns [grain_x0_, grain_x0_ + width), by row mod.
     std::vector<std::vector<CellGrains>> ring_;
     int grain_x0_ = 0;
-    // One bit per sample, 64 samples of a row a word; word w of row j at [w m + j], so that the
-    // rows a disk spans are neighbours in memory.
-    std::vector<uint64_t> covered_;
+    std::vector<uint64_t> covered_;  // the cell's raster (clear_raster)
     int words_ = 0;
     std::vector<double> contribution_, row_sum_;
-    std::vector<float> interior_x_, interior_y_;
+    std::vector<float> drawn_x_, drawn_y_, interior_x_, interior_y_;
     std::map<std::pair<int, int>, std::vector<double>> cdf_tables_;  // (raster side, sub-cell)
 
     float density_of_cell(int cx, int cy) const {
@@ -187,18 +369,21 @@ private:
         cell.samples_per_um = net > 0 ? table_at(g_.samples_per_um, net) : 0.0;
         const double c = g_.cell_um, r = cell.radius_um;
         const uint32_t count = poisson_count(g_.intensity_at(net) * c * c, cx, cy);
-        // Uniform centres, 16-bit coordinates (c / 65536 is under 0.2 nm): four per draw.
-        // Disks wholly inside the cell come after those that may reach its neighbours,
-        // which only scan the first `border`.
+        // Uniform centres, 16-bit coordinates (c / 65536 is under 0.2 nm). Disks wholly inside
+        // the cell come after those that may reach its neighbours, which only scan the first
+        // `border`.
+        const uint32_t draws = (count + 3) / 4;
+        drawn_x_.resize(4 * size_t(draws) + 4 * kMaxLanes);
+        drawn_y_.resize(drawn_x_.size());
+        simd::dispatch_doubles<DrawCentres>(uint32_t(cx), uint32_t(cy), position_tag_, key0_, key1_, draws, c,
+                                            drawn_x_.data(), drawn_y_.data());
         cell.x_um.resize(count);
         cell.y_um.resize(count);
         interior_x_.resize(count);
         interior_y_.resize(count);
         size_t border = 0, interior = 0;
         for (uint32_t i = 0; i < count; ++i) {
-            if (i % 4 == 0) bits_ = philox4x32_10({uint32_t(cx), uint32_t(cy), i / 4, position_tag_}, key0_, key1_);
-            const uint32_t xy = bits_[i % 4];
-            const float x = float(c * ((xy & 0xffffu) + 0.5) / 65536.0), y = float(c * ((xy >> 16) + 0.5) / 65536.0);
+            const float x = drawn_x_[i], y = drawn_y_[i];
             const bool inside = x >= r && y >= r && x <= c - r && y <= c - r;
             // Both written, one kept (no branch on the disk's position).
             cell.x_um[border] = interior_x_[interior] = x;
@@ -300,7 +485,7 @@ private:
         const int m = std::max(1, int(std::ceil(c * samples_per_um)));
         const double h = c / m;
         words_ = (m + 63) / 64;
-        covered_.assign(size_t(m) * words_, 0);
+        clear_raster(covered_, m);
         for (int dy = -reach; dy <= reach; ++dy)
             for (int dx = -reach; dx <= reach; ++dx) rasterize(grains(cx + dx, cy + dy), dx * c, dy * c, m, h, dx == 0 && dy == 0);
 
@@ -344,71 +529,16 @@ private:
         }
     }
 
-    // Marks the samples ((i + 0.5) h, (j + 0.5) h) of the cell's raster that a disk covers;
-    // the disks' centres are offset by (ox, oy) um from the cell's corner. Neighbours'
-    // disks are scanned only if they may reach beyond their own cell.
+    // Marks the samples of the cell's raster that a cell's disks cover, its centres offset by
+    // (ox, oy) um from the cell's corner; neighbours' disks are scanned only if they may reach
+    // beyond their own cell.
     void rasterize(const CellGrains& cell, double ox, double oy, int m, double h, bool own) {
-        const double inv_h = 1.0 / h, r = cell.radius_um * inv_h, r2 = r * r, extent = m;
         const size_t count = own ? cell.x_um.size() : cell.border;
-        for (size_t k = 0; k < count; ++k) {
-            // In sample units, sample (i, j) at (i + 0.5, j + 0.5): shifted by 0.5 to (i, j).
-            const double gx = (ox + cell.x_um[k]) * inv_h - 0.5, gy = (oy + cell.y_um[k]) * inv_h - 0.5;
-            if (gx + r < -0.5 || gx - r > extent || gy + r < -0.5 || gy - r > extent) continue;
-            const int j0 = first_index_at_or_above(gy - r), j1 = std::min(m - 1, last_index_at_or_below(gy + r));
-            // The disk's bounding columns (widened by a rounding margin): a row whose samples
-            // there are all covered already cannot change, which in dark areas is most rows.
-            const int b0 = first_index_at_or_above(gx - r - kRoundingMargin),
-                      b1 = std::min(m - 1, last_index_at_or_below(gx + r + kRoundingMargin));
-            if (b1 < b0) continue;
-            const RowSpan box(b0, b1);
-            if (box.all_set_in_rows(covered_.data(), j0, j1, m)) continue;
-            for (int j = j0; j <= j1; ++j) {
-                uint64_t* row = covered_.data() + j;
-                if (box.all_set(row, m)) continue;
-                const double dy = j - gy, half2 = r2 - dy * dy;
-                if (half2 < 0) continue;
-                const double half = std::sqrt(half2);
-                const int i0 = first_index_at_or_above(gx - half), i1 = std::min(m - 1, last_index_at_or_below(gx + half));
-                if (i1 >= i0) RowSpan(i0, i1).set(row, m);
-            }
-        }
+        simd::dispatch_doubles<RasterizeDisks>(cell.x_um.data(), cell.y_um.data(), count, ox, oy, 1.0 / h,
+                                               cell.radius_um, m, covered_.data(), cell.uncovered < kSkipCoveredBelow);
     }
-    // Bits i0..i1 (inclusive) of a row, i0 <= i1.
-    struct RowSpan {
-        int w0, w1;  // first and last word
-        uint64_t first, last;  // their masks
-        RowSpan(int i0, int i1)
-            : w0(i0 >> 6), w1(i1 >> 6), first(~0ull << (i0 & 63)), last(~0ull >> (63 - (i1 & 63))) {
-            if (w0 == w1) first &= last;
-        }
-        // `row` is the row's first word; its words are `stride` apart.
-        void set(uint64_t* row, size_t stride) const {
-            row[w0 * stride] |= first;
-            if (w0 == w1) return;
-            for (int w = w0 + 1; w < w1; ++w) row[w * stride] = ~0ull;
-            row[w1 * stride] |= last;
-        }
-        // all_set in each row j0..j1 of the raster (words m apart), without a branch per row.
-        bool all_set_in_rows(const uint64_t* raster, int j0, int j1, int m) const {
-            for (int w = w0; w <= w1; ++w) {
-                const uint64_t* word = raster + size_t(w) * m;
-                uint64_t all = ~0ull;
-                for (int j = j0; j <= j1; ++j) all &= word[j];
-                const uint64_t mask = w == w0 ? first : w == w1 ? last : ~0ull;
-                if ((all & mask) != mask) return false;
-            }
-            return true;
-        }
-        bool all_set(const uint64_t* row, size_t stride) const {
-            if ((row[w0 * stride] & first) != first) return false;
-            if (w0 == w1) return true;
-            for (int w = w0 + 1; w < w1; ++w)
-                if (row[w * stride] != ~0ull) return false;
-            return (row[w1 * stride] & last) == last;
-        }
-    };
     // The first sample at or after i that is covered (or not), m if none.
-    // (`row` as in RowSpan, its words m apart.)
+    // (`row` is the row's first word; its words are m apart.)
     int next_sample(const uint64_t* row, int i, bool covered, int m) const {
         int w = i >> 6;
         uint64_t bits = (covered ? row[size_t(w) * m] : ~row[size_t(w) * m]) & (~0ull << (i & 63));
@@ -418,15 +548,19 @@ private:
         }
         return std::min(m, w * 64 + __builtin_ctzll(bits));
     }
-    // max(0, ceil(v)) and floor(v), branch-free (the comparisons are unpredictable): the
-    // offset makes the truncation a floor for |v| below it (v is within m + 2 r samples).
-    static constexpr double kFloorOffset = 1 << 20;
-    static constexpr double kRoundingMargin = 1e-6;  // samples; sqrt(r^2) may exceed r by an ulp
-    static int first_index_at_or_above(double v) { return std::max(0, int(kFloorOffset) - int(kFloorOffset - v)); }
-    static int last_index_at_or_below(double v) { return int(v + kFloorOffset) - int(kFloorOffset); }
 };
 
 }  // namespace
+
+std::vector<uint64_t> boolean_disk_raster(const std::vector<float>& x_um, const std::vector<float>& y_um,
+                                          double radius_um, double h_um, int m, bool skip_covered) {
+    std::vector<uint64_t> raster;
+    clear_raster(raster, m);
+    simd::dispatch_doubles<RasterizeDisks>(x_um.data(), y_um.data(), std::min(x_um.size(), y_um.size()), 0.0, 0.0,
+                                           1.0 / h_um, radius_um, m, raster.data(), skip_covered);
+    raster.resize(raster.size() - kRasterPaddingWords);
+    return raster;
+}
 
 double boolean_power_integral(double c) {
     // Midpoint rule in u over [0, 2]; g's (2 - u)^(3/2) end is smooth enough for 1e-7.

@@ -9,6 +9,7 @@
 // docs/model/boolean-grain.md.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "core/image.h"
@@ -58,6 +59,14 @@ BooleanGrain design_boolean_grain(const GrainSpec& spec, double d_min, double pi
 // model whose mean transmittance is that pixel's: net = D - d_min, T = 10^-net. Densities
 // that are NaN count as d_min; infinite ones as +-3.4e38.
 void apply_boolean_grain(Plane& density, const BooleanGrain& grain, int threads);
+
+// The raster of samples a cell's grain is integrated on, exposed for the tests: bit i of row j
+// of an m x m raster of spacing h_um is set where a disk of radius_um centred at (x_um[k],
+// y_um[k]) um from its corner covers the sample ((i + 0.5) h, (j + 0.5) h); samples 64 w to
+// 64 w + 63 of row j are the bits of word [w m + j]. With skip_covered each disk is first
+// checked for covering nothing new, as in dark cells (the same bits).
+std::vector<uint64_t> boolean_disk_raster(const std::vector<float>& x_um, const std::vector<float>& y_um,
+                                          double radius_um, double h_um, int m, bool skip_covered);
 
 // F(c) above (the unit-disk integral), and its lattice sum at spacing h_over_r:
 // h^2 sum over n of (exp(c g(h n)/pi) - 1). Exposed for the tests.

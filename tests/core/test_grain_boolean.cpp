@@ -1,9 +1,11 @@
 // The reference tier's Boolean grain (core/stages/grain_boolean.h) against its definition:
 // Nutting's mean, the stock's RMS granularity through a 48 um aperture, the filtered-noise
-// model's spectrum, window and thread independence, and bad input.
+// model's spectrum, window, thread and instruction set independence, its raster against the
+// disks it draws, and bad input.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <string>
 
 #include "core/plate/grain_analysis.h"
@@ -11,6 +13,7 @@
 #include "core/stages/grain.h"
 #include "core/stages/grain_boolean.h"
 #include "tests/core/plate_test_support.h"
+#include "tests/core/test_support.h"
 
 using namespace darkroom;
 
@@ -262,5 +265,82 @@ TEST_CASE("Boolean grain: bad values give finite densities", "[grain][boolean]")
         Plane flat(Window{0, 0, 4, 4}, 0.7f);
         apply_boolean_grain(flat, g, 1);
         for (float v : flat.pixels) CHECK(v == 0.7f);
+    }
+}
+
+TEST_CASE("Boolean grain's raster sets exactly the samples its disks cover, on every instruction set",
+          "[grain][boolean][simd]") {
+    test::IsaScope scope;
+    std::mt19937 rng(5);
+    const double h = 0.01;  // um
+    // Part of a word, a whole word, and three words with a partial last; disks from under a
+    // sample to 17 samples in radius (one across two words); few of them, and so many that
+    // most are covered before they are drawn (the path that skips them).
+    for (int m : {37, 64, 150})
+        for (double radius_samples : {0.7, 2.5, 5.5, 17.0})
+            for (double coverage : {0.3, 0.999}) {
+                INFO("m " << m << ", radius " << radius_samples << " samples, coverage " << coverage);
+                const double r = radius_samples * h, grown = m * h + 2 * r;
+                const int count = int(std::ceil(-std::log(1 - coverage) * grown * grown / (M_PI * r * r)));
+                // Centres over the raster grown by the radius, so that disks cross its edges.
+                std::uniform_real_distribution<float> position(float(-r), float(m * h + r));
+                std::vector<float> x(static_cast<size_t>(count)), y(static_cast<size_t>(count));
+                for (int k = 0; k < count; ++k) x[size_t(k)] = position(rng), y[size_t(k)] = position(rng);
+
+                // The definition, sample by sample near each disk; a sample within rounding of a
+                // disk's edge is left out unless another disk covers it.
+                std::vector<char> inside(size_t(m) * m, 0), on_edge(size_t(m) * m, 0);
+                for (int k = 0; k < count; ++k) {
+                    const double cx = x[size_t(k)] / h - 0.5, cy = y[size_t(k)] / h - 0.5, rs = r / h;
+                    for (int j = std::max(0, int(cy - rs) - 1); j <= std::min(m - 1, int(cy + rs) + 1); ++j)
+                        for (int i = std::max(0, int(cx - rs) - 1); i <= std::min(m - 1, int(cx + rs) + 1); ++i) {
+                            const double d2 = (i - cx) * (i - cx) + (j - cy) * (j - cy);
+                            if (std::abs(d2 - rs * rs) < 1e-9 * rs * rs)
+                                on_edge[size_t(j) * m + i] = 1;
+                            else if (d2 < rs * rs)
+                                inside[size_t(j) * m + i] = 1;
+                        }
+                }
+                std::vector<std::vector<uint64_t>> rasters;
+                for (simd::Isa isa : test::runnable_isas()) {
+                    simd::set_isa(isa);
+                    for (bool skip_covered : {false, true})
+                        rasters.push_back(boolean_disk_raster(x, y, r, h, m, skip_covered));
+                }
+                for (size_t k = 1; k < rasters.size(); ++k) CHECK(rasters[k] == rasters[0]);
+                int checked = 0, wrong = 0, set = 0;
+                for (int j = 0; j < m; ++j)
+                    for (int i = 0; i < m; ++i) {
+                        const bool bit = (rasters[0][size_t(i / 64) * m + j] >> (i % 64)) & 1;
+                        set += bit;
+                        if (on_edge[size_t(j) * m + i] && !inside[size_t(j) * m + i]) continue;
+                        ++checked;
+                        wrong += bit != bool(inside[size_t(j) * m + i]);
+                    }
+                CHECK(wrong == 0);
+                CHECK(checked > m * m * 99 / 100);
+                CHECK(set > 0);
+                if (coverage < 0.5) CHECK(set < m * m);
+            }
+}
+
+TEST_CASE("Boolean grain is the same on every instruction set", "[grain][boolean][simd][determinism]") {
+    test::IsaScope scope;
+    const GrainSpec spec{0.02, 1.0, 0.5};
+    // A ramp from no silver to past the model's cap, 11 px wide (draws and rows that fill no
+    // whole vector), at a cell a pixel and at two cells across a pixel.
+    for (double pitch_um : {3.0, 12.0}) {
+        BooleanGrain g = design_boolean_grain(spec, kDMin, pitch_um, NoiseKey{3, 1, 2});
+        Plane ramp(Window{0, 0, 11, 6});
+        for (int y = 0; y < 6; ++y)
+            for (int x = 0; x < 11; ++x) ramp.at(x, y) = float(kDMin + 0.32 * x);
+        std::vector<Plane> results;
+        for (simd::Isa isa : test::runnable_isas()) {
+            simd::set_isa(isa);
+            Plane d = ramp;
+            apply_boolean_grain(d, g, 2);
+            results.push_back(std::move(d));
+        }
+        for (size_t k = 1; k < results.size(); ++k) CHECK(results[k].pixels == results[0].pixels);
     }
 }
