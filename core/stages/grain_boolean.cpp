@@ -120,34 +120,6 @@ struct RowSpan {
     }
 };
 
-// root = the square root of each lane, correctly rounded as std::sqrt, one instruction for
-// each register width the kernels run at. (By assembly: an intrinsic inlines only into a
-// function compiled for its instruction set, and the kernels' bodies are compiled for none.
-// Clang checks an operand's width against the instruction set of the function the assembly
-// is written in, so there the lanes take std::sqrt one at a time: the same values.)
-#if defined(__clang__)
-template <int lanes>
-__attribute__((always_inline)) inline void sqrt_lanes(const typename simd::Lanes<lanes>::D& x,
-                                                      typename simd::Lanes<lanes>::D& root) {
-    for (int i = 0; i < lanes; ++i) root[i] = std::sqrt(x[i]);
-}
-#else
-template <int lanes>
-void sqrt_lanes(const typename simd::Lanes<lanes>::D& x, typename simd::Lanes<lanes>::D& root);
-template <>
-__attribute__((always_inline)) inline void sqrt_lanes<8>(const simd::Lanes<8>::D& x, simd::Lanes<8>::D& root) {
-    asm("vsqrtpd %1, %0" : "=v"(root) : "v"(x));
-}
-template <>
-__attribute__((always_inline)) inline void sqrt_lanes<4>(const simd::Lanes<4>::D& x, simd::Lanes<4>::D& root) {
-    asm("vsqrtpd %1, %0" : "=v"(root) : "v"(x));
-}
-template <>
-__attribute__((always_inline)) inline void sqrt_lanes<2>(const simd::Lanes<2>::D& x, simd::Lanes<2>::D& root) {
-    asm("sqrtpd %1, %0" : "=x"(root) : "x"(x));
-}
-#endif
-
 constexpr int kMaxLanes = simd::kAvx512Doubles;  // the kernels' widest
 template <int lanes>
 struct UnsignedLanes {  // as many uint64 lanes as simd::Lanes<lanes>::L has int64
@@ -241,7 +213,7 @@ struct RasterizeDisks {
         half2_bits &= inside;
         D half2_inside, half;
         std::memcpy(&half2_inside, &half2_bits, sizeof half2);
-        sqrt_lanes<lanes>(half2_inside, half);
+        simd::sqrt_lanes(half2_inside, half);
         // The row's span i0..i1 as first_index_at_or_above and last_index_at_or_below.
         const I low = __builtin_convertvector(kFloorOffset - (gx - half), I),
                 high = __builtin_convertvector((gx + half) + kFloorOffset, I);
