@@ -126,6 +126,20 @@ struct UnsignedLanes {  // as many uint64 lanes as simd::Lanes<lanes>::L has int
     typedef uint64_t U __attribute__((vector_size(8 * lanes)));
 };
 
+// The OR of v's lanes: the halves ORed, down to one lane (not lane by lane, which GCC does
+// by extracting each).
+template <int lanes>
+__attribute__((always_inline)) inline uint64_t or_lanes(const typename UnsignedLanes<lanes>::U& v) {
+    if constexpr (lanes == 1) {
+        return v[0];
+    } else {
+        typename UnsignedLanes<lanes / 2>::U low, high;
+        std::memcpy(&low, &v, sizeof low);
+        std::memcpy(&high, reinterpret_cast<const char*>(&v) + sizeof low, sizeof high);
+        return or_lanes<lanes / 2>(low | high);
+    }
+}
+
 // A cell's raster: one bit per sample, 64 samples of a row a word, word w of row j at
 // [w m + j], so that the rows a disk spans are neighbours in memory; then padding, which a
 // disk's last rows may read and write back unchanged.
@@ -141,6 +155,15 @@ void clear_raster(std::vector<uint64_t>& raster, int m) {
 // once. The raster is a union, so with skip_covered a disk whose bounding columns are set
 // in every row it spans is skipped (in a print's blacks, about 40 % of them).
 struct RasterizeDisks {
+    // Disks are checked a batch at a time and the batch's uncovered ones then set, so that
+    // the check's outcome, which is hard to predict, steers no branch. (A disk covered only
+    // by others of its batch is set: the same bits.)
+    static constexpr int kDisksPerBatch = 64;
+    struct PendingDisk {
+        double gx, gy;  // centre, in samples from sample (0, 0)
+        int b0, b1;     // bounding columns
+        int j0, j1;     // rows
+    };
     // mask = all ones in the lanes k <= n, zero beyond (lane_index holds k).
     template <typename L>
     __attribute__((always_inline)) static void lanes_up_to(int n, const L& lane_index, L& mask) {
@@ -162,9 +185,7 @@ struct RasterizeDisks {
                 missing |= ~words & mask & (U)rows;
             }
         }
-        uint64_t any = 0;
-        for (int k = 0; k < lanes; ++k) any |= missing[k];
-        return any == 0;
+        return or_lanes<lanes>(missing) == 0;
     }
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* x_um, const float* y_um, size_t count, double ox,
@@ -173,23 +194,47 @@ struct RasterizeDisks {
         static_assert(lanes <= kMaxLanes, "a disk's last row group stays within the padding");
         using L = typename simd::Lanes<lanes>::L;
         using U = typename UnsignedLanes<lanes>::U;
-        const double r = radius_um * inv_h, r2 = r * r, extent = m;
+        const double r = radius_um * inv_h, r2 = r * r;
+        if (!skip_covered) {
+            PendingDisk disk;
+            for (size_t k = 0; k < count; ++k)
+                if (place(x_um[k], y_um[k], ox, oy, inv_h, r, m, disk)) set_disk<lanes>(raster, m, disk, r2);
+            return;
+        }
         L lane_index;
         for (int k = 0; k < lanes; ++k) lane_index[k] = k;
-        for (size_t k = 0; k < count; ++k) {
-            // In sample units, sample (i, j) at (i + 0.5, j + 0.5): shifted by 0.5 to (i, j).
-            const double gx = (ox + x_um[k]) * inv_h - 0.5, gy = (oy + y_um[k]) * inv_h - 0.5;
-            if (gx + r < -0.5 || gx - r > extent || gy + r < -0.5 || gy - r > extent) continue;
-            const int j0 = first_index_at_or_above(gy - r), j1 = std::min(m - 1, last_index_at_or_below(gy + r));
-            // The disk's bounding columns, widened by a rounding margin so that they hold every
-            // sample a row of it sets.
-            const int b0 = first_index_at_or_above(gx - r - kRoundingMargin),
-                      b1 = std::min(m - 1, last_index_at_or_below(gx + r + kRoundingMargin));
-            if (b1 < b0 || j1 < j0) continue;
-            const RowSpan box(b0, b1);
-            if (skip_covered && all_set<L, U>(box, raster, j0, j1, m, lane_index)) continue;
-            for (int j = j0; j <= j1; j += lanes) set_rows<lanes>(raster, m, box, j, j1, gx, gy, r2);
+        PendingDisk pending[kDisksPerBatch];
+        for (size_t k0 = 0; k0 < count; k0 += kDisksPerBatch) {
+            // The batch's disks that reach the raster and cover something not set before the
+            // batch, kept without a branch on the check.
+            int kept = 0;
+            for (size_t k = k0; k < std::min(count, k0 + kDisksPerBatch); ++k) {
+                PendingDisk& disk = pending[kept];
+                kept += place(x_um[k], y_um[k], ox, oy, inv_h, r, m, disk) &&
+                        !all_set<L, U>(RowSpan(disk.b0, disk.b1), raster, disk.j0, disk.j1, m, lane_index);
+            }
+            for (int d = 0; d < kept; ++d) set_disk<lanes>(raster, m, pending[d], r2);
         }
+    }
+    // The disk of radius r (samples) centred at (x_um, y_um) + (ox, oy): its centre in samples,
+    // its rows and its bounding columns; false where it sets no sample of the raster.
+    __attribute__((always_inline)) static bool place(float x_um, float y_um, double ox, double oy, double inv_h,
+                                                     double r, int m, PendingDisk& disk) {
+        // In sample units, sample (i, j) at (i + 0.5, j + 0.5): shifted by 0.5 to (i, j).
+        const double gx = (ox + x_um) * inv_h - 0.5, gy = (oy + y_um) * inv_h - 0.5, extent = m;
+        if (gx + r < -0.5 || gx - r > extent || gy + r < -0.5 || gy - r > extent) return false;
+        disk.gx = gx, disk.gy = gy;
+        disk.j0 = first_index_at_or_above(gy - r), disk.j1 = std::min(m - 1, last_index_at_or_below(gy + r));
+        // The bounding columns, widened by a rounding margin so that they hold every sample a
+        // row of the disk sets.
+        disk.b0 = first_index_at_or_above(gx - r - kRoundingMargin);
+        disk.b1 = std::min(m - 1, last_index_at_or_below(gx + r + kRoundingMargin));
+        return disk.b0 <= disk.b1 && disk.j0 <= disk.j1;
+    }
+    template <int lanes>
+    __attribute__((always_inline)) static void set_disk(uint64_t* raster, int m, const PendingDisk& disk, double r2) {
+        const RowSpan box(disk.b0, disk.b1);
+        for (int j = disk.j0; j <= disk.j1; j += lanes) set_rows<lanes>(raster, m, box, j, disk.j1, disk.gx, disk.gy, r2);
     }
     // Sets the disk's rows j..min(j1, j + lanes - 1).
     template <int lanes>
