@@ -165,6 +165,19 @@ __attribute__((always_inline)) inline void sqrt_lanes(const D& x, D& root) {
         for (size_t k = 0; k < sizeof(D) / sizeof(double); ++k) root[k] = std::sqrt(x[k]);
 }
 
+// result = the lanes of x truncated toward zero, in int64 lanes (as many as D has): one
+// instruction for AVX-512's width (vcvttpd2qq). Narrower registers have none, and GCC
+// converts such lanes one at a time, so there through int32 lanes: |x| must be under 2^31.
+template <typename D, typename L>
+__attribute__((always_inline)) inline void truncate_lanes(const D& x, L& result) {
+    if constexpr (sizeof(D) == 64) {
+        result = __builtin_convertvector(x, L);
+    } else {
+        typedef int32_t I __attribute__((vector_size(sizeof(D) / 2)));
+        result = __builtin_convertvector(__builtin_convertvector(x, I), L);
+    }
+}
+
 // The instruction sets the kernels are compiled for, narrowest first.
 enum class Isa { baseline, avx2, avx512 };
 const char* isa_name(Isa isa);

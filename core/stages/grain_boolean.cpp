@@ -242,7 +242,6 @@ struct RasterizeDisks {
                                                         double gx, double gy, double r2) {
         using D = typename simd::Lanes<lanes>::D;
         using L = typename simd::Lanes<lanes>::L;
-        using I = typename simd::Lanes<lanes>::I;
         using U = typename UnsignedLanes<lanes>::U;
         D lane_row;
         L lane_index;
@@ -260,10 +259,10 @@ struct RasterizeDisks {
         std::memcpy(&half2_inside, &half2_bits, sizeof half2);
         simd::sqrt_lanes(half2_inside, half);
         // The row's span i0..i1 as first_index_at_or_above and last_index_at_or_below.
-        const I low = __builtin_convertvector(kFloorOffset - (gx - half), I),
-                high = __builtin_convertvector((gx + half) + kFloorOffset, I);
-        const L i0 = __builtin_convertvector(int(kFloorOffset) - low, L),
-                i1 = __builtin_convertvector(high - int(kFloorOffset), L);
+        L low, high;
+        simd::truncate_lanes(kFloorOffset - (gx - half), low);
+        simd::truncate_lanes((gx + half) + kFloorOffset, high);
+        const L i0 = int64_t(kFloorOffset) - low, i1 = high - int64_t(kFloorOffset);
         for (int w = box.w0; w <= box.w1; ++w) {
             // The span's bits within word w, a to b (max(i0, first) and min(i1, last) from
             // it), none where b < a.
