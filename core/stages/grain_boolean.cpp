@@ -383,7 +383,7 @@ private:
     std::vector<uint64_t> covered_;  // the cell's raster (clear_raster)
     int words_ = 0;
     std::vector<double> contribution_, row_sum_;
-    std::vector<float> drawn_x_, drawn_y_, interior_x_, interior_y_;
+    std::vector<float> drawn_x_, drawn_y_;
     std::map<std::pair<int, int>, std::vector<double>> cdf_tables_;  // (raster side, sub-cell)
 
     float density_of_cell(int cx, int cy) const {
@@ -410,21 +410,20 @@ private:
                                             drawn_x_.data(), drawn_y_.data());
         cell.x_um.resize(count);
         cell.y_um.resize(count);
-        interior_x_.resize(count);
-        interior_y_.resize(count);
-        size_t border = 0, interior = 0;
+        // The border disks fill the arrays from the front, the interior ones from the back
+        // (the order of a cell's disks changes no bit of their union). Both places are
+        // written, one kept, so that no branch follows the disk's position: between them
+        // lie the places not yet kept, at least the disk's own.
+        size_t border = 0, interior_from = count;
         for (uint32_t i = 0; i < count; ++i) {
             const float x = drawn_x_[i], y = drawn_y_[i];
-            const bool inside = x >= r && y >= r && x <= c - r && y <= c - r;
-            // Both written, one kept (no branch on the disk's position).
-            cell.x_um[border] = interior_x_[interior] = x;
-            cell.y_um[border] = interior_y_[interior] = y;
+            const bool inside = (x >= r) & (y >= r) & (x <= c - r) & (y <= c - r);
+            cell.x_um[border] = cell.x_um[interior_from - 1] = x;
+            cell.y_um[border] = cell.y_um[interior_from - 1] = y;
             border += !inside;
-            interior += inside;
+            interior_from -= inside;
         }
         cell.border = border;
-        std::copy_n(interior_x_.begin(), interior, cell.x_um.begin() + border);
-        std::copy_n(interior_y_.begin(), interior, cell.y_um.begin() + border);
     }
 
     // The cell's grain count, Poisson of mean `mean`: products of uniforms below 10, else
