@@ -383,6 +383,7 @@ private:
     std::vector<uint64_t> covered_;  // the cell's raster (clear_raster)
     int words_ = 0;
     std::vector<double> contribution_, row_sum_;
+    std::vector<int> run_ends_;  // a raster row's uncovered runs, each as its first and its end
     std::vector<float> drawn_x_, drawn_y_;
     std::map<std::pair<int, int>, std::vector<double>> cdf_tables_;  // (raster side, sub-cell)
 
@@ -524,17 +525,17 @@ private:
         const int columns = kx1 - kx0 + 1;
         contribution_.assign(size_t(ky1 - ky0 + 1) * columns, 0.0);  // [ky - ky0][kx - kx0]
         row_sum_.resize(size_t(columns));
+        run_ends_.resize(size_t(m) + 1);
         for (int j = 0; j < m; ++j) {
             const uint64_t* row = covered_.data() + j;
-            std::fill(row_sum_.begin(), row_sum_.end(), 0.0);
-            // Uncovered runs [i0, i1) add their footprint weight.
-            for (int i0 = next_sample(row, 0, false, m); i0 < m;) {
-                const int i1 = next_sample(row, i0, true, m);
-                for (int kx = kx0; kx <= kx1; ++kx) {
-                    const double* q = qx.data() + size_t(kx + reach_px_) * (m + 1);
-                    row_sum_[size_t(kx - kx0)] += q[i1] - q[i0];
-                }
-                i0 = i1 < m ? next_sample(row, i1, false, m) : m;
+            const int ends = uncovered_runs(row, m);
+            // Each uncovered run adds its footprint weight, in the runs' order (a column at a
+            // time, its sum in a register).
+            for (int kx = kx0; kx <= kx1; ++kx) {
+                const double* q = qx.data() + size_t(kx + reach_px_) * (m + 1);
+                double sum = 0;
+                for (int e = 0; e < ends; e += 2) sum += q[run_ends_[size_t(e + 1)]] - q[run_ends_[size_t(e)]];
+                row_sum_[size_t(kx - kx0)] = sum;
             }
             for (int ky = ky0; ky <= ky1; ++ky) {
                 const double* q = qy.data() + size_t(ky + reach_px_) * (m + 1);
@@ -567,16 +568,23 @@ private:
         simd::dispatch_doubles<RasterizeDisks>(cell.x_um.data(), cell.y_um.data(), count, ox, oy, 1.0 / h,
                                                cell.radius_um, m, covered_.data(), cell.uncovered < kSkipCoveredBelow);
     }
-    // The first sample at or after i that is covered (or not), m if none.
-    // (`row` is the row's first word; its words are m apart.)
-    int next_sample(const uint64_t* row, int i, bool covered, int m) const {
-        int w = i >> 6;
-        uint64_t bits = (covered ? row[size_t(w) * m] : ~row[size_t(w) * m]) & (~0ull << (i & 63));
-        while (!bits) {
-            if (++w == words_) return m;
-            bits = covered ? row[size_t(w) * m] : ~row[size_t(w) * m];
+    // The uncovered runs [i0, i1) of a raster row (`row` its first word; its words are m
+    // apart) into run_ends_, i0 and i1 in turn, and their count times 2: the samples where
+    // the coverage changes, from each word's bits (samples past the row's end count as
+    // covered).
+    int uncovered_runs(const uint64_t* row, int m) {
+        int ends = 0;
+        uint64_t uncovered_before = 0;  // bit 63: the sample before the word's first
+        for (int w = 0; w < words_; ++w) {
+            uint64_t uncovered = ~row[size_t(w) * m];
+            if (w == words_ - 1 && m % 64 != 0) uncovered &= ~0ull >> (64 - m % 64);
+            for (uint64_t changes = uncovered ^ ((uncovered << 1) | (uncovered_before >> 63)); changes;
+                 changes &= changes - 1)
+                run_ends_[size_t(ends++)] = 64 * w + __builtin_ctzll(changes);
+            uncovered_before = uncovered;
         }
-        return std::min(m, w * 64 + __builtin_ctzll(bits));
+        if (ends % 2 != 0) run_ends_[size_t(ends++)] = m;  // a run to the row's end
+        return ends;
     }
 };
 
