@@ -148,9 +148,9 @@ void clear_raster(std::vector<uint64_t>& raster, int m) {
     raster.assign(size_t(m) * size_t((m + 63) / 64) + kRasterPaddingWords, 0);
 }
 
-// Sets the bits of the samples ((i + 0.5) h, (j + 0.5) h), i and j in [0, m), that disks of
-// `radius_um` cover, their centres (x_um, y_um) offset by (ox, oy) um from the raster's
-// corner. A disk's rows `lanes` at a time: each lane's span from its own square root, then
+// Sets the bits of the samples ((i + 0.5) h, (j + 0.5) h), i in [0, m) and j in [row0, row1],
+// that disks of `radius_um` cover, their centres (x_um, y_um) offset by (ox, oy) um from the
+// raster's corner. A disk's rows `lanes` at a time: each lane's span from its own square root, then
 // its bits in each of the disk's bounding words, ORed into `lanes` neighbouring words at
 // once. The raster is a union, so with skip_covered a disk whose bounding columns are set
 // in every row it spans is skipped (in a print's blacks, about 40 % of them).
@@ -189,8 +189,8 @@ struct RasterizeDisks {
     }
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* x_um, const float* y_um, size_t count, double ox,
-                                                   double oy, double inv_h, double radius_um, int m, uint64_t* raster,
-                                                   bool skip_covered) {
+                                                   double oy, double inv_h, double radius_um, int m, int row0,
+                                                   int row1, uint64_t* raster, bool skip_covered) {
         static_assert(lanes <= kMaxLanes, "a disk's last row group stays within the padding");
         using L = typename simd::Lanes<lanes>::L;
         using U = typename UnsignedLanes<lanes>::U;
@@ -198,7 +198,7 @@ struct RasterizeDisks {
         if (!skip_covered) {
             PendingDisk disk;
             for (size_t k = 0; k < count; ++k)
-                if (place(x_um[k], y_um[k], ox, oy, inv_h, r, m, disk)) set_disk<lanes>(raster, m, disk, r2);
+                if (place(x_um[k], y_um[k], ox, oy, inv_h, r, m, row0, row1, disk)) set_disk<lanes>(raster, m, disk, r2);
             return;
         }
         L lane_index;
@@ -210,21 +210,22 @@ struct RasterizeDisks {
             int kept = 0;
             for (size_t k = k0; k < std::min(count, k0 + kDisksPerBatch); ++k) {
                 PendingDisk& disk = pending[kept];
-                kept += place(x_um[k], y_um[k], ox, oy, inv_h, r, m, disk) &&
+                kept += place(x_um[k], y_um[k], ox, oy, inv_h, r, m, row0, row1, disk) &&
                         !all_set<L, U>(RowSpan(disk.b0, disk.b1), raster, disk.j0, disk.j1, m, lane_index);
             }
             for (int d = 0; d < kept; ++d) set_disk<lanes>(raster, m, pending[d], r2);
         }
     }
     // The disk of radius r (samples) centred at (x_um, y_um) + (ox, oy): its centre in samples,
-    // its rows and its bounding columns; false where it sets no sample of the raster.
+    // its rows within row0..row1 and its bounding columns; false where it sets no sample there.
     __attribute__((always_inline)) static bool place(float x_um, float y_um, double ox, double oy, double inv_h,
-                                                     double r, int m, PendingDisk& disk) {
+                                                     double r, int m, int row0, int row1, PendingDisk& disk) {
         // In sample units, sample (i, j) at (i + 0.5, j + 0.5): shifted by 0.5 to (i, j).
         const double gx = (ox + x_um) * inv_h - 0.5, gy = (oy + y_um) * inv_h - 0.5, extent = m;
         if (gx + r < -0.5 || gx - r > extent || gy + r < -0.5 || gy - r > extent) return false;
         disk.gx = gx, disk.gy = gy;
-        disk.j0 = first_index_at_or_above(gy - r), disk.j1 = std::min(m - 1, last_index_at_or_below(gy + r));
+        disk.j0 = std::max(row0, first_index_at_or_above(gy - r));
+        disk.j1 = std::min(row1, last_index_at_or_below(gy + r));
         // The bounding columns, widened by a rounding margin so that they hold every sample a
         // row of the disk sets.
         disk.b0 = first_index_at_or_above(gx - r - kRoundingMargin);
@@ -515,18 +516,27 @@ private:
         const double c = g_.cell_um;
         const int m = std::max(1, int(std::ceil(c * samples_per_um)));
         const double h = c / m;
+        const std::vector<double>& qx = cdf_table(m, cx - px * n);
+        const std::vector<double>& qy = cdf_table(m, cy - py * n);
+        // The raster rows some pixel of the band weighs: a cell beyond the band's edge only
+        // within the footprint's reach of it, and its other rows need no disks.
+        int row0 = m, row1 = -1;
+        for (int j = 0; j < m; ++j)
+            for (int ky = ky0; ky <= ky1; ++ky) {
+                const double* q = qy.data() + size_t(ky + reach_px_) * (m + 1);
+                if (q[j + 1] - q[j] != 0) row0 = std::min(row0, j), row1 = j;
+            }
         words_ = (m + 63) / 64;
         clear_raster(covered_, m);
         for (int dy = -reach; dy <= reach; ++dy)
-            for (int dx = -reach; dx <= reach; ++dx) rasterize(grains(cx + dx, cy + dy), dx * c, dy * c, m, h, dx == 0 && dy == 0);
+            for (int dx = -reach; dx <= reach; ++dx)
+                rasterize(grains(cx + dx, cy + dy), dx * c, dy * c, m, row0, row1, h, dx == 0 && dy == 0);
 
-        const std::vector<double>& qx = cdf_table(m, cx - px * n);
-        const std::vector<double>& qy = cdf_table(m, cy - py * n);
         const int columns = kx1 - kx0 + 1;
         contribution_.assign(size_t(ky1 - ky0 + 1) * columns, 0.0);  // [ky - ky0][kx - kx0]
         row_sum_.resize(size_t(columns));
         run_ends_.resize(size_t(m) + 1);
-        for (int j = 0; j < m; ++j) {
+        for (int j = row0; j <= row1; ++j) {
             const uint64_t* row = covered_.data() + j;
             const int ends = uncovered_runs(row, m);
             // Each uncovered run adds its footprint weight, in the runs' order (a column at a
@@ -560,13 +570,14 @@ private:
         }
     }
 
-    // Marks the samples of the cell's raster that a cell's disks cover, its centres offset by
-    // (ox, oy) um from the cell's corner; neighbours' disks are scanned only if they may reach
-    // beyond their own cell.
-    void rasterize(const CellGrains& cell, double ox, double oy, int m, double h, bool own) {
+    // Marks the samples of the cell's raster rows row0..row1 that a cell's disks cover, its
+    // centres offset by (ox, oy) um from the cell's corner; neighbours' disks are scanned only
+    // if they may reach beyond their own cell.
+    void rasterize(const CellGrains& cell, double ox, double oy, int m, int row0, int row1, double h, bool own) {
         const size_t count = own ? cell.x_um.size() : cell.border;
         simd::dispatch_doubles<RasterizeDisks>(cell.x_um.data(), cell.y_um.data(), count, ox, oy, 1.0 / h,
-                                               cell.radius_um, m, covered_.data(), cell.uncovered < kSkipCoveredBelow);
+                                               cell.radius_um, m, row0, row1, covered_.data(),
+                                               cell.uncovered < kSkipCoveredBelow);
     }
     // The uncovered runs [i0, i1) of a raster row (`row` its first word; its words are m
     // apart) into run_ends_, i0 and i1 in turn, and their count times 2: the samples where
@@ -595,7 +606,7 @@ std::vector<uint64_t> boolean_disk_raster(const std::vector<float>& x_um, const 
     std::vector<uint64_t> raster;
     clear_raster(raster, m);
     simd::dispatch_doubles<RasterizeDisks>(x_um.data(), y_um.data(), std::min(x_um.size(), y_um.size()), 0.0, 0.0,
-                                           1.0 / h_um, radius_um, m, raster.data(), skip_covered);
+                                           1.0 / h_um, radius_um, m, 0, m - 1, raster.data(), skip_covered);
     raster.resize(raster.size() - kRasterPaddingWords);
     return raster;
 }
