@@ -153,7 +153,7 @@ void clear_raster(std::vector<uint64_t>& raster, int m) {
 // raster's corner. A disk's rows `lanes` at a time: each lane's span from its own square root, then
 // its bits in each of the disk's bounding words, ORed into `lanes` neighbouring words at
 // once. The raster is a union, so with skip_covered a disk whose bounding columns are set
-// in every row it spans is skipped (in a print's blacks, about 40 % of them).
+// in every row it spans is skipped (in a print's blacks, about half of them).
 struct RasterizeDisks {
     // Disks are checked a batch at a time and the batch's uncovered ones then set, so that
     // the check's outcome, which is hard to predict, steers no branch. (A disk covered only
