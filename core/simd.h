@@ -15,6 +15,7 @@
 // kernels take pointers and scalars, and their helpers take references and are inlined.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -141,6 +142,40 @@ __attribute__((always_inline)) inline void exp_lanes(const D& x, D& result) {
     D power1, power2;
     power_of_two<D, L>(k1, power1), power_of_two<D, L>(k2, power2);
     result = p * power1 * power2;
+}
+
+// root = the square root of each double lane of x (D: Lanes<n>::D), correctly rounded as
+// std::sqrt, one instruction for each register width the kernels run at. (By assembly: an
+// intrinsic inlines only into a function compiled for its instruction set, and the kernels'
+// bodies are compiled for none. Clang checks an operand's width against the instruction set
+// of the function the assembly is written in, so there, and for one lane, the lanes take
+// std::sqrt one at a time: the same values.)
+#if defined(__clang__)
+constexpr bool kSqrtByAssembly = false;
+#else
+constexpr bool kSqrtByAssembly = true;
+#endif
+template <typename D>
+__attribute__((always_inline)) inline void sqrt_lanes(const D& x, D& root) {
+    if constexpr (kSqrtByAssembly && sizeof(D) == 16)
+        asm("sqrtpd %1, %0" : "=x"(root) : "x"(x));
+    else if constexpr (kSqrtByAssembly && sizeof(D) > 16)
+        asm("vsqrtpd %1, %0" : "=v"(root) : "v"(x));
+    else
+        for (size_t k = 0; k < sizeof(D) / sizeof(double); ++k) root[k] = std::sqrt(x[k]);
+}
+
+// result = the lanes of x truncated toward zero, in int64 lanes (as many as D has): one
+// instruction for AVX-512's width (vcvttpd2qq). Narrower registers have none, and GCC
+// converts such lanes one at a time, so there through int32 lanes: |x| must be under 2^31.
+template <typename D, typename L>
+__attribute__((always_inline)) inline void truncate_lanes(const D& x, L& result) {
+    if constexpr (sizeof(D) == 64) {
+        result = __builtin_convertvector(x, L);
+    } else {
+        typedef int32_t I __attribute__((vector_size(sizeof(D) / 2)));
+        result = __builtin_convertvector(__builtin_convertvector(x, I), L);
+    }
 }
 
 // The instruction sets the kernels are compiled for, narrowest first.

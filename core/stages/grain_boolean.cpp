@@ -120,39 +120,25 @@ struct RowSpan {
     }
 };
 
-// root = the square root of each lane, correctly rounded as std::sqrt, one instruction for
-// each register width the kernels run at. (By assembly: an intrinsic inlines only into a
-// function compiled for its instruction set, and the kernels' bodies are compiled for none.
-// Clang checks an operand's width against the instruction set of the function the assembly
-// is written in, so there the lanes take std::sqrt one at a time: the same values.)
-#if defined(__clang__)
-template <int lanes>
-__attribute__((always_inline)) inline void sqrt_lanes(const typename simd::Lanes<lanes>::D& x,
-                                                      typename simd::Lanes<lanes>::D& root) {
-    for (int i = 0; i < lanes; ++i) root[i] = std::sqrt(x[i]);
-}
-#else
-template <int lanes>
-void sqrt_lanes(const typename simd::Lanes<lanes>::D& x, typename simd::Lanes<lanes>::D& root);
-template <>
-__attribute__((always_inline)) inline void sqrt_lanes<8>(const simd::Lanes<8>::D& x, simd::Lanes<8>::D& root) {
-    asm("vsqrtpd %1, %0" : "=v"(root) : "v"(x));
-}
-template <>
-__attribute__((always_inline)) inline void sqrt_lanes<4>(const simd::Lanes<4>::D& x, simd::Lanes<4>::D& root) {
-    asm("vsqrtpd %1, %0" : "=v"(root) : "v"(x));
-}
-template <>
-__attribute__((always_inline)) inline void sqrt_lanes<2>(const simd::Lanes<2>::D& x, simd::Lanes<2>::D& root) {
-    asm("sqrtpd %1, %0" : "=x"(root) : "x"(x));
-}
-#endif
-
 constexpr int kMaxLanes = simd::kAvx512Doubles;  // the kernels' widest
 template <int lanes>
 struct UnsignedLanes {  // as many uint64 lanes as simd::Lanes<lanes>::L has int64
     typedef uint64_t U __attribute__((vector_size(8 * lanes)));
 };
+
+// The OR of v's lanes: the halves ORed, down to one lane (not lane by lane, which GCC does
+// by extracting each).
+template <int lanes>
+__attribute__((always_inline)) inline uint64_t or_lanes(const typename UnsignedLanes<lanes>::U& v) {
+    if constexpr (lanes == 1) {
+        return v[0];
+    } else {
+        typename UnsignedLanes<lanes / 2>::U low, high;
+        std::memcpy(&low, &v, sizeof low);
+        std::memcpy(&high, reinterpret_cast<const char*>(&v) + sizeof low, sizeof high);
+        return or_lanes<lanes / 2>(low | high);
+    }
+}
 
 // A cell's raster: one bit per sample, 64 samples of a row a word, word w of row j at
 // [w m + j], so that the rows a disk spans are neighbours in memory; then padding, which a
@@ -162,13 +148,22 @@ void clear_raster(std::vector<uint64_t>& raster, int m) {
     raster.assign(size_t(m) * size_t((m + 63) / 64) + kRasterPaddingWords, 0);
 }
 
-// Sets the bits of the samples ((i + 0.5) h, (j + 0.5) h), i and j in [0, m), that disks of
-// `radius_um` cover, their centres (x_um, y_um) offset by (ox, oy) um from the raster's
-// corner. A disk's rows `lanes` at a time: each lane's span from its own square root, then
+// Sets the bits of the samples ((i + 0.5) h, (j + 0.5) h), i in [0, m) and j in [row0, row1],
+// that disks of `radius_um` cover, their centres (x_um, y_um) offset by (ox, oy) um from the
+// raster's corner. A disk's rows `lanes` at a time: each lane's span from its own square root, then
 // its bits in each of the disk's bounding words, ORed into `lanes` neighbouring words at
 // once. The raster is a union, so with skip_covered a disk whose bounding columns are set
-// in every row it spans is skipped (in a print's blacks, about 40 % of them).
+// in every row it spans is skipped (in a print's blacks, about half of them).
 struct RasterizeDisks {
+    // Disks are checked a batch at a time and the batch's uncovered ones then set, so that
+    // the check's outcome, which is hard to predict, steers no branch. (A disk covered only
+    // by others of its batch is set: the same bits.)
+    static constexpr int kDisksPerBatch = 64;
+    struct PendingDisk {
+        double gx, gy;  // centre, in samples from sample (0, 0)
+        int b0, b1;     // bounding columns
+        int j0, j1;     // rows
+    };
     // mask = all ones in the lanes k <= n, zero beyond (lane_index holds k).
     template <typename L>
     __attribute__((always_inline)) static void lanes_up_to(int n, const L& lane_index, L& mask) {
@@ -190,34 +185,57 @@ struct RasterizeDisks {
                 missing |= ~words & mask & (U)rows;
             }
         }
-        uint64_t any = 0;
-        for (int k = 0; k < lanes; ++k) any |= missing[k];
-        return any == 0;
+        return or_lanes<lanes>(missing) == 0;
     }
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* x_um, const float* y_um, size_t count, double ox,
-                                                   double oy, double inv_h, double radius_um, int m, uint64_t* raster,
-                                                   bool skip_covered) {
+                                                   double oy, double inv_h, double radius_um, int m, int row0,
+                                                   int row1, uint64_t* raster, bool skip_covered) {
         static_assert(lanes <= kMaxLanes, "a disk's last row group stays within the padding");
         using L = typename simd::Lanes<lanes>::L;
         using U = typename UnsignedLanes<lanes>::U;
-        const double r = radius_um * inv_h, r2 = r * r, extent = m;
+        const double r = radius_um * inv_h, r2 = r * r;
+        if (!skip_covered) {
+            PendingDisk disk;
+            for (size_t k = 0; k < count; ++k)
+                if (place(x_um[k], y_um[k], ox, oy, inv_h, r, m, row0, row1, disk)) set_disk<lanes>(raster, m, disk, r2);
+            return;
+        }
         L lane_index;
         for (int k = 0; k < lanes; ++k) lane_index[k] = k;
-        for (size_t k = 0; k < count; ++k) {
-            // In sample units, sample (i, j) at (i + 0.5, j + 0.5): shifted by 0.5 to (i, j).
-            const double gx = (ox + x_um[k]) * inv_h - 0.5, gy = (oy + y_um[k]) * inv_h - 0.5;
-            if (gx + r < -0.5 || gx - r > extent || gy + r < -0.5 || gy - r > extent) continue;
-            const int j0 = first_index_at_or_above(gy - r), j1 = std::min(m - 1, last_index_at_or_below(gy + r));
-            // The disk's bounding columns, widened by a rounding margin so that they hold every
-            // sample a row of it sets.
-            const int b0 = first_index_at_or_above(gx - r - kRoundingMargin),
-                      b1 = std::min(m - 1, last_index_at_or_below(gx + r + kRoundingMargin));
-            if (b1 < b0 || j1 < j0) continue;
-            const RowSpan box(b0, b1);
-            if (skip_covered && all_set<L, U>(box, raster, j0, j1, m, lane_index)) continue;
-            for (int j = j0; j <= j1; j += lanes) set_rows<lanes>(raster, m, box, j, j1, gx, gy, r2);
+        PendingDisk pending[kDisksPerBatch];
+        for (size_t k0 = 0; k0 < count; k0 += kDisksPerBatch) {
+            // The batch's disks that reach the raster and cover something not set before the
+            // batch, kept without a branch on the check.
+            int kept = 0;
+            for (size_t k = k0; k < std::min(count, k0 + kDisksPerBatch); ++k) {
+                PendingDisk& disk = pending[kept];
+                kept += place(x_um[k], y_um[k], ox, oy, inv_h, r, m, row0, row1, disk) &&
+                        !all_set<L, U>(RowSpan(disk.b0, disk.b1), raster, disk.j0, disk.j1, m, lane_index);
+            }
+            for (int d = 0; d < kept; ++d) set_disk<lanes>(raster, m, pending[d], r2);
         }
+    }
+    // The disk of radius r (samples) centred at (x_um, y_um) + (ox, oy): its centre in samples,
+    // its rows within row0..row1 and its bounding columns; false where it sets no sample there.
+    __attribute__((always_inline)) static bool place(float x_um, float y_um, double ox, double oy, double inv_h,
+                                                     double r, int m, int row0, int row1, PendingDisk& disk) {
+        // In sample units, sample (i, j) at (i + 0.5, j + 0.5): shifted by 0.5 to (i, j).
+        const double gx = (ox + x_um) * inv_h - 0.5, gy = (oy + y_um) * inv_h - 0.5, extent = m;
+        if (gx + r < -0.5 || gx - r > extent || gy + r < -0.5 || gy - r > extent) return false;
+        disk.gx = gx, disk.gy = gy;
+        disk.j0 = std::max(row0, first_index_at_or_above(gy - r));
+        disk.j1 = std::min(row1, last_index_at_or_below(gy + r));
+        // The bounding columns, widened by a rounding margin so that they hold every sample a
+        // row of the disk sets.
+        disk.b0 = first_index_at_or_above(gx - r - kRoundingMargin);
+        disk.b1 = std::min(m - 1, last_index_at_or_below(gx + r + kRoundingMargin));
+        return disk.b0 <= disk.b1 && disk.j0 <= disk.j1;
+    }
+    template <int lanes>
+    __attribute__((always_inline)) static void set_disk(uint64_t* raster, int m, const PendingDisk& disk, double r2) {
+        const RowSpan box(disk.b0, disk.b1);
+        for (int j = disk.j0; j <= disk.j1; j += lanes) set_rows<lanes>(raster, m, box, j, disk.j1, disk.gx, disk.gy, r2);
     }
     // Sets the disk's rows j..min(j1, j + lanes - 1).
     template <int lanes>
@@ -225,7 +243,6 @@ struct RasterizeDisks {
                                                         double gx, double gy, double r2) {
         using D = typename simd::Lanes<lanes>::D;
         using L = typename simd::Lanes<lanes>::L;
-        using I = typename simd::Lanes<lanes>::I;
         using U = typename UnsignedLanes<lanes>::U;
         D lane_row;
         L lane_index;
@@ -241,12 +258,12 @@ struct RasterizeDisks {
         half2_bits &= inside;
         D half2_inside, half;
         std::memcpy(&half2_inside, &half2_bits, sizeof half2);
-        sqrt_lanes<lanes>(half2_inside, half);
+        simd::sqrt_lanes(half2_inside, half);
         // The row's span i0..i1 as first_index_at_or_above and last_index_at_or_below.
-        const I low = __builtin_convertvector(kFloorOffset - (gx - half), I),
-                high = __builtin_convertvector((gx + half) + kFloorOffset, I);
-        const L i0 = __builtin_convertvector(int(kFloorOffset) - low, L),
-                i1 = __builtin_convertvector(high - int(kFloorOffset), L);
+        L low, high;
+        simd::truncate_lanes(kFloorOffset - (gx - half), low);
+        simd::truncate_lanes((gx + half) + kFloorOffset, high);
+        const L i0 = int64_t(kFloorOffset) - low, i1 = high - int64_t(kFloorOffset);
         for (int w = box.w0; w <= box.w1; ++w) {
             // The span's bits within word w, a to b (max(i0, first) and min(i1, last) from
             // it), none where b < a.
@@ -367,7 +384,8 @@ private:
     std::vector<uint64_t> covered_;  // the cell's raster (clear_raster)
     int words_ = 0;
     std::vector<double> contribution_, row_sum_;
-    std::vector<float> drawn_x_, drawn_y_, interior_x_, interior_y_;
+    std::vector<int> run_ends_;  // a raster row's uncovered runs, each as its first and its end
+    std::vector<float> drawn_x_, drawn_y_;
     std::map<std::pair<int, int>, std::vector<double>> cdf_tables_;  // (raster side, sub-cell)
 
     float density_of_cell(int cx, int cy) const {
@@ -394,21 +412,20 @@ private:
                                             drawn_x_.data(), drawn_y_.data());
         cell.x_um.resize(count);
         cell.y_um.resize(count);
-        interior_x_.resize(count);
-        interior_y_.resize(count);
-        size_t border = 0, interior = 0;
+        // The border disks fill the arrays from the front, the interior ones from the back
+        // (the order of a cell's disks changes no bit of their union). Both places are
+        // written, one kept, so that no branch follows the disk's position: between them
+        // lie the places not yet kept, at least the disk's own.
+        size_t border = 0, interior_from = count;
         for (uint32_t i = 0; i < count; ++i) {
             const float x = drawn_x_[i], y = drawn_y_[i];
-            const bool inside = x >= r && y >= r && x <= c - r && y <= c - r;
-            // Both written, one kept (no branch on the disk's position).
-            cell.x_um[border] = interior_x_[interior] = x;
-            cell.y_um[border] = interior_y_[interior] = y;
+            const bool inside = (x >= r) & (y >= r) & (x <= c - r) & (y <= c - r);
+            cell.x_um[border] = cell.x_um[interior_from - 1] = x;
+            cell.y_um[border] = cell.y_um[interior_from - 1] = y;
             border += !inside;
-            interior += inside;
+            interior_from -= inside;
         }
         cell.border = border;
-        std::copy_n(interior_x_.begin(), interior, cell.x_um.begin() + border);
-        std::copy_n(interior_y_.begin(), interior, cell.y_um.begin() + border);
     }
 
     // The cell's grain count, Poisson of mean `mean`: products of uniforms below 10, else
@@ -499,27 +516,36 @@ private:
         const double c = g_.cell_um;
         const int m = std::max(1, int(std::ceil(c * samples_per_um)));
         const double h = c / m;
+        const std::vector<double>& qx = cdf_table(m, cx - px * n);
+        const std::vector<double>& qy = cdf_table(m, cy - py * n);
+        // The raster rows some pixel of the band weighs: a cell beyond the band's edge only
+        // within the footprint's reach of it, and its other rows need no disks.
+        int row0 = m, row1 = -1;
+        for (int j = 0; j < m; ++j)
+            for (int ky = ky0; ky <= ky1; ++ky) {
+                const double* q = qy.data() + size_t(ky + reach_px_) * (m + 1);
+                if (q[j + 1] - q[j] != 0) row0 = std::min(row0, j), row1 = j;
+            }
         words_ = (m + 63) / 64;
         clear_raster(covered_, m);
         for (int dy = -reach; dy <= reach; ++dy)
-            for (int dx = -reach; dx <= reach; ++dx) rasterize(grains(cx + dx, cy + dy), dx * c, dy * c, m, h, dx == 0 && dy == 0);
+            for (int dx = -reach; dx <= reach; ++dx)
+                rasterize(grains(cx + dx, cy + dy), dx * c, dy * c, m, row0, row1, h, dx == 0 && dy == 0);
 
-        const std::vector<double>& qx = cdf_table(m, cx - px * n);
-        const std::vector<double>& qy = cdf_table(m, cy - py * n);
         const int columns = kx1 - kx0 + 1;
         contribution_.assign(size_t(ky1 - ky0 + 1) * columns, 0.0);  // [ky - ky0][kx - kx0]
         row_sum_.resize(size_t(columns));
-        for (int j = 0; j < m; ++j) {
+        run_ends_.resize(size_t(m) + 1);
+        for (int j = row0; j <= row1; ++j) {
             const uint64_t* row = covered_.data() + j;
-            std::fill(row_sum_.begin(), row_sum_.end(), 0.0);
-            // Uncovered runs [i0, i1) add their footprint weight.
-            for (int i0 = next_sample(row, 0, false, m); i0 < m;) {
-                const int i1 = next_sample(row, i0, true, m);
-                for (int kx = kx0; kx <= kx1; ++kx) {
-                    const double* q = qx.data() + size_t(kx + reach_px_) * (m + 1);
-                    row_sum_[size_t(kx - kx0)] += q[i1] - q[i0];
-                }
-                i0 = i1 < m ? next_sample(row, i1, false, m) : m;
+            const int ends = uncovered_runs(row, m);
+            // Each uncovered run adds its footprint weight, in the runs' order (a column at a
+            // time, its sum in a register).
+            for (int kx = kx0; kx <= kx1; ++kx) {
+                const double* q = qx.data() + size_t(kx + reach_px_) * (m + 1);
+                double sum = 0;
+                for (int e = 0; e < ends; e += 2) sum += q[run_ends_[size_t(e + 1)]] - q[run_ends_[size_t(e)]];
+                row_sum_[size_t(kx - kx0)] = sum;
             }
             for (int ky = ky0; ky <= ky1; ++ky) {
                 const double* q = qy.data() + size_t(ky + reach_px_) * (m + 1);
@@ -544,24 +570,32 @@ private:
         }
     }
 
-    // Marks the samples of the cell's raster that a cell's disks cover, its centres offset by
-    // (ox, oy) um from the cell's corner; neighbours' disks are scanned only if they may reach
-    // beyond their own cell.
-    void rasterize(const CellGrains& cell, double ox, double oy, int m, double h, bool own) {
+    // Marks the samples of the cell's raster rows row0..row1 that a cell's disks cover, its
+    // centres offset by (ox, oy) um from the cell's corner; neighbours' disks are scanned only
+    // if they may reach beyond their own cell.
+    void rasterize(const CellGrains& cell, double ox, double oy, int m, int row0, int row1, double h, bool own) {
         const size_t count = own ? cell.x_um.size() : cell.border;
         simd::dispatch_doubles<RasterizeDisks>(cell.x_um.data(), cell.y_um.data(), count, ox, oy, 1.0 / h,
-                                               cell.radius_um, m, covered_.data(), cell.uncovered < kSkipCoveredBelow);
+                                               cell.radius_um, m, row0, row1, covered_.data(),
+                                               cell.uncovered < kSkipCoveredBelow);
     }
-    // The first sample at or after i that is covered (or not), m if none.
-    // (`row` is the row's first word; its words are m apart.)
-    int next_sample(const uint64_t* row, int i, bool covered, int m) const {
-        int w = i >> 6;
-        uint64_t bits = (covered ? row[size_t(w) * m] : ~row[size_t(w) * m]) & (~0ull << (i & 63));
-        while (!bits) {
-            if (++w == words_) return m;
-            bits = covered ? row[size_t(w) * m] : ~row[size_t(w) * m];
+    // The uncovered runs [i0, i1) of a raster row (`row` its first word; its words are m
+    // apart) into run_ends_, i0 and i1 in turn, and their count times 2: the samples where
+    // the coverage changes, from each word's bits (samples past the row's end count as
+    // covered).
+    int uncovered_runs(const uint64_t* row, int m) {
+        int ends = 0;
+        uint64_t uncovered_before = 0;  // bit 63: the sample before the word's first
+        for (int w = 0; w < words_; ++w) {
+            uint64_t uncovered = ~row[size_t(w) * m];
+            if (w == words_ - 1 && m % 64 != 0) uncovered &= ~0ull >> (64 - m % 64);
+            for (uint64_t changes = uncovered ^ ((uncovered << 1) | (uncovered_before >> 63)); changes;
+                 changes &= changes - 1)
+                run_ends_[size_t(ends++)] = 64 * w + __builtin_ctzll(changes);
+            uncovered_before = uncovered;
         }
-        return std::min(m, w * 64 + __builtin_ctzll(bits));
+        if (ends % 2 != 0) run_ends_[size_t(ends++)] = m;  // a run to the row's end
+        return ends;
     }
 };
 
@@ -572,7 +606,7 @@ std::vector<uint64_t> boolean_disk_raster(const std::vector<float>& x_um, const 
     std::vector<uint64_t> raster;
     clear_raster(raster, m);
     simd::dispatch_doubles<RasterizeDisks>(x_um.data(), y_um.data(), std::min(x_um.size(), y_um.size()), 0.0, 0.0,
-                                           1.0 / h_um, radius_um, m, raster.data(), skip_covered);
+                                           1.0 / h_um, radius_um, m, 0, m - 1, raster.data(), skip_covered);
     raster.resize(raster.size() - kRasterPaddingWords);
     return raster;
 }

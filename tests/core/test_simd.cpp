@@ -107,6 +107,51 @@ TEST_CASE("the vector e^x is within 1 ulp of std::exp from the subnormals to ove
     CHECK(std::isnan(exp_one_lane(NAN)));
 }
 
+namespace {
+
+// root[i] = simd::sqrt_lanes of x[i], a register's width of lanes at a time (count a multiple of 8).
+struct SquareRoots {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const double* x, double* root, size_t count) {
+        using D = typename simd::Lanes<lanes>::D;
+        for (size_t i = 0; i < count; i += lanes) {
+            D v, r;
+            simd::load(v, x + i);
+            simd::sqrt_lanes(v, r);
+            simd::store(root + i, r);
+        }
+    }
+};
+
+}  // namespace
+
+TEST_CASE("the vector square root is std::sqrt's in every lane, on every instruction set", "[simd]") {
+    IsaScope scope;
+    // Doubles from their bits over every positive exponent (subnormals included), and the ends.
+    std::vector<double> x = {0.0, -0.0, INFINITY, 1.0, 2.0, 0.25, 1e-310, 1.7976931348623157e308};
+    for (uint64_t bits = 1; x.size() < 8 * 4096; bits = bits * 6364136223846793005ull + 1442695040888963407ull) {
+        double v;
+        const uint64_t positive = bits >> 1;
+        std::memcpy(&v, &positive, sizeof v);
+        if (std::isfinite(v)) x.push_back(v);
+    }
+    for (simd::Isa isa : runnable_isas()) {
+        simd::set_isa(isa);
+        INFO(simd::isa_name(isa));
+        std::vector<double> root(x.size());
+        simd::dispatch_doubles<SquareRoots>(x.data(), root.data(), x.size());
+        int wrong = 0;
+        for (size_t i = 0; i < x.size(); ++i) {
+            const double expected = std::sqrt(x[i]);
+            wrong += std::memcmp(&root[i], &expected, sizeof expected) != 0;  // bit for bit: -0 stays -0
+        }
+        CHECK(wrong == 0);
+    }
+    simd::Double1 one_root;
+    simd::sqrt_lanes(simd::Double1{2.0}, one_root);
+    CHECK(one_root[0] == std::sqrt(2.0));
+}
+
 TEST_CASE("a spectral density's transmittance is 10^-D within 1 ulp, the same on every instruction set", "[simd][spectral]") {
     IsaScope scope;
     constexpr double kLn10 = 2.302585092994046;
