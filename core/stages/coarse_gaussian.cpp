@@ -105,16 +105,30 @@ struct Exp2OfPseudoLog2Row {
 // the same operations as the scalar loops for any d.
 constexpr int interleaved(int j, int lanes) { return j / 2 + (j % 2) * lanes; }  // a0 b0 a1 b1 ...
 
-template <typename V, size_t... J>
-__attribute__((always_inline)) inline void store_interleaved(float* out, const V& a, const V& b,
-                                                             std::index_sequence<J...>) {
-    constexpr int lanes = sizeof(V) / sizeof(float);
-    simd::store(out, __builtin_shufflevector(a, b, interleaved(int(J), lanes)...));
-    simd::store(out + lanes, __builtin_shufflevector(a, b, interleaved(int(J) + lanes, lanes)...));
+// What the interpolation along x does with each fine column's value: writes it, or
+// (multiply) multiplies the column by it.
+template <bool multiply, typename V>
+__attribute__((always_inline)) inline void put(float* out, const V& v) {
+    if constexpr (!multiply) {
+        simd::store(out, v);
+    } else {
+        V o;
+        simd::load(o, out);
+        simd::store(out, o * v);
+    }
 }
 
-// out[2k + m] = coarse[k] + t[m] (coarse[k + 1] - coarse[k]), m = 0, 1, k < blocks: two fine
-// columns per block, interpolated along x.
+template <bool multiply, typename V, size_t... J>
+__attribute__((always_inline)) inline void put_interleaved(float* out, const V& a, const V& b,
+                                                           std::index_sequence<J...>) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    put<multiply>(out, V(__builtin_shufflevector(a, b, interleaved(int(J), lanes)...)));
+    put<multiply>(out + lanes, V(__builtin_shufflevector(a, b, interleaved(int(J) + lanes, lanes)...)));
+}
+
+// out[2k + m] = (or *=) coarse[k] + t[m] (coarse[k + 1] - coarse[k]), m = 0, 1, k < blocks: two
+// fine columns per block, interpolated along x.
+template <bool multiply>
 struct InterpolatePairs {
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* coarse, float t0, float t1, int blocks, float* out) {
@@ -122,14 +136,17 @@ struct InterpolatePairs {
         int k = 0;
         if constexpr (lanes > 1)
             for (; k + lanes <= blocks; k += lanes) {
+                // (multiplying: a ring row read back, from memory)
+                if constexpr (multiply) simd::prefetch_ahead(out + 2 * k, 2 * lanes * int(sizeof(float)));
                 V b0, b1;
                 simd::load(b0, coarse + k), simd::load(b1, coarse + k + 1);
                 const V step = b1 - b0;
-                store_interleaved(out + 2 * k, b0 + t0 * step, b0 + t1 * step, std::make_index_sequence<lanes>());
+                put_interleaved<multiply>(out + 2 * k, b0 + t0 * step, b0 + t1 * step, std::make_index_sequence<lanes>());
             }
         for (; k < blocks; ++k) {
             const float step = coarse[k + 1] - coarse[k];
-            out[2 * k] = coarse[k] + t0 * step, out[2 * k + 1] = coarse[k] + t1 * step;
+            put<multiply>(out + 2 * k, simd::Float1{coarse[k] + t0 * step});
+            put<multiply>(out + 2 * k + 1, simd::Float1{coarse[k] + t1 * step});
         }
     }
 };
@@ -234,7 +251,7 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
         PlaneRows& plane = planes_[p];
         filters.push_back(SeparableFilter{{*coarse_taps[p]}, {1.0f}});
         plane.column_sums.resize(size_t(means_window_.width()) * d_);
-        for (auto& row : plane.across) row.resize(size_t(out.width()));
+        for (auto& row : plane.coarse) row.resize(size_t(blurred_window_.width()));
     }
     // Every plane's coarse rows from one stream, so that each fine row is read once for all;
     // two coarse rows summed at once (more would read further ahead, for a ring of fine rows
@@ -243,9 +260,11 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
     blur_ = std::make_unique<SeparableStream>(
         blurred_window_.width(), std::move(filters), means_window_.y0, means_window_.y1, blurred_window_.y1,
         [this](int by, float* const* means) { block_means(by, means); }, kCoarseRowsTogether);
-    // Output row y lies above coarse row j + 1 <= y / d + 1, whose blur (with the next one)
-    // reads block rows to j + kCoarseRowsTogether + r, each d fine rows.
-    slots_ = d_ * (r + 3 + kCoarseRowsTogether) + 2;
+    // Output row y lies above coarse row j + 1 (j d <= y), whose blur (with the rows summed
+    // with it) reads block rows to j + kCoarseRowsTogether + r, the last of them ending at fine
+    // row y + (kCoarseRowsTogether + r + 1) d - 1: the ring holds row y to that one (ring_row
+    // refuses a row that has left it).
+    slots_ = d_ * (r + kCoarseRowsTogether + 1);
     ring_.resize(planes_.size());
     for (auto& ring : ring_) ring.resize(size_t(slots_) * size_t(read_x1_ - read_x0_));
     ring_rows_.resize(planes_.size());
@@ -313,48 +332,72 @@ void CoarseGaussianStream::block_means(int by, float* const* means) {
     if (means_map_) means_map_(means, means_window_.width());
 }
 
-// Coarse row j of every plane's blurred means, interpolated along x to out's columns (the
-// last two rows are kept).
-void CoarseGaussianStream::interpolate(int j) {
-    if (across_row_[j & 1] == j) return;
+// Coarse row j of every plane's blurred means, mapped (the last two rows are kept).
+void CoarseGaussianStream::keep_coarse(int j) {
+    if (coarse_row_[j & 1] == j) return;
     float* const* blurred_rows = blur_->row(j);  // (the stream's to change: it reads them no more)
     if (blurred_map_) blurred_map_(blurred_rows, blurred_window_.width());
+    for (size_t b = 0; b < blurred_.size(); ++b)
+        std::copy_n(blurred_rows[b], blurred_window_.width(), planes_[blurred_[b]].coarse[j & 1].data());
+    coarse_row_[j & 1] = j;
+}
+
+// Coarse row j of every plane, interpolated along x to out's columns (the last two rows are kept).
+void CoarseGaussianStream::interpolate(int j) {
+    if (across_row_[j & 1] == j) return;
+    keep_coarse(j);
     for (size_t b = 0; b < blurred_.size(); ++b) {
-        float* row = planes_[blurred_[b]].across[j & 1].data();
-        // A run's two coarse values once, then a loop without indirection (which vectorises);
-        // with d = 2, the whole runs (two columns each) in vectors.
-        if (pair_runs_[1] > pair_runs_[0]) {
-            const ColumnRun& run = column_runs_[pair_runs_[0]];
-            simd::dispatch<InterpolatePairs>(blurred_rows[b] + run.block, tx_[size_t(run.begin)],
-                                             tx_[size_t(run.begin) + 1], int(pair_runs_[1] - pair_runs_[0]),
-                                             row + run.begin);
-        }
-        interpolate_runs(blurred_rows[b], 0, pair_runs_[0], row);
-        interpolate_runs(blurred_rows[b], pair_runs_[1], column_runs_.size(), row);
+        std::vector<float>& row = planes_[blurred_[b]].across[j & 1];
+        row.resize(size_t(out_.width()));  // (only row() asks for them)
+        along_x<false>(planes_[blurred_[b]].coarse[j & 1].data(), row.data());
     }
     across_row_[j & 1] = j;
 }
 
-void CoarseGaussianStream::interpolate_runs(const float* coarse, size_t first, size_t last, float* row) const {
-    for (size_t r = first; r < last; ++r) {
-        const ColumnRun& run = column_runs_[r];
-        const float b0 = coarse[run.block], step = coarse[run.block + 1] - b0;
-        for (int i = run.begin; i < run.end; ++i) row[i] = b0 + tx_[size_t(i)] * step;
-    }
+void CoarseGaussianStream::multiply_by_interpolated(const float* coarse, float* fine) const {
+    along_x<true>(coarse, fine);
 }
 
-const CoarseGaussianStream::Row& CoarseGaussianStream::row(int y) {
+// A run's two coarse values once, then a loop without indirection (which vectorises); with
+// d = 2, the whole runs (two columns each) in vectors.
+template <bool multiply>
+void CoarseGaussianStream::along_x(const float* coarse, float* out) const {
+    if (pair_runs_[1] > pair_runs_[0]) {
+        const ColumnRun& run = column_runs_[pair_runs_[0]];
+        simd::dispatch<InterpolatePairs<multiply>>(coarse + run.block, tx_[size_t(run.begin)], tx_[size_t(run.begin) + 1],
+                                             int(pair_runs_[1] - pair_runs_[0]), out + run.begin);
+    }
+    auto runs = [&](size_t first, size_t last) {
+        for (size_t r = first; r < last; ++r) {
+            const ColumnRun& run = column_runs_[r];
+            const float b0 = coarse[run.block], step = coarse[run.block + 1] - b0;
+            for (int i = run.begin; i < run.end; ++i) put<multiply>(out + i, simd::Float1{b0 + tx_[size_t(i)] * step});
+        }
+    };
+    runs(0, pair_runs_[0]);
+    runs(pair_runs_[1], column_runs_.size());
+}
+
+const CoarseGaussianStream::Row& CoarseGaussianStream::row(int y) { return read_row(y, true); }
+
+const CoarseGaussianStream::Row& CoarseGaussianStream::coarse_row(int y) { return read_row(y, false); }
+
+const CoarseGaussianStream::Row& CoarseGaussianStream::read_row(int y, bool across) {
     // The coarse rows first: they read the fine rows below this one.
     const int j = floor_div(2 * y + 1 - d_, 2 * d_);
-    interpolate(j);
-    interpolate(j + 1);
+    for (int k : {j, j + 1}) {
+        if (across)
+            interpolate(k);
+        else
+            keep_coarse(k);
+    }
     read_to(y);
     row_.t = float(2 * y + 1 - d_ - 2 * d_ * j) / float(2 * d_);  // the fine row's place between them
     for (size_t p = 0; p < planes_.size(); ++p) {
         row_.read[p] = ring_row(p, y) + (out_.x0 - read_x0_);
         if (planes_[p].column_sums.empty()) continue;
-        row_.above[p] = planes_[p].across[j & 1].data();
-        row_.below[p] = planes_[p].across[(j + 1) & 1].data();
+        row_.above[p] = (across ? planes_[p].across[j & 1] : planes_[p].coarse[j & 1]).data();
+        row_.below[p] = (across ? planes_[p].across[(j + 1) & 1] : planes_[p].coarse[(j + 1) & 1]).data();
     }
     return row_;
 }

@@ -60,17 +60,30 @@ public:
         float t = 0;
     };
     const Row& row(int y);
+    // Row y of out as row() gives it, with each blurred plane's Gaussian left on the coarse
+    // grid: above and below are its coarse rows either side (on the blurred window's columns,
+    // coarse_width() of them), for the caller to interpolate along y on those fewer values
+    // and then along x, fused with its use of them (multiply_by_interpolated).
+    const Row& coarse_row(int y);
+    int coarse_width() const { return blurred_window_.width(); }
+    // fine[i] *= the coarse row interpolated along x to out's column i (i < out's width).
+    void multiply_by_interpolated(const float* coarse, float* fine) const;
 
 private:
     struct PlaneRows {
         std::vector<float> column_sums;  // none: the plane passes through
-        std::vector<float> across[2];    // coarse rows j (by j's parity) interpolated to out's columns
+        std::vector<float> coarse[2];    // blurred coarse rows j (by j's parity)
+        std::vector<float> across[2];    // ... interpolated to out's columns
     };
     float* ring_row(size_t plane, int y);
     void read_to(int y);
     void block_means(int by, float* const* means);
+    void keep_coarse(int j);
     void interpolate(int j);
-    void interpolate_runs(const float* coarse, size_t first, size_t last, float* row) const;
+    // Each of out's columns gets (or, multiply, is multiplied by) the coarse row interpolated along x.
+    template <bool multiply>
+    void along_x(const float* coarse, float* out) const;
+    const Row& read_row(int y, bool across);
 
     Window out_, frame_;
     Source source_;
@@ -91,7 +104,7 @@ private:
     std::vector<ColumnRun> column_runs_;
     size_t pair_runs_[2] = {0, 0};  // with d = 2: the runs [first, last) of two columns each, in vectors
     std::unique_ptr<SeparableStream> blur_;
-    int across_row_[2] = {INT32_MIN, INT32_MIN};
+    int coarse_row_[2] = {INT32_MIN, INT32_MIN}, across_row_[2] = {INT32_MIN, INT32_MIN};
     int read_x0_ = 0, read_x1_ = 0, slots_ = 0;
     std::vector<std::vector<float, UnsetAllocator<float>>> ring_;  // per plane, the fine rows read (unset till then)
     std::vector<float*> ring_rows_;

@@ -139,14 +139,14 @@ __attribute__((always_inline)) inline void inhibit_by_rows(float* const* e, cons
     scale_by_powers_of_two<V>(e, a, x);
 }
 
-// The factors between two coarse rows of them, interpolated along y: e_i[x] *= above + t (below - above).
+// The factors between two coarse rows of them, interpolated along y: f_i[x] = above + t (below - above).
 template <typename V>
-__attribute__((always_inline)) inline void scale_between_rows(float* const* e, const float* const* above,
-                                                              const float* const* below, float t, int x) {
+__attribute__((always_inline)) inline void between_rows(const float* const* above, const float* const* below, float t,
+                                                        float* const* f, int x) {
     for (int i = 0; i < 3; ++i) {
-        V lo, hi, h;
-        simd::load(lo, above[i] + x), simd::load(hi, below[i] + x), simd::load(h, e[i] + x);
-        simd::store(e[i] + x, h * (lo + t * (hi - lo)));
+        V lo, hi;
+        simd::load(lo, above[i] + x), simd::load(hi, below[i] + x);
+        simd::store(f[i] + x, lo + t * (hi - lo));
     }
 }
 
@@ -177,14 +177,13 @@ struct InhibitRows {
     }
 };
 
-struct ScaleBetweenRows {
+struct BetweenRows {
     template <int lanes>
-    __attribute__((always_inline)) static void run(float* const* e, const float* const* above,
-                                                   const float* const* below, float t, int width) {
+    __attribute__((always_inline)) static void run(const float* const* above, const float* const* below, float t,
+                                                   float* const* f, int width) {
         int x = 0;
-        for (; x + lanes <= width; x += lanes)
-            scale_between_rows<typename simd::Lanes<lanes>::F>(e, above, below, t, x);
-        for (; x < width; ++x) scale_between_rows<simd::Float1>(e, above, below, t, x);
+        for (; x + lanes <= width; x += lanes) between_rows<typename simd::Lanes<lanes>::F>(above, below, t, f, x);
+        for (; x < width; ++x) between_rows<simd::Float1>(above, below, t, f, x);
     }
 };
 
@@ -235,7 +234,6 @@ CoarseCouplerStream::CoarseCouplerStream(const CouplerStage& c, const Window& ou
                                          CoarseGaussianStream::Source source)
     : c_(c),
       m_(log2_inhibition(c)),
-      width_(out.width()),
       stream_({&c.spread.taps, &c.spread.taps, &c.spread.taps}, c.spread.decimation, out, frame, std::move(source),
               // The donors from each block's geometric mean exposure (its mean log exposure,
               // which the curves take), and their exponents of 2 (the matrix is linear, so it
@@ -246,12 +244,19 @@ CoarseCouplerStream::CoarseCouplerStream(const CouplerStage& c, const Window& ou
               },
               // The blurred exponents' powers of 2: the pixels then interpolate the factors.
               [](float* const* exponents, int width) { simd::dispatch<PowersOfTwo>(exponents, width); },
-              donor_floors(c)) {}
+              donor_floors(c)),
+      factor_rows_(3, std::vector<float>(size_t(stream_.coarse_width()))) {
+    for (size_t l = 0; l < 3; ++l) factors_[l] = factor_rows_[l].data();
+}
 
 float* const* CoarseCouplerStream::row(int y) {
-    const CoarseGaussianStream::Row& r = stream_.row(y);
-    for (size_t l = 0; l < 3; ++l) out_[l] = r.read[l];
-    simd::dispatch<ScaleBetweenRows>(out_, r.above.data(), r.below.data(), r.t, width_);
+    // The factors along y on the coarse grid (fewer values), then along x as they multiply.
+    const CoarseGaussianStream::Row& r = stream_.coarse_row(y);
+    simd::dispatch<BetweenRows>(r.above.data(), r.below.data(), r.t, factors_.data(), stream_.coarse_width());
+    for (size_t l = 0; l < 3; ++l) {
+        stream_.multiply_by_interpolated(factors_[l], r.read[l]);
+        out_[l] = r.read[l];
+    }
     return out_;
 }
 

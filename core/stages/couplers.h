@@ -70,8 +70,9 @@ public:
 private:
     const CouplerStage& c_;
     std::array<float, 9> m_;  // the matrix times -log2 10
-    int width_;
     CoarseGaussianStream stream_;  // the three layers' exposures, their inhibition's factors blurred
+    std::vector<std::vector<float>> factor_rows_;  // each layer's factors on a fine row's coarse columns
+    std::array<float*, 3> factors_;
     float* out_[3];
 };
 
