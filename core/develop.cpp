@@ -456,7 +456,7 @@ void append_view_key(std::string& key, const Stock& material) {
 // unit lights (PrintExposure::at_unit_lights): the printer lights and print exposure add
 // log10 of their light to a layer's, so one grid serves every light. x fastest.
 struct PaperLogExposures {
-    std::vector<std::array<double, 3>> log_h;
+    std::unique_ptr<std::array<double, 3>[]> log_h;
 };
 
 // log10 of n doubles, within 4 ulp (3.6e-15) of std::log10 (measured against it from 1e-30 to
@@ -516,19 +516,21 @@ std::shared_ptr<const PaperLogExposures> paper_log_exposures(const PrintExposure
         for (int a = 0; a < 3 && unit.spectral(); ++a)
             for (int i = 0; i < nodes; ++i)
                 transmittance[a].push_back(unit.layer_transmittance(a, Table3D::node_coordinate(lo[a], hi[a], nodes, i)));
-        std::vector<float> along_x(size_t(kSpectralSamples) * size_t(nodes));
-        for (int i = 0; i < nodes && unit.spectral(); ++i)
+        // Each row padded to whole vectors with copies of its last node's.
+        const int stride = (nodes + PrintExposure::kRowStride - 1) / PrintExposure::kRowStride * PrintExposure::kRowStride;
+        std::vector<float> along_x(size_t(kSpectralSamples) * size_t(stride));
+        for (int i = 0; i < stride && unit.spectral(); ++i)
             for (int s = 0; s < kSpectralSamples; ++s)
-                along_x[size_t(s) * nodes + i] = float(transmittance[0][size_t(i)][size_t(s)]);
+                along_x[size_t(s) * stride + i] = float(transmittance[0][size_t(std::min(i, nodes - 1))][size_t(s)]);
         auto grid = std::make_shared<PaperLogExposures>();
-        grid->log_h.resize(size_t(nodes) * nodes * nodes);
+        grid->log_h.reset(new std::array<double, 3>[size_t(nodes) * nodes * nodes]);  // (each node written below)
         parallel_for(0, nodes, threads, [&](int k_begin, int k_end) {
             // A row's exposures and their logs, paper layer after layer.
-            std::vector<double> h(3 * size_t(nodes)), log_h(3 * size_t(nodes));
+            std::vector<double> h(3 * size_t(stride), 1.0), log_h(3 * size_t(stride));
             for (int k = k_begin; k < k_end; ++k)
                 for (int j = 0; j < nodes; ++j) {
                     if (unit.spectral())
-                        unit.expose_row(along_x.data(), nodes, transmittance[1][size_t(j)], transmittance[2][size_t(k)],
+                        unit.expose_row(along_x.data(), stride, transmittance[1][size_t(j)], transmittance[2][size_t(k)],
                                         h.data());
                     else
                         for (int i = 0; i < nodes; ++i) {
@@ -537,12 +539,12 @@ std::shared_ptr<const PaperLogExposures> paper_log_exposures(const PrintExposure
                                                  Table3D::node_coordinate(lo[2], hi[2], nodes, k)};
                             double at[3];
                             unit.expose(d, at);
-                            for (int l = 0; l < 3; ++l) h[size_t(l * nodes + i)] = at[l];
+                            for (int l = 0; l < 3; ++l) h[size_t(l * stride + i)] = at[l];
                         }
-                    log10_row(h.data(), log_h.data(), 3 * nodes);  // (-inf for no light)
+                    log10_row(h.data(), log_h.data(), 3 * stride);  // (-inf for no light)
                     for (int i = 0; i < nodes; ++i)
                         for (int l = 0; l < 3; ++l)
-                            grid->log_h[(size_t(k) * nodes + j) * nodes + i][size_t(l)] = log_h[size_t(l * nodes + i)];
+                            grid->log_h[(size_t(k) * nodes + j) * nodes + i][size_t(l)] = log_h[size_t(l * stride + i)];
                 }
         });
         return std::shared_ptr<const PaperLogExposures>(std::move(grid));
