@@ -459,45 +459,17 @@ struct PaperLogExposures {
     std::vector<std::array<double, 3>, UnsetAllocator<std::array<double, 3>>> log_h;
 };
 
-// log10 of n doubles, within 4 ulp (3.6e-15) of std::log10 (measured against it from 1e-30 to
-// 1e30) and the same on every processor (lane by lane without FMA, as simd::exp_lanes):
-// std::log10 a node and layer took a third of the
-// grid's build. v = 2^e m, m within [sqrt(1/2), sqrt(2)): ln m = 2 atanh(s), s = (m - 1) /
-// (m + 1), |s| <= 0.172, by its odd series to s^23 (the rest under 1e-19 of it). Values that
-// are not positive normal doubles (0: no light) are std::log10's (-inf).
-struct Log10Row {
-    template <int lanes>
-    __attribute__((always_inline)) static void run(const double* in, double* out, int n) {
-        int i = 0;
-        for (; i + lanes <= n; i += lanes)
-            log10_lanes<typename simd::Lanes<lanes>::D, typename simd::Lanes<lanes>::L>(in, out, i);
-        for (; i < n; ++i) log10_lanes<simd::Double1, simd::Lanes<1>::L>(in, out, i);
-    }
+// log10 of n doubles (simd::log10_lanes, the same on every processor); values that are not
+// positive normal doubles (0: no light) are std::log10's (-inf).
+struct Log10 {
     template <typename D, typename L>
-    __attribute__((always_inline)) static void log10_lanes(const double* in, double* out, int i) {
-        constexpr double kLog10Of2 = 0.30102999566398120, kTwoOverLn10 = 0.86858896380650366,
-                         kSqrt2 = 1.4142135623730951;
-        D v, m, exponent;
-        simd::load(v, in + i);
-        L bits;
-        std::memcpy(&bits, &v, sizeof bits);
-        // The exponent as a double (its 11 bits under 2^52's, less 2^52 + 1023), and m in [1, 2).
-        const L exponent_bits = ((bits >> 52) & 0x7FF) | int64_t(0x4330000000000000);
-        std::memcpy(&exponent, &exponent_bits, sizeof exponent);
-        exponent -= 0x1p52 + 1023;
-        bits = (bits & int64_t(0x000FFFFFFFFFFFFF)) | int64_t(0x3FF0000000000000);
-        std::memcpy(&m, &bits, sizeof m);
-        const D above = m > kSqrt2 ? D{} + 1.0 : D{};
-        m = m * (1.0 - 0.5 * above), exponent += above;
-        const D s = (m - 1.0) / (m + 1.0), s2 = s * s;
-        D series = D{} + 1.0 / 23;
-        for (int k = 21; k >= 1; k -= 2) series = series * s2 + 1.0 / k;
-        simd::store(out + i, exponent * kLog10Of2 + s * series * kTwoOverLn10);
+    __attribute__((always_inline)) static void apply(const D& v, D& result) {
+        simd::log10_lanes<D, L>(v, result);
     }
 };
 
 void log10_row(const double* in, double* out, int n) {
-    simd::dispatch_doubles<Log10Row>(in, out, n);
+    simd::map_doubles<Log10>(in, out, n);
     for (int i = 0; i < n; ++i)
         if (!(in[i] >= std::numeric_limits<double>::min() && in[i] <= std::numeric_limits<double>::max()))
             out[i] = std::log10(in[i]);

@@ -347,21 +347,11 @@ Spectrum from_log10(const Spectrum& log10_values, double missing_value) {
 
 namespace {
 
-struct TransmittanceRow {
-    template <int lanes>
-    __attribute__((always_inline)) static void run(const double* density, double* out, int n) {
-        int i = 0;
-        for (; i + lanes <= n; i += lanes)
-            transmittance_lanes<typename simd::Lanes<lanes>::D, typename simd::Lanes<lanes>::L>(density, out, i);
-        for (; i < n; ++i) transmittance_lanes<simd::Double1, simd::Lanes<1>::L>(density, out, i);
-    }
+struct Transmittance {
     template <typename D, typename L>
-    __attribute__((always_inline)) static void transmittance_lanes(const double* density, double* out, int i) {
+    __attribute__((always_inline)) static void apply(const D& density, D& t) {
         constexpr double kLn10 = 2.302585092994046;
-        D d, t;
-        simd::load(d, density + i);
-        simd::exp_lanes<D, L>(d * -kLn10, t);
-        simd::store(out + i, t);
+        simd::exp_lanes<D, L>(density * -kLn10, t);
     }
 };
 
@@ -388,7 +378,7 @@ void add_scaled(Spectrum& sum, double weight, const Spectrum& term) {
 
 Spectrum transmittance_of(const Spectrum& density) {
     Spectrum t;
-    simd::dispatch_doubles<TransmittanceRow>(density.data(), t.data(), N);
+    simd::map_doubles<Transmittance>(density.data(), t.data(), N);
     return t;
 }
 

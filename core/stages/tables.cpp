@@ -322,25 +322,17 @@ void LogAxisTable::apply_row_with_noise(const float* in, const float* noise, flo
 
 namespace {
 
-struct CubeRootRow {
-    template <int lanes>
-    __attribute__((always_inline)) static void run(const double* in, double* out, int n) {
-        int i = 0;
-        for (; i + lanes <= n; i += lanes) root<typename simd::Lanes<lanes>::D, typename simd::Lanes<lanes>::L>(in, out, i);
-        for (; i < n; ++i) root<simd::Double1, simd::Lanes<1>::L>(in, out, i);
-    }
+struct CubeRoot {
     template <typename D, typename L>
-    __attribute__((always_inline)) static void root(const double* in, double* out, int i) {
-        D v;
-        simd::load(v, in + i);
-        simd::store(out + i, cube_root_lanes<D, L>(v));
+    __attribute__((always_inline)) static void apply(const D& v, D& root) {
+        cube_root_lanes<D, L>(v, root);
     }
 };
 
 }  // namespace
 
 void cube_root_row(const double* in, double* out, int n) {
-    simd::dispatch_doubles<CubeRootRow>(in, out, n);
+    simd::map_doubles<CubeRoot>(in, out, n);
     for (int i = 0; i < n; ++i)
         if (!(in[i] >= std::numeric_limits<double>::min() && in[i] <= std::numeric_limits<double>::max()))
             out[i] = std::cbrt(in[i]);

@@ -74,7 +74,7 @@ private:
 // (The steps on each lane of D, L as many int64: one piece of code for cube_root and
 // cube_root_row. Positive normal lanes only.)
 template <typename D, typename L>
-__attribute__((always_inline)) inline D cube_root_lanes(const D& v) {
+__attribute__((always_inline)) inline void cube_root_lanes(const D& v, D& root) {
     L bits;
     std::memcpy(&bits, &v, sizeof bits);
     // The exponent divided by 3, with the bias's third added back (a third of 1023 << 52, less a
@@ -86,11 +86,13 @@ __attribute__((always_inline)) inline D cube_root_lanes(const D& v) {
         const D cube = y * y * y;
         y *= (cube + 2 * v) / (2 * cube + v);  // (the ratio first: y times the sum would leave the range)
     }
-    return y - (y * y * y - v) / (3 * y * y);
+    root = y - (y * y * y - v) / (3 * y * y);
 }
 inline double cube_root(double v) {
     if (!(v >= std::numeric_limits<double>::min() && v <= std::numeric_limits<double>::max())) return std::cbrt(v);
-    return cube_root_lanes<simd::Double1, simd::Lanes<1>::L>(simd::Double1{v})[0];
+    simd::Double1 root;
+    cube_root_lanes<simd::Double1, simd::Lanes<1>::L>(simd::Double1{v}, root);
+    return root[0];
 }
 // cube_root of n values, in vectors, bit for bit the same values.
 void cube_root_row(const double* in, double* out, int n);
