@@ -12,7 +12,6 @@
 #include <vector>
 
 #include "core/curve.h"
-#include "core/image.h"
 #include "core/simd.h"
 
 namespace darkroom {
@@ -137,11 +136,8 @@ private:
     int nodes_ = 0;
     std::array<double, 3> lo_given_{}, hi_given_{};
     std::array<float, 3> lo_{}, scale_{};
-    // x fastest; 3 values and a pad, one 16-byte load per node. (Unset until fill writes every
-    // node, and recycled: a print table built again for an edit of the print faulted in fresh
-    // pages.)
-    std::vector<std::array<float, 4>, UnsetAllocator<std::array<float, 4>>> values_;
-    bool cubed_ = false;  // Encoding::cube_root
+    std::vector<std::array<float, 4>> values_;  // x fastest; 3 values and a pad, one 16-byte load per node
+    bool cubed_ = false;                        // Encoding::cube_root
 };
 
 }  // namespace darkroom
