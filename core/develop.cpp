@@ -456,48 +456,20 @@ void append_view_key(std::string& key, const Stock& material) {
 // unit lights (PrintExposure::at_unit_lights): the printer lights and print exposure add
 // log10 of their light to a layer's, so one grid serves every light. x fastest.
 struct PaperLogExposures {
-    std::vector<std::array<double, 3>> log_h;
+    std::vector<std::array<double, 3>, UnsetAllocator<std::array<double, 3>>> log_h;
 };
 
-// log10 of n doubles, within 4 ulp (3.6e-15) of std::log10 (measured against it from 1e-30 to
-// 1e30) and the same on every processor (lane by lane without FMA, as simd::exp_lanes):
-// std::log10 a node and layer took a third of the
-// grid's build. v = 2^e m, m within [sqrt(1/2), sqrt(2)): ln m = 2 atanh(s), s = (m - 1) /
-// (m + 1), |s| <= 0.172, by its odd series to s^23 (the rest under 1e-19 of it). Values that
-// are not positive normal doubles (0: no light) are std::log10's (-inf).
-struct Log10Row {
-    template <int lanes>
-    __attribute__((always_inline)) static void run(const double* in, double* out, int n) {
-        int i = 0;
-        for (; i + lanes <= n; i += lanes)
-            log10_lanes<typename simd::Lanes<lanes>::D, typename simd::Lanes<lanes>::L>(in, out, i);
-        for (; i < n; ++i) log10_lanes<simd::Double1, simd::Lanes<1>::L>(in, out, i);
-    }
+// log10 of n doubles (simd::log10_lanes, the same on every processor); values that are not
+// positive normal doubles (0: no light) are std::log10's (-inf).
+struct Log10 {
     template <typename D, typename L>
-    __attribute__((always_inline)) static void log10_lanes(const double* in, double* out, int i) {
-        constexpr double kLog10Of2 = 0.30102999566398120, kTwoOverLn10 = 0.86858896380650366,
-                         kSqrt2 = 1.4142135623730951;
-        D v, m, exponent;
-        simd::load(v, in + i);
-        L bits;
-        std::memcpy(&bits, &v, sizeof bits);
-        // The exponent as a double (its 11 bits under 2^52's, less 2^52 + 1023), and m in [1, 2).
-        const L exponent_bits = ((bits >> 52) & 0x7FF) | int64_t(0x4330000000000000);
-        std::memcpy(&exponent, &exponent_bits, sizeof exponent);
-        exponent -= 0x1p52 + 1023;
-        bits = (bits & int64_t(0x000FFFFFFFFFFFFF)) | int64_t(0x3FF0000000000000);
-        std::memcpy(&m, &bits, sizeof m);
-        const D above = m > kSqrt2 ? D{} + 1.0 : D{};
-        m = m * (1.0 - 0.5 * above), exponent += above;
-        const D s = (m - 1.0) / (m + 1.0), s2 = s * s;
-        D series = D{} + 1.0 / 23;
-        for (int k = 21; k >= 1; k -= 2) series = series * s2 + 1.0 / k;
-        simd::store(out + i, exponent * kLog10Of2 + s * series * kTwoOverLn10);
+    __attribute__((always_inline)) static void apply(const D& v, D& result) {
+        simd::log10_lanes<D, L>(v, result);
     }
 };
 
 void log10_row(const double* in, double* out, int n) {
-    simd::dispatch_doubles<Log10Row>(in, out, n);
+    simd::map_doubles<Log10>(in, out, n);
     for (int i = 0; i < n; ++i)
         if (!(in[i] >= std::numeric_limits<double>::min() && in[i] <= std::numeric_limits<double>::max()))
             out[i] = std::log10(in[i]);
@@ -516,19 +488,21 @@ std::shared_ptr<const PaperLogExposures> paper_log_exposures(const PrintExposure
         for (int a = 0; a < 3 && unit.spectral(); ++a)
             for (int i = 0; i < nodes; ++i)
                 transmittance[a].push_back(unit.layer_transmittance(a, Table3D::node_coordinate(lo[a], hi[a], nodes, i)));
-        std::vector<float> along_x(size_t(kSpectralSamples) * size_t(nodes));
-        for (int i = 0; i < nodes && unit.spectral(); ++i)
+        // Each row padded to whole vectors with copies of its last node's.
+        const int stride = (nodes + PrintExposure::kRowStride - 1) / PrintExposure::kRowStride * PrintExposure::kRowStride;
+        std::vector<float> along_x(size_t(kSpectralSamples) * size_t(stride));
+        for (int i = 0; i < stride && unit.spectral(); ++i)
             for (int s = 0; s < kSpectralSamples; ++s)
-                along_x[size_t(s) * nodes + i] = float(transmittance[0][size_t(i)][size_t(s)]);
+                along_x[size_t(s) * stride + i] = float(transmittance[0][size_t(std::min(i, nodes - 1))][size_t(s)]);
         auto grid = std::make_shared<PaperLogExposures>();
-        grid->log_h.resize(size_t(nodes) * nodes * nodes);
+        grid->log_h.resize(size_t(nodes) * nodes * nodes);  // (unset: each node is written below)
         parallel_for(0, nodes, threads, [&](int k_begin, int k_end) {
             // A row's exposures and their logs, paper layer after layer.
-            std::vector<double> h(3 * size_t(nodes)), log_h(3 * size_t(nodes));
+            std::vector<double> h(3 * size_t(stride), 1.0), log_h(3 * size_t(stride));
             for (int k = k_begin; k < k_end; ++k)
                 for (int j = 0; j < nodes; ++j) {
                     if (unit.spectral())
-                        unit.expose_row(along_x.data(), nodes, transmittance[1][size_t(j)], transmittance[2][size_t(k)],
+                        unit.expose_row(along_x.data(), stride, transmittance[1][size_t(j)], transmittance[2][size_t(k)],
                                         h.data());
                     else
                         for (int i = 0; i < nodes; ++i) {
@@ -537,12 +511,12 @@ std::shared_ptr<const PaperLogExposures> paper_log_exposures(const PrintExposure
                                                  Table3D::node_coordinate(lo[2], hi[2], nodes, k)};
                             double at[3];
                             unit.expose(d, at);
-                            for (int l = 0; l < 3; ++l) h[size_t(l * nodes + i)] = at[l];
+                            for (int l = 0; l < 3; ++l) h[size_t(l * stride + i)] = at[l];
                         }
-                    log10_row(h.data(), log_h.data(), 3 * nodes);  // (-inf for no light)
+                    log10_row(h.data(), log_h.data(), 3 * stride);  // (-inf for no light)
                     for (int i = 0; i < nodes; ++i)
                         for (int l = 0; l < 3; ++l)
-                            grid->log_h[(size_t(k) * nodes + j) * nodes + i][size_t(l)] = log_h[size_t(l * nodes + i)];
+                            grid->log_h[(size_t(k) * nodes + j) * nodes + i][size_t(l)] = log_h[size_t(l * stride + i)];
                 }
         });
         return std::shared_ptr<const PaperLogExposures>(std::move(grid));
@@ -569,33 +543,70 @@ std::shared_ptr<const PrintViewTable> paper_view_table(const Stock& paper, Print
 
 // A curve's values as Curve::operator() gives them, bit for bit, its segment found from a
 // uniform grid of buckets instead of a binary search (the print tables' nodes evaluate the
-// paper's three curves each).
+// paper's three curves each), a row of values at a time in vectors of doubles: the lookups'
+// divisions and the segments' varying searches were most of the table's build in scalar code.
 class CurveLookup {
 public:
-    explicit CurveLookup(const Curve& curve) : curve_(curve) {
-        const std::vector<double>& x = curve.x;
-        step_ = (x.back() - x.front()) / (4 * double(x.size()));
+    explicit CurveLookup(const Curve& curve) : x_(curve.x), y_(curve.y) {
+        step_ = (x_.back() - x_.front()) / (4 * double(x_.size()));
         // Each bucket starts from the segment the bucket before it starts in, so that a value
         // rounded into the next bucket never starts past its own segment.
-        for (size_t b = 0; b <= 4 * x.size(); ++b)
-            first_.push_back(size_t(std::upper_bound(x.begin(), x.end(), x.front() + (double(b) - 1) * step_) - x.begin()));
+        for (size_t b = 0; b <= 4 * x_.size(); ++b)
+            first_.push_back(int64_t(std::upper_bound(x_.begin(), x_.end(), x_.front() + (double(b) - 1) * step_) - x_.begin()));
     }
-    double operator()(double at) const {
-        const std::vector<double>& x = curve_.x;
-        const std::vector<double>& y = curve_.y;
-        if (!(at > x.front())) return y.front();  // (as Curve::operator(): NaN held at the low end)
-        if (at >= x.back()) return y.back();
-        size_t hi = first_[std::min(size_t((at - x.front()) / step_), first_.size() - 1)];
-        while (x[hi] <= at) ++hi;  // (the upper bound: the first node past `at`)
-        const size_t lo = hi - 1;
-        const double t = (at - x[lo]) / (x[hi] - x[lo]);
-        return y[lo] + t * (y[hi] - y[lo]);
-    }
+    // out[i] = the curve at at[i], for n values.
+    void row(const double* at, double* out, int n) const { simd::dispatch_doubles<Row>(this, at, out, n); }
 
 private:
-    const Curve& curve_;
+    struct Row {
+        template <int lanes>
+        __attribute__((always_inline)) static void run(const CurveLookup* curve, const double* at, double* out, int n) {
+            int i = 0;
+            for (; i + lanes <= n; i += lanes)
+                lookup<typename simd::Lanes<lanes>::D, typename simd::Lanes<lanes>::L>(*curve, at, out, i);
+            for (; i < n; ++i) lookup<simd::Double1, simd::Lanes<1>::L>(*curve, at, out, i);
+        }
+        template <typename D, typename L>
+        __attribute__((always_inline)) static void lookup(const CurveLookup& c, const double* at_row, double* out, int i) {
+            constexpr int lanes = sizeof(D) / sizeof(double);
+            const double* x = c.x_.data();
+            const double* y = c.y_.data();
+            D at;
+            simd::load(at, at_row + i);
+            // Values at or past the ends take the end's value (NaN the low end's, as Curve's),
+            // and search the first segment meanwhile.
+            const L low = ~(at > x[0]), high = at >= c.x_.back();
+            const D inside = (low | high) ? D{} + x[0] : at;
+            L bucket = __builtin_convertvector((inside - x[0]) / c.step_, L);
+            bucket = bucket < int64_t(c.first_.size() - 1) ? bucket : L{} + int64_t(c.first_.size() - 1);
+            L hi;
+            D x_hi;
+            for (int l = 0; l < lanes; ++l) hi[l] = c.first_[size_t(bucket[l])], x_hi[l] = x[hi[l]];
+            // The upper bound: the first node past the value.
+            for (L past = x_hi <= inside; any(past); past = x_hi <= inside) {
+                hi -= past;  // (true lanes are -1)
+                for (int l = 0; l < lanes; ++l) x_hi[l] = x[hi[l]];
+            }
+            D x_lo, y_lo, y_hi;
+            for (int l = 0; l < lanes; ++l) x_lo[l] = x[hi[l] - 1], y_lo[l] = y[hi[l] - 1], y_hi[l] = y[hi[l]];
+            const D t = (inside - x_lo) / (x_hi - x_lo);
+            D v = y_lo + t * (y_hi - y_lo);
+            v = low ? D{} + y[0] : v;
+            v = high ? D{} + c.y_.back() : v;
+            simd::store(out + i, v);
+        }
+        template <typename L>
+        __attribute__((always_inline)) static bool any(const L& mask) {
+            bool set = false;
+            for (size_t l = 0; l < sizeof(L) / sizeof(int64_t); ++l) set = set || mask[l] != 0;
+            return set;
+        }
+    };
+
+    const std::vector<double>& x_;
+    const std::vector<double>& y_;
     double step_ = 0;
-    std::vector<size_t> first_;
+    std::vector<int64_t> first_;
 };
 
 // The one print table of a colour negative on colour paper: the negative's densities -> the
@@ -626,19 +637,26 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
         // A row of nodes at a time: the paper's densities, then their view in vectors.
         return std::make_shared<const Table3D>(Table3D::by_rows(lo, hi, nodes, threads, [&](int j, int k, double* rgb) {
             const std::array<double, 3>* log_h = &grid->log_h[(size_t(k) * nodes + size_t(j)) * nodes];
+            std::vector<double> at(static_cast<size_t>(nodes)), density(static_cast<size_t>(nodes));
             std::vector<float> densities(3 * size_t(nodes)), xyz(3 * size_t(nodes));
             const float* density_rows[3] = {&densities[0], &densities[size_t(nodes)], &densities[2 * size_t(nodes)]};
             float* xyz_rows[3] = {&xyz[0], &xyz[size_t(nodes)], &xyz[2 * size_t(nodes)]};
-            for (int l = 0; l < 3; ++l)
-                for (int i = 0; i < nodes; ++i)
-                    densities[size_t(l * nodes + i)] =
-                        float(curves[l](std::clamp(log_light[l] + log_h[i][size_t(l)], log_min, log_max)));
-            view->xyz.apply_row(density_rows, xyz_rows, nodes);
-            for (int i = 0; i < nodes; ++i) {
-                Rgb node = multiply(view->xyz_to_rgb, {xyz_rows[0][i], xyz_rows[1][i], xyz_rows[2][i]});
-                if (seen.compress_gamut) node = compress_to_gamut(node);
-                std::copy(node.begin(), node.end(), rgb + 3 * i);
+            for (int l = 0; l < 3; ++l) {
+                for (int i = 0; i < nodes; ++i) at[size_t(i)] = std::clamp(log_light[l] + log_h[i][size_t(l)], log_min, log_max);
+                curves[l].row(at.data(), density.data(), nodes);
+                for (int i = 0; i < nodes; ++i) densities[size_t(l * nodes + i)] = float(density[size_t(i)]);
             }
+            view->xyz.apply_row(density_rows, xyz_rows, nodes);
+            std::vector<double> linear(3 * size_t(nodes));
+            double* const linear_rows[3] = {&linear[0], &linear[size_t(nodes)], &linear[2 * size_t(nodes)]};
+            const Matrix3& m = view->xyz_to_rgb;  // (multiply's sums, in its order)
+            for (int c = 0; c < 3; ++c)
+                for (int i = 0; i < nodes; ++i)
+                    linear_rows[c][i] = m[size_t(c)][0] * double(xyz_rows[0][i]) + m[size_t(c)][1] * double(xyz_rows[1][i]) +
+                                        m[size_t(c)][2] * double(xyz_rows[2][i]);
+            if (seen.compress_gamut) compress_to_gamut_row(linear_rows, nodes);
+            for (int i = 0; i < nodes; ++i)
+                for (int c = 0; c < 3; ++c) rgb[3 * i + c] = linear_rows[c][i];
         }, Table3D::Encoding::cube_root));
     });
 }

@@ -347,21 +347,11 @@ Spectrum from_log10(const Spectrum& log10_values, double missing_value) {
 
 namespace {
 
-struct TransmittanceRow {
-    template <int lanes>
-    __attribute__((always_inline)) static void run(const double* density, double* out, int n) {
-        int i = 0;
-        for (; i + lanes <= n; i += lanes)
-            transmittance_lanes<typename simd::Lanes<lanes>::D, typename simd::Lanes<lanes>::L>(density, out, i);
-        for (; i < n; ++i) transmittance_lanes<simd::Double1, simd::Lanes<1>::L>(density, out, i);
-    }
+struct Transmittance {
     template <typename D, typename L>
-    __attribute__((always_inline)) static void transmittance_lanes(const double* density, double* out, int i) {
+    __attribute__((always_inline)) static void apply(const D& density, D& t) {
         constexpr double kLn10 = 2.302585092994046;
-        D d, t;
-        simd::load(d, density + i);
-        simd::exp_lanes<D, L>(d * -kLn10, t);
-        simd::store(out + i, t);
+        simd::exp_lanes<D, L>(density * -kLn10, t);
     }
 };
 
@@ -388,7 +378,7 @@ void add_scaled(Spectrum& sum, double weight, const Spectrum& term) {
 
 Spectrum transmittance_of(const Spectrum& density) {
     Spectrum t;
-    simd::dispatch_doubles<TransmittanceRow>(density.data(), t.data(), N);
+    simd::map_doubles<Transmittance>(density.data(), t.data(), N);
     return t;
 }
 
@@ -455,18 +445,58 @@ Matrix3 adaptation_to_d65(const Rgb& white) {
     return {{{y / white[0], 0, 0}, {0, y / white[1], 0}, {0, 0, y / white[2]}}};
 }
 
-Rgb compress_to_gamut(const Rgb& rgb) {
-    const double y = luminance(rgb);
-    if (!(y > 0)) return {0.0, 0.0, 0.0};
-    const double distance = (y - std::min({rgb[0], rgb[1], rgb[2]})) / y;
+namespace {
+
+// compress_to_gamut on each lane of D (L: as many int64), in place: one piece of code for a
+// colour and for rows of them. tanh lane by lane, where a colour is compressed.
+template <typename D, typename L>
+__attribute__((always_inline)) inline void compress_to_gamut_lanes(D& r, D& g, D& b) {
+    const D y = kLinearSrgbToXyz[1][0] * r + kLinearSrgbToXyz[1][1] * g + kLinearSrgbToXyz[1][2] * b;  // luminance
+    D lowest = r;
+    lowest = g < lowest ? g : lowest;
+    lowest = b < lowest ? b : lowest;
+    const D distance = (y - lowest) / y;
     constexpr double s = kGamutCompressionStart;
-    if (distance <= s) return rgb;
-    const double compressed = s + (1 - s) * std::tanh((distance - s) / (1 - s));
-    const double k = compressed / distance;
+    const L black = ~(y > 0), compressed_lanes = ~black & ~(distance <= s);
+    const D over = (distance - s) / (1 - s);
+    D tanh_over{};
+    for (size_t l = 0; l < sizeof(D) / sizeof(double); ++l)
+        if (compressed_lanes[l]) tanh_over[l] = std::tanh(over[l]);
+    const D k = (s + (1 - s) * tanh_over) / distance;
     // (Where tanh has reached 1 in doubles a component lands on 0 give or take rounding.)
-    return {std::max(0.0, y + k * (rgb[0] - y)), std::max(0.0, y + k * (rgb[1] - y)),
-            std::max(0.0, y + k * (rgb[2] - y))};
+    for (D* c : {&r, &g, &b}) {
+        const D moved = y + k * (*c - y);
+        *c = compressed_lanes ? (0.0 < moved ? moved : D{}) : *c;
+        *c = black ? D{} : *c;
+    }
 }
+
+struct CompressToGamutRow {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(double* const* rgb, int n) {
+        int i = 0;
+        for (; i + lanes <= n; i += lanes)
+            compress<typename simd::Lanes<lanes>::D, typename simd::Lanes<lanes>::L>(rgb, i);
+        for (; i < n; ++i) compress<simd::Double1, simd::Lanes<1>::L>(rgb, i);
+    }
+    template <typename D, typename L>
+    __attribute__((always_inline)) static void compress(double* const* rgb, int i) {
+        D r, g, b;
+        simd::load(r, rgb[0] + i), simd::load(g, rgb[1] + i), simd::load(b, rgb[2] + i);
+        compress_to_gamut_lanes<D, L>(r, g, b);
+        simd::store(rgb[0] + i, r), simd::store(rgb[1] + i, g), simd::store(rgb[2] + i, b);
+    }
+};
+
+}  // namespace
+
+Rgb compress_to_gamut(const Rgb& rgb) {
+    simd::Double1 r{rgb[0]}, g{rgb[1]}, b{rgb[2]};
+    compress_to_gamut_lanes<simd::Double1, simd::Lanes<1>::L>(r, g, b);
+    return {r[0], g[0], b[0]};
+}
+
+void compress_to_gamut_row(double* const* rgb, int n) { simd::dispatch_doubles<CompressToGamutRow>(rgb, n); }
 
 Rgb xyz_to_linear_srgb(const Xyz& xyz) { return multiply(kXyzToLinearSrgb, xyz); }
 Xyz linear_srgb_to_xyz(const Rgb& rgb) { return multiply(kLinearSrgbToXyz, rgb); }

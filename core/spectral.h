@@ -161,6 +161,9 @@ double luminance(const Rgb& rgb);
 // Y <= 0 (no light a print can reflect) gives black. Per pixel.
 constexpr double kGamutCompressionStart = 0.8;
 Rgb compress_to_gamut(const Rgb& rgb);
+// compress_to_gamut of n colours given as three rows (rgb[c][i]), in place, in vectors: bit
+// for bit its values.
+void compress_to_gamut_row(double* const* rgb, int n);
 
 // ---------------------------------------------------------------------------------------
 // RGB -> spectrum upsampling

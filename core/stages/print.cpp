@@ -85,32 +85,36 @@ double slide_mid_grey_luminance(const Stock& film) {
     return luminance(reflectance_to_linear_srgb(transmittance_of(spectral_density(film, density))));
 }
 
-// Dot products of `count` spectra, given transposed (spectra[s * count + i]), with one
-// spectrum, in floats (twice the lanes of doubles), each summed over the samples in their
-// order: four vectors of spectra at a time (four chains of sums in flight), then one, then
-// one spectrum.
-struct DotsWithOne {
+// Dot products of `stride` spectra, given transposed (spectra[s * stride + i]), with each of
+// three spectra (with[j * kSpectralSamples + s]), into out[j * stride + i], in floats (twice
+// the lanes of doubles), each summed over the samples in their order: four vectors of spectra
+// at a time against all three (twelve chains of sums in flight, each vector loaded once),
+// then one. stride: a multiple of every vector's lanes, so there is no scalar tail.
+static_assert(PrintExposure::kRowStride % simd::kAvx512Lanes == 0 && simd::kAvx512Lanes % simd::kAvx2Lanes == 0 &&
+                  simd::kAvx2Lanes % simd::kBaselineLanes == 0,
+              "a row's stride is whole vectors at every instruction set");
+struct DotsWithThree {
     template <int lanes>
-    __attribute__((always_inline)) static void run(const float* spectra, int count, const float* with, double* out) {
+    __attribute__((always_inline)) static void run(const float* spectra, int stride, const float* with, double* out) {
         using F = typename simd::Lanes<lanes>::F;
         int i = 0;
-        for (; i + 4 * lanes <= count; i += 4 * lanes) dots<F, 4>(spectra, count, with, out, i);
-        for (; i + lanes <= count; i += lanes) dots<F, 1>(spectra, count, with, out, i);
-        for (; i < count; ++i) dots<simd::Float1, 1>(spectra, count, with, out, i);
+        for (; i + 4 * lanes <= stride; i += 4 * lanes) dots<F, 4>(spectra, stride, with, out, i);
+        for (; i < stride; i += lanes) dots<F, 1>(spectra, stride, with, out, i);
     }
     template <typename F, int vectors>
-    __attribute__((always_inline)) static void dots(const float* spectra, int count, const float* with, double* out,
+    __attribute__((always_inline)) static void dots(const float* spectra, int stride, const float* with, double* out,
                                                     int i) {
         constexpr int lanes = sizeof(F) / sizeof(float);
-        F sum[vectors]{};
-        for (int s = 0; s < kSpectralSamples; ++s)
-            for (int v = 0; v < vectors; ++v) {
-                F t;
-                simd::load(t, spectra + size_t(s) * size_t(count) + size_t(i + v * lanes));
-                sum[v] += t * with[s];
-            }
-        for (int v = 0; v < vectors; ++v)
-            for (int l = 0; l < lanes; ++l) out[i + v * lanes + l] = double(sum[v][l]);
+        F sum[3][vectors]{};
+        for (int s = 0; s < kSpectralSamples; ++s) {
+            F t[vectors];
+            for (int v = 0; v < vectors; ++v) simd::load(t[v], spectra + size_t(s) * size_t(stride) + size_t(i + v * lanes));
+            for (int j = 0; j < 3; ++j)
+                for (int v = 0; v < vectors; ++v) sum[j][v] += t[v] * with[j * kSpectralSamples + s];
+        }
+        for (int j = 0; j < 3; ++j)
+            for (int v = 0; v < vectors; ++v)
+                for (int l = 0; l < lanes; ++l) out[size_t(j) * size_t(stride) + size_t(i + v * lanes + l)] = double(sum[j][v][l]);
     }
 };
 
@@ -208,14 +212,14 @@ void PrintExposure::expose(const std::array<const Spectrum*, 3>& layer_transmitt
     for (int j = 0; j < paper_layers_; ++j) paper_exposure[j] = dot(weighted_light_[j], t);
 }
 
-void PrintExposure::expose_row(const float* layer0, int count, const Spectrum& layer1, const Spectrum& layer2,
+void PrintExposure::expose_row(const float* layer0, int stride, const Spectrum& layer1, const Spectrum& layer2,
                                double* paper_exposure) const {
-    for (int j = 0; j < paper_layers_; ++j) {
-        std::array<float, kSpectralSamples> through;  // layer j's light through the negative's layers 1 and 2
-        for (int s = 0; s < kSpectralSamples; ++s) through[size_t(s)] = float(weighted_light_[j][s] * layer1[s] * layer2[s]);
-        simd::dispatch<DotsWithOne>(layer0, count, static_cast<const float*>(through.data()),
-                                    paper_exposure + size_t(j) * size_t(count));
-    }
+    // Each paper layer's light through the negative's layers 1 and 2.
+    std::array<float, 3 * kSpectralSamples> through;
+    for (int j = 0; j < 3; ++j)
+        for (int s = 0; s < kSpectralSamples; ++s)
+            through[size_t(j * kSpectralSamples + s)] = float(weighted_light_[j][s] * layer1[s] * layer2[s]);
+    simd::dispatch<DotsWithThree>(layer0, stride, static_cast<const float*>(through.data()), paper_exposure);
 }
 
 std::string PrintExposure::fingerprint() const {

@@ -72,14 +72,16 @@ public:
     Spectrum layer_transmittance(int layer, double density) const;
     // and expose() of the negative whose layers' factors these are (spectral() only).
     void expose(const std::array<const Spectrum*, 3>& layer_transmittance, double* paper_exposure_lux_s) const;
-    // The same for `count` negatives that share their layers 1 and 2's factors, layer 0's
-    // given transposed (layer0[s * count + i]: sample s of negative i's), into
-    // paper_exposure_lux_s[j * count + i] for paper layer j: a row of the print table's grid,
+    // The same for `stride` negatives that share their layers 1 and 2's factors, layer 0's
+    // given transposed (layer0[s * stride + i]: sample s of negative i's), into
+    // paper_exposure_lux_s[j * stride + i] for paper layer j: a row of the print table's grid,
     // in vectors of negatives (each one's sum over the samples in their order, so any vector
     // width gives the same values), summed in floats for twice the lanes: within 81 float
-    // roundings of expose()'s (1e-5 relative, 1e-5 D on the paper). spectral() and three film
-    // layers only.
-    void expose_row(const float* layer0, int count, const Spectrum& layer1, const Spectrum& layer2,
+    // roundings of expose()'s (1e-5 relative, 1e-5 D on the paper). stride: a multiple of
+    // kRowStride (the row's nodes and copies after them). spectral(), three film and three
+    // paper layers only.
+    static constexpr int kRowStride = 16;
+    void expose_row(const float* layer0, int stride, const Spectrum& layer1, const Spectrum& layer2,
                     double* paper_exposure_lux_s) const;
 
     int paper_layers() const { return paper_layers_; }

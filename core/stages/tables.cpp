@@ -320,6 +320,24 @@ void LogAxisTable::apply_row_with_noise(const float* in, const float* noise, flo
     simd::dispatch<LogAxisNoiseRow>(samples(), in, noise, floor, out, n);
 }
 
+namespace {
+
+struct CubeRoot {
+    template <typename D, typename L>
+    __attribute__((always_inline)) static void apply(const D& v, D& root) {
+        cube_root_lanes<D, L>(v, root);
+    }
+};
+
+}  // namespace
+
+void cube_root_row(const double* in, double* out, int n) {
+    simd::map_doubles<CubeRoot>(in, out, n);
+    for (int i = 0; i < n; ++i)
+        if (!(in[i] >= std::numeric_limits<double>::min() && in[i] <= std::numeric_limits<double>::max()))
+            out[i] = std::cbrt(in[i]);
+}
+
 Table3D::Table3D(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int nodes, Encoding encoding)
     : nodes_(nodes), lo_given_(lo), hi_given_(hi), cubed_(encoding == Encoding::cube_root) {
     for (int a = 0; a < 3; ++a) {
@@ -352,16 +370,16 @@ Table3D Table3D::by_rows(const std::array<double, 3>& lo, const std::array<doubl
 void Table3D::fill(int threads, const RowFunction& f) {
     // The planes of nodes along z shared among the threads, a row of nodes at a time.
     parallel_for(0, nodes_, threads, [&](int k_begin, int k_end) {
-        std::vector<double> row(3 * size_t(nodes_));
+        std::vector<double> row(3 * size_t(nodes_)), roots(3 * size_t(nodes_));
         for (int k = k_begin; k < k_end; ++k)
             for (int j = 0; j < nodes_; ++j) {
                 f(j, k, row.data());
-                if (cubed_)
-                    for (double& v : row) v = cube_root(v);
+                if (cubed_) cube_root_row(row.data(), roots.data(), 3 * nodes_);
+                const std::vector<double>& value = cubed_ ? roots : row;
                 for (int i = 0; i < nodes_; ++i)
-                    values_[(size_t(k) * nodes_ + j) * nodes_ + i] = {float(row[3 * size_t(i)]),
-                                                                       float(row[3 * size_t(i) + 1]),
-                                                                       float(row[3 * size_t(i) + 2]), 0.0f};
+                    values_[(size_t(k) * nodes_ + j) * nodes_ + i] = {float(value[3 * size_t(i)]),
+                                                                       float(value[3 * size_t(i) + 1]),
+                                                                       float(value[3 * size_t(i) + 2]), 0.0f};
             }
     });
 }

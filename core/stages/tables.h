@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/curve.h"
+#include "core/simd.h"
 
 namespace darkroom {
 
@@ -69,21 +70,31 @@ private:
 // one of Newton's, in plain double arithmetic, so every processor gives the same values.
 // std::cbrt took a third of a print table's build. Zero, negative, subnormal and non-finite
 // v as std::cbrt.
-inline double cube_root(double v) {
-    if (!(v >= std::numeric_limits<double>::min() && v <= std::numeric_limits<double>::max())) return std::cbrt(v);
-    uint64_t bits;
+// (The steps on each lane of D, L as many int64: one piece of code for cube_root and
+// cube_root_row. Positive normal lanes only.)
+template <typename D, typename L>
+__attribute__((always_inline)) inline void cube_root_lanes(const D& v, D& root) {
+    L bits;
     std::memcpy(&bits, &v, sizeof bits);
     // The exponent divided by 3, with the bias's third added back (a third of 1023 << 52, less a
     // little, which centres the estimate's error: within 3.2 % over a binade).
-    bits = bits / 3 + 0x2A9F7893782DA1CEull;
-    double y;
+    bits = bits / 3 + int64_t(0x2A9F7893782DA1CE);
+    D y;
     std::memcpy(&y, &bits, sizeof y);
     for (int step = 0; step < 2; ++step) {
-        const double cube = y * y * y;
+        const D cube = y * y * y;
         y *= (cube + 2 * v) / (2 * cube + v);  // (the ratio first: y times the sum would leave the range)
     }
-    return y - (y * y * y - v) / (3 * y * y);
+    root = y - (y * y * y - v) / (3 * y * y);
 }
+inline double cube_root(double v) {
+    if (!(v >= std::numeric_limits<double>::min() && v <= std::numeric_limits<double>::max())) return std::cbrt(v);
+    simd::Double1 root;
+    cube_root_lanes<simd::Double1, simd::Lanes<1>::L>(simd::Double1{v}, root);
+    return root[0];
+}
+// cube_root of n values, in vectors, bit for bit the same values.
+void cube_root_row(const double* in, double* out, int n);
 
 // A function of three variables on a uniform grid (nodes^3 over [lo, hi] per axis),
 // interpolated tetrahedrally; inputs outside the grid are clamped to its faces.

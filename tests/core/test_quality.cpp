@@ -245,6 +245,48 @@ TEST_CASE("the tables' cube root is std::cbrt's within 4 ulp, and std::cbrt's wh
     CHECK(std::isnan(cube_root(std::numeric_limits<double>::quiet_NaN())));
 }
 
+TEST_CASE("the print table's row kernels give the per-value functions' values bit for bit on every instruction set",
+          "[quality][tables][simd]") {
+    auto same_bits = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+    const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    // Values over twelve decades, and zero, negatives, subnormals and the non-finite.
+    std::vector<double> values{0.0, -0.0, -8.0, 1e-310, inf, -inf, nan};
+    for (int i = 0; i < 2000; ++i) values.push_back(std::pow(10.0, 12 * u(rng) - 6));
+    // Colours inside the gamut, past its compression's start and outside it, and black and below.
+    std::array<std::vector<double>, 3> colours{std::vector<double>{0, -1, nan}, std::vector<double>{0, -1, 0.5},
+                                               std::vector<double>{0, -1, 0.5}};
+    for (int i = 0; i < 2000; ++i)
+        for (auto& channel : colours) channel.push_back(1.5 * u(rng) - 0.3);
+    const int n = int(colours[0].size());
+    const simd::Isa widest = simd::isa();
+    for (simd::Isa isa : {simd::Isa::avx512, simd::Isa::avx2, simd::Isa::baseline}) {
+        if (int(isa) > int(widest)) continue;
+        simd::set_isa(isa);
+        INFO(simd::isa_name(isa));
+        std::vector<double> roots(values.size());
+        cube_root_row(values.data(), roots.data(), int(values.size()));
+        int roots_differing = 0;
+        for (size_t i = 0; i < values.size(); ++i) roots_differing += !same_bits(roots[i], cube_root(values[i]));
+        CHECK(roots_differing == 0);
+        std::array<std::vector<double>, 3> compressed = colours;
+        double* const rows[3] = {compressed[0].data(), compressed[1].data(), compressed[2].data()};
+        compress_to_gamut_row(rows, n);
+        int colours_differing = 0, moved = 0;
+        for (int i = 0; i < n; ++i) {
+            const Rgb expected = compress_to_gamut({colours[0][size_t(i)], colours[1][size_t(i)], colours[2][size_t(i)]});
+            bool same = true;
+            for (int c = 0; c < 3; ++c) same = same && same_bits(rows[c][i], expected[size_t(c)]);
+            colours_differing += !same;
+            moved += rows[0][i] != colours[0][size_t(i)];
+        }
+        CHECK(colours_differing == 0);
+        CHECK(moved > n / 10);  // (the colours exercise the compression)
+    }
+    simd::set_isa(widest);
+}
+
 TEST_CASE("a 3D table of cube roots reads back its function at the nodes and the cube of its interpolant between",
           "[quality][tables]") {
     // Values over six decades and of either sign, as a print's light and an out-of-gamut channel.
