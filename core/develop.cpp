@@ -637,8 +637,11 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
         // A row of nodes at a time: the paper's densities, then their view in vectors.
         return std::make_shared<const Table3D>(Table3D::by_rows(lo, hi, nodes, threads, [&](int j, int k, double* rgb) {
             const std::array<double, 3>* log_h = &grid->log_h[(size_t(k) * nodes + size_t(j)) * nodes];
-            std::vector<double> at(static_cast<size_t>(nodes)), density(static_cast<size_t>(nodes));
-            std::vector<float> densities(3 * size_t(nodes)), xyz(3 * size_t(nodes));
+            // The rows' scratch, per thread: kept from row to row (nodes^2 rows a table).
+            thread_local std::vector<double> at, density, linear;
+            thread_local std::vector<float> densities, xyz;
+            at.resize(size_t(nodes)), density.resize(size_t(nodes)), linear.resize(3 * size_t(nodes));
+            densities.resize(3 * size_t(nodes)), xyz.resize(3 * size_t(nodes));
             const float* density_rows[3] = {&densities[0], &densities[size_t(nodes)], &densities[2 * size_t(nodes)]};
             float* xyz_rows[3] = {&xyz[0], &xyz[size_t(nodes)], &xyz[2 * size_t(nodes)]};
             for (int l = 0; l < 3; ++l) {
@@ -647,7 +650,6 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
                 for (int i = 0; i < nodes; ++i) densities[size_t(l * nodes + i)] = float(density[size_t(i)]);
             }
             view->xyz.apply_row(density_rows, xyz_rows, nodes);
-            std::vector<double> linear(3 * size_t(nodes));
             double* const linear_rows[3] = {&linear[0], &linear[size_t(nodes)], &linear[2 * size_t(nodes)]};
             const Matrix3& m = view->xyz_to_rgb;  // (multiply's sums, in its order)
             for (int c = 0; c < 3; ++c)
