@@ -3,9 +3,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
+#include <memory>
+#include <numeric>
 #include <sstream>
 
 #include "core/parallel.h"
+#include "core/plate/grain_synthesis.h"
+#include "core/stages/filters.h"
 
 namespace darkroom {
 
@@ -147,6 +152,16 @@ struct SurfaceFit {
         for (int k = 0; k < kTerms; ++k)
             for (int l = 0; l < kTerms; ++l)
                 basis_xcorr[k][l] = cross_correlation(basis[k].data(), basis[l].data(), block, lags);
+    }
+
+    // v less its least-squares surface (v: a block, row-major).
+    void subtract_from(double* v) const {
+        const int npx = size * size;
+        double coef[kTerms] = {};
+        for (int k = 0; k < kTerms; ++k)
+            for (int p = 0; p < npx; ++p) coef[k] += basis[k][p] * v[p];
+        for (int p = 0; p < npx; ++p)
+            for (int k = 0; k < kTerms; ++k) v[p] -= coef[k] * basis[k][p];
     }
 
     // What the fit does to grain of autocorrelation rho, in units of sigma^2: the
@@ -402,12 +417,178 @@ void drop_levels_above_envelope(LevelCurve& curve, SignalEncoding encoding) {
         if (content[k]) curve.erase(k);
 }
 
+// Grain variance in patch space (Liu, Tanaka and Okutomi, "Single-image noise level estimation
+// for blind denoising", IEEE TIP 2013): picture content is low-rank among small patches, so
+// the small eigenvalues of the patches' covariance, whitened by the grain's own (its
+// autocorrelation on the patch's lags), are the grain's alone, however much content the
+// other directions hold. Which are the grain's (Chen, Zhu and Heng, "An efficient statistical
+// method for image noise level estimation", ICCV 2015): the most of the smallest whose mean is
+// not above their median (content's eigenvalues stand out above the grain's spread); their
+// mean is the variance. Sample eigenvalues spread about the true ones (Marchenko-Pastur), the
+// more the fewer and the more correlated the patches, so this reads low: the same statistic on
+// synthetic grain of the same autocorrelation, in as many blocks through the same surface
+// fit, gives that bias, which divides it out.
+constexpr int kPatchSidePx = 5;
+// Patch-space directions where the grain's covariance is below this fraction of its largest
+// eigenvalue are left out: the measured autocorrelation says too little there to whiten by.
+constexpr double kPatchSpaceFloor = 0.1;
+// Synthetic grain per channel: a few times the most blocks a level holds (at least as many),
+// and at least a field of 512 x 512 px: the bias is the mean over several groups of that
+// many blocks, and divides every level of that many blocks, so its own error is alike at
+// all of them.
+constexpr int kMinCalibrationPixels = 512 * 512, kMaxCalibrationBlocks = 4096, kCalibrationGroups = 4;
+constexpr int kMaxCalibrationGroups = 64;  // bounds the eigen-solves for a level of few blocks
+constexpr uint64_t kCalibrationSeed = 0x9a7c4e5;
+
+// Sums over a set of patches (each a vector of side^2 pixels): of x x^T (row-major) and of x.
+struct PatchMoments {
+    std::vector<double> second, first;
+    long long count = 0;
+    explicit PatchMoments(int dim) : second((size_t)dim * dim, 0.0), first(dim, 0.0) {}
+    void add(const PatchMoments& other) {
+        for (size_t i = 0; i < second.size(); ++i) second[i] += other.second[i];
+        for (size_t i = 0; i < first.size(); ++i) first[i] += other.first[i];
+        count += other.count;
+    }
+};
+
+struct PatchSpace {
+    int side = 0, dim = 0, kept = 0;
+    std::vector<double> whitening;  // kept x dim: Lambda^-1/2 V^T of the grain's patch covariance
+
+    PatchSpace(const std::vector<double>& rho, const LagGrid& lags, int patch_side)
+        : side(patch_side), dim(patch_side * patch_side) {
+        std::vector<double> covariance((size_t)dim * dim), values, vectors;
+        for (int i = 0; i < dim; ++i)
+            for (int j = 0; j < dim; ++j)
+                covariance[(size_t)i * dim + j] = rho[lags.index(j % side - i % side, j / side - i / side)];
+        symmetric_eigen(covariance, dim, values, vectors);
+        const double largest = *std::max_element(values.begin(), values.end());
+        for (int k = 0; k < dim; ++k) {
+            if (!(values[k] >= kPatchSpaceFloor * largest)) continue;
+            for (int i = 0; i < dim; ++i) whitening.push_back(vectors[(size_t)i * dim + k] / std::sqrt(values[k]));
+            ++kept;
+        }
+    }
+
+    // Every patch of an n x n block (row-major).
+    void accumulate(const double* block, int n, PatchMoments& m) const {
+        std::vector<double> x(dim);
+        for (int y0 = 0; y0 + side <= n; ++y0)
+            for (int x0 = 0; x0 + side <= n; ++x0) {
+                for (int i = 0; i < dim; ++i) x[i] = block[(size_t)(y0 + i / side) * n + x0 + i % side];
+                for (int i = 0; i < dim; ++i) {
+                    m.first[i] += x[i];
+                    double* row = &m.second[(size_t)i * dim];
+                    for (int j = i; j < dim; ++j) row[j] += x[i] * x[j];
+                }
+                ++m.count;
+            }
+    }
+
+    // The grain's variance from the patches' whitened covariance (accumulate's upper triangle),
+    // before the bias correction.
+    double grain_variance(const PatchMoments& m) const {
+        std::vector<double> covariance((size_t)dim * dim);
+        for (int i = 0; i < dim; ++i)
+            for (int j = i; j < dim; ++j)
+                covariance[(size_t)i * dim + j] = covariance[(size_t)j * dim + i] =
+                    (m.second[(size_t)i * dim + j] - m.first[i] * m.first[j] / m.count) / (m.count - 1);
+        std::vector<double> half((size_t)kept * dim, 0.0), whitened((size_t)kept * kept, 0.0), values, vectors;
+        for (int k = 0; k < kept; ++k)
+            for (int i = 0; i < dim; ++i)
+                for (int j = 0; j < dim; ++j)
+                    half[(size_t)k * dim + j] += whitening[(size_t)k * dim + i] * covariance[(size_t)i * dim + j];
+        for (int k = 0; k < kept; ++k)
+            for (int l = 0; l < kept; ++l)
+                for (int j = 0; j < dim; ++j)
+                    whitened[(size_t)k * kept + l] += half[(size_t)k * dim + j] * whitening[(size_t)l * dim + j];
+        symmetric_eigen(whitened, kept, values, vectors);
+        std::sort(values.begin(), values.end());
+        auto mean_of_smallest = [&](int m) { return std::accumulate(values.begin(), values.begin() + m, 0.0) / m; };
+        auto median_of_smallest = [&](int m) { return m % 2 ? values[m / 2] : 0.5 * (values[m / 2 - 1] + values[m / 2]); };
+        int grain_count = kept;
+        while (grain_count > 1 && mean_of_smallest(grain_count) > median_of_smallest(grain_count)) --grain_count;
+        return mean_of_smallest(grain_count);
+    }
+};
+
+// PatchSpace::grain_variance of unit grain of the measured autocorrelation, by the number of
+// blocks it is read from: its mean and relative standard deviation.
+class PatchCalibration {
+public:
+    PatchCalibration(const PatchSpace& space, const SurfaceFit& surface, const std::vector<double>& rho,
+                     const LagGrid& lags, int channel, int most_blocks, int threads)
+        : space_(space) {
+        // Unit grain of that autocorrelation over a field of blocks, as the plate's are tiled.
+        GrainProfile grain;
+        GrainChannel channel_grain;
+        channel_grain.level = {0.0, 1.0};
+        channel_grain.sigma = {1.0, 1.0};
+        channel_grain.acf_radius = lags.radius;
+        channel_grain.autocorrelation = rho;
+        grain.channels = {channel_grain};
+        const int n = surface.size, columns = 16;
+        const int count =
+            std::max(most_blocks, std::clamp(kCalibrationGroups * most_blocks, kMinCalibrationPixels / (n * n), kMaxCalibrationBlocks));
+        Image field(columns * n, (count + columns - 1) / columns * n, 1);
+        apply_grain_profile(grain, field.view(), kCalibrationSeed, channel, threads);
+        blocks_.assign(count, PatchMoments(space.dim));
+        parallel_for(0, count, threads, [&](int begin, int end) {
+            std::vector<double> block((size_t)n * n);
+            for (int b = begin; b < end; ++b) {
+                for (int y = 0; y < n; ++y)
+                    for (int x = 0; x < n; ++x) block[(size_t)y * n + x] = field.at(b % columns * n + x, b / columns * n + y)[0];
+                surface.subtract_from(block.data());
+                space.accumulate(block.data(), n, blocks_[b]);
+            }
+        });
+    }
+
+    struct Bias {
+        double mean = 0, relative_sd = 0;
+    };
+    // The mean over groups of `blocks` consecutive synthetic blocks; the spread over groups of
+    // at most a quarter of them, scaled to `blocks` (a variance estimate's error falls as the
+    // square root of its blocks).
+    Bias at(int blocks) {
+        auto found = cache_.find(blocks);
+        if (found != cache_.end()) return found->second;
+        Bias bias;
+        const std::vector<double> variance = group_variances(blocks);
+        for (double v : variance) bias.mean += v / variance.size();
+        const int spread_blocks = std::min<int>(blocks, (int)blocks_.size() / kCalibrationGroups);
+        const std::vector<double> spread_variance = spread_blocks == blocks ? variance : group_variances(spread_blocks);
+        double mean = 0, spread = 0;
+        for (double v : spread_variance) mean += v / spread_variance.size();
+        for (double v : spread_variance) spread += (v - mean) * (v - mean) / (spread_variance.size() - 1);
+        bias.relative_sd = std::sqrt(spread * spread_blocks / blocks) / mean;
+        return cache_[blocks] = bias;
+    }
+
+private:
+    std::vector<double> group_variances(int size) const {
+        std::vector<double> variance;
+        for (size_t start = 0; start + size <= blocks_.size() && variance.size() < kMaxCalibrationGroups; start += size) {
+            PatchMoments m(space_.dim);
+            for (size_t b = start; b < start + size; ++b) m.add(blocks_[b]);
+            variance.push_back(space_.grain_variance(m));
+        }
+        return variance;
+    }
+
+    const PatchSpace& space_;
+    std::vector<PatchMoments> blocks_;
+    std::map<int, Bias> cache_;
+};
+
 struct ChannelState {
     std::vector<double> rho;        // autocorrelation on the lag grid
     std::vector<char> candidate;    // per block: grain-like short-range correlation, stationary
     std::vector<char> accepted;     // per block: a candidate whose variance fits the curve
     std::vector<int> bin;           // per block
-    LevelCurve curve;
+    LevelCurve curve;               // the blocks' selection: the quantile of their variances
+    LevelCurve response;            // reported: the same blocks' variance in patch space
     double dof = 0;                 // N - trace: expected residual sum of squares / sigma^2
     LowBand::Expectation low_band;  // of a grain-only block's LowBand::power / sigma^2
     double relative_sd = 0;         // of a grain-only block's variance estimate
@@ -483,15 +664,12 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                         if (!std::isfinite(v)) finite[i] = 0;
                         r[y * bs + x] = v;
                     }
-                double coef[SurfaceFit::kTerms] = {};
-                for (int k = 0; k < SurfaceFit::kTerms; ++k)
-                    for (int p = 0; p < npx; ++p) coef[k] += surface.basis[k][p] * r[p];
                 double mean = 0;
                 for (int p = 0; p < npx; ++p) mean += r[p];
                 b.level.push_back(mean / npx);
+                surface.subtract_from(r);
                 double squares = 0, quadrant[4] = {};
                 for (int p = 0; p < npx; ++p) {
-                    for (int k = 0; k < SurfaceFit::kTerms; ++k) r[p] -= coef[k] * surface.basis[k][p];
                     squares += r[p] * r[p];
                     quadrant[2 * ((p / bs) >= half) + ((p % bs) >= half)] += r[p] * r[p];
                 }
@@ -638,23 +816,43 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
         return smooth;
     };
 
-    // The response through the candidates of each bin that has enough of them.
-    auto fit_curve = [&](int c) {
+    // The response through the candidates of each bin that has enough of them: the quantile
+    // of their variances, or their patches' smallest whitened eigenvalue (PatchSpace).
+    auto fit_curve = [&](int c, bool in_patch_space) {
         ChannelState& s = state[c];
         std::vector<std::vector<double>> variance(nbins);
+        std::vector<std::vector<int>> members(nbins);
         std::vector<double> level(nbins, 0.0);
         for (int i = 0; i < nblocks; ++i)
             if (s.candidate[i]) {
                 variance[s.bin[i]].push_back(blocks[i].squares[c] / s.dof);
+                members[s.bin[i]].push_back(i);
                 level[s.bin[i]] += blocks[i].level[c];
             }
+        const int min_blocks = std::max(1, settings.min_blocks_per_level);
+        int most_blocks = 0;
+        for (const auto& m : members) most_blocks = std::max(most_blocks, (int)m.size());
+        std::unique_ptr<PatchSpace> space;
+        std::unique_ptr<PatchCalibration> calibration;
+        if (in_patch_space && most_blocks >= min_blocks) {
+            space = std::make_unique<PatchSpace>(s.rho, lags, std::min(kPatchSidePx, lags.radius + 1));
+            calibration = std::make_unique<PatchCalibration>(*space, surface, s.rho, lags, c, most_blocks, 1);
+        }
         LevelCurve curve;
         for (int k = 0; k < nbins; ++k) {
             const int n = (int)variance[k].size();
-            if (n < std::max(1, settings.min_blocks_per_level)) continue;
+            if (n < min_blocks) continue;
             curve.level.push_back(level[k] / n);
-            curve.variance.push_back(quantile_of(variance[k], kResponseQuantile) / grain_quantile(s.relative_sd));
-            curve.error.push_back(quantile_sigma_error(s.relative_sd, n));
+            if (space) {
+                PatchMoments moments(space->dim);
+                for (int i : members[k]) space->accumulate(&blocks[i].residual[(size_t)c * npx], bs, moments);
+                const PatchCalibration::Bias bias = calibration->at(n);
+                curve.variance.push_back(space->grain_variance(moments) / bias.mean);
+                curve.error.push_back(0.5 * bias.relative_sd);
+            } else {
+                curve.variance.push_back(quantile_of(variance[k], kResponseQuantile) / grain_quantile(s.relative_sd));
+                curve.error.push_back(quantile_sigma_error(s.relative_sd, n));
+            }
             curve.bin.push_back(k);
             curve.blocks.push_back(n);
         }
@@ -691,7 +889,7 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                     const std::vector<char> weak = weak_textured_blocks(c), smooth = low_band_blocks(c, pass);
                     for (int i = 0; i < nblocks; ++i)
                         s.candidate[i] = typical[i] && stationary[i] && weak[i] && smooth[i];
-                    LevelCurve next = fit_curve(c);
+                    LevelCurve next = fit_curve(c, false);
                     bool settled = next.bin == s.curve.bin;
                     for (size_t k = 0; settled && k < next.variance.size(); ++k)
                         settled = std::abs(next.variance[k] / s.curve.variance[k] - 1) < kWeakTextureSettled;
@@ -749,11 +947,15 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
             }
         });
     }
-    // The final autocorrelation sets the fit's degrees of freedom for the final response.
-    for (int c = 0; c < nch; ++c) {
-        update_statistics(state[c]);
-        state[c].curve = fit_curve(c);
-    }
+    // The final autocorrelation sets the fit's degrees of freedom for the final curve, and the
+    // whitening of the response.
+    parallel_for(0, nch, settings.threads, [&](int c_begin, int c_end) {
+        for (int c = c_begin; c < c_end; ++c) {
+            update_statistics(state[c]);
+            state[c].curve = fit_curve(c, false);
+            state[c].response = fit_curve(c, true);
+        }
+    });
     return a;
 }
 
@@ -822,17 +1024,17 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
             all_level[s.bin[i]] += blocks[i].level[c];
             candidates[s.bin[i]] += s.candidate[i];
         }
-        for (size_t k = 0; k < s.curve.level.size(); ++k) {
-            ch.level.push_back(s.curve.level[k]);
-            ch.sigma.push_back(std::sqrt(s.curve.variance[k]));
-            ch.samples.push_back((long long)s.curve.blocks[k] * npx);
-            ch.sigma_error.push_back(s.curve.error[k]);
-            ch.plate_samples.push_back((long long)seen[s.curve.bin[k]] * npx);
+        for (size_t k = 0; k < s.response.level.size(); ++k) {
+            ch.level.push_back(s.response.level[k]);
+            ch.sigma.push_back(std::sqrt(s.response.variance[k]));
+            ch.samples.push_back((long long)s.response.blocks[k] * npx);
+            ch.sigma_error.push_back(s.response.error[k]);
+            ch.plate_samples.push_back((long long)seen[s.response.bin[k]] * npx);
         }
         // The levels seen but not estimated: too few candidates, or dropped as content.
         std::vector<SparseLevel> sparse;
         for (int k = 0; k < nbins; ++k)
-            if (seen[k] > 0 && std::find(s.curve.bin.begin(), s.curve.bin.end(), k) == s.curve.bin.end())
+            if (seen[k] > 0 && std::find(s.response.bin.begin(), s.response.bin.end(), k) == s.response.bin.end())
                 sparse.push_back(
                     {ch.name, all_level[k] / seen[k], (long long)candidates[k] * npx, (long long)seen[k] * npx});
         // Below this fraction of the signal, what is left is float rounding, not grain.
@@ -862,7 +1064,8 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
         throw GrainAnalysisError(message);
     }
 
-    // Channel correlation at lag 0, pooled over blocks that are grain-only in every channel.
+    // Channel correlation at lag 0, pooled over blocks that are grain-only in every channel, each
+    // normalised by the curve they were selected by.
     profile.channel_correlation.assign((size_t)nch * nch, 0.0);
     std::vector<double> numerator((size_t)nch * nch, 0.0), denominator((size_t)nch * nch, 0.0);
     for (int i = 0; i < nblocks; ++i) {

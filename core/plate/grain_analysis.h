@@ -15,11 +15,18 @@
 //   chi-square test as libaom's noise model makes of block spectra;
 //   the curve and these two selections are iterated until the curve settles.
 // From the kept blocks:
-// - sigma per level: residual sum of squares / (N - tr(P R)), the exact expectation of a
-//   fit residual for grain with autocorrelation R (P projects onto the surface);
+// - a block's variance: residual sum of squares / (N - tr(P R)), the exact expectation of a
+//   fit residual for grain with autocorrelation R (P projects onto the surface); the curve
+//   the blocks are selected by is a low quantile of these per level;
+// - sigma per level (the response reported): from the 5 x 5 patches of the level's blocks,
+//   the mean of the smallest eigenvalues of their covariance whitened by R (picture content
+//   is low-rank among patches, after Liu, Tanaka and Okutomi; which eigenvalues are the
+//   grain's, after Chen, Zhu and Heng), divided by the same statistic of synthetic grain of
+//   that R in as many blocks (its small-sample bias);
 // - the autocorrelation: residual products at each lag, normalised by sigma^2 and
 //   corrected for the fit the same way (a linear solve, the correction being linear in R);
-// - the channel correlation: the pooled correlation of the residuals at lag 0.
+// - the channel correlation: the pooled correlation of the residuals at lag 0, each block's
+//   normalised by the selection curve.
 // Limits: a plate textured alike everywhere cannot be told from coarse grain this way.
 // Several frames pool their blocks.
 #pragma once
