@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <future>
 #include <iomanip>
 #include <limits>
 #include <memory>
@@ -823,10 +824,17 @@ Plan Plan::compile_pixels(const Stock& film, const Stock* paper, const DevelopSe
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev, view_settings(settings)});
         if (one_print_table) {
+            // The table is built on a thread of its own while the paper's grain is folded into
+            // the film's: a print edit's table fills the core the fold leaves idle (its halves of
+            // the grey levels take unequal times, and it has serial steps). Neither reads what
+            // the other writes; the future waits for the table even where the fold throws.
+            std::future<std::shared_ptr<const Table3D>> table = std::async(std::launch::async, [&] {
+                return shared_print_table(film, *paper, *p.print_, tier.print_table_nodes, threads);
+            });
             fold_paper_grain(*film_stages, *paper_stages, *p.print_, p.film_exposure_scale_, tier.curve_table_bits,
                              threads);
             leave_out_paper_grain(*paper_stages, *film_stages, p.skipped_);
-            p.print_table_ = shared_print_table(film, *paper, *p.print_, tier.print_table_nodes, threads);
+            p.print_table_ = table.get();
         }
     } else if (views_film) {
         if (tier.print_table_nodes > 0 && film.is_colour())
