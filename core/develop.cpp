@@ -832,8 +832,10 @@ Plan Plan::compile_pixels(const Stock& film, const Stock* paper, const DevelopSe
             // The table is built on a thread of its own while the paper's grain is folded into
             // the film's: a print edit's table fills the core the fold leaves idle (its halves of
             // the grey levels take unequal times, and it has serial steps). Neither reads what
-            // the other writes; the future waits for the table even where the fold throws.
-            std::future<std::shared_ptr<const Table3D>> table = std::async(std::launch::async, [&] {
+            // the other writes; the future waits for the table even where the fold throws. A
+            // plan compiled on one thread builds it after the fold, on that thread.
+            const auto when = resolve_thread_count(threads) > 1 ? std::launch::async : std::launch::deferred;
+            std::future<std::shared_ptr<const Table3D>> table = std::async(when, [&] {
                 return shared_print_table(film, *paper, *p.print_, tier.print_table_nodes, threads);
             });
             fold_paper_grain(*film_stages, *paper_stages, *p.print_, p.film_exposure_scale_, tier.curve_table_bits,
