@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <future>
 #include <iomanip>
 #include <limits>
 #include <memory>
@@ -454,9 +455,13 @@ void append_view_key(std::string& key, const Stock& material) {
 
 // The paper's log10 exposures at every node of a grid of negatives' densities, printed at
 // unit lights (PrintExposure::at_unit_lights): the printer lights and print exposure add
-// log10 of their light to a layer's, so one grid serves every light. x fastest.
+// log10 of their light to a layer's, so one grid serves every light. By rows of nodes along
+// x, as the table reads them: row (j, k)'s three layers one after another.
 struct PaperLogExposures {
-    std::vector<std::array<double, 3>, UnsetAllocator<std::array<double, 3>>> log_h;
+    int nodes = 0;
+    std::vector<double, UnsetAllocator<double>> log_h;
+    // Where row (j, k) starts in log_h: layer l's log exposure at its node i is l * nodes + i on.
+    size_t rows(int j, int k) const { return (size_t(k) * size_t(nodes) + size_t(j)) * 3 * size_t(nodes); }
 };
 
 // log10 of n doubles (simd::log10_lanes, the same on every processor); values that are not
@@ -495,10 +500,11 @@ std::shared_ptr<const PaperLogExposures> paper_log_exposures(const PrintExposure
             for (int s = 0; s < kSpectralSamples; ++s)
                 along_x[size_t(s) * stride + i] = float(transmittance[0][size_t(std::min(i, nodes - 1))][size_t(s)]);
         auto grid = std::make_shared<PaperLogExposures>();
-        grid->log_h.resize(size_t(nodes) * nodes * nodes);  // (unset: each node is written below)
+        grid->nodes = nodes;
+        grid->log_h.resize(3 * size_t(nodes) * nodes * nodes);  // (unset: each node is written below)
         parallel_for(0, nodes, threads, [&](int k_begin, int k_end) {
-            // A row's exposures and their logs, paper layer after layer.
-            std::vector<double> h(3 * size_t(stride), 1.0), log_h(3 * size_t(stride));
+            // A row's exposures, paper layer after layer.
+            std::vector<double> h(3 * size_t(stride), 1.0);
             for (int k = k_begin; k < k_end; ++k)
                 for (int j = 0; j < nodes; ++j) {
                     if (unit.spectral())
@@ -513,10 +519,9 @@ std::shared_ptr<const PaperLogExposures> paper_log_exposures(const PrintExposure
                             unit.expose(d, at);
                             for (int l = 0; l < 3; ++l) h[size_t(l * stride + i)] = at[l];
                         }
-                    log10_row(h.data(), log_h.data(), 3 * stride);  // (-inf for no light)
-                    for (int i = 0; i < nodes; ++i)
-                        for (int l = 0; l < 3; ++l)
-                            grid->log_h[(size_t(k) * nodes + j) * nodes + i][size_t(l)] = log_h[size_t(l * stride + i)];
+                    double* const rows = &grid->log_h[grid->rows(j, k)];
+                    for (int l = 0; l < 3; ++l)  // (-inf for no light)
+                        log10_row(&h[size_t(l) * size_t(stride)], rows + size_t(l) * size_t(nodes), nodes);
                 }
         });
         return std::shared_ptr<const PaperLogExposures>(std::move(grid));
@@ -636,7 +641,7 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
                                        CurveLookup(paper.layers[2].density_curve)};
         // A row of nodes at a time: the paper's densities, then their view in vectors.
         return std::make_shared<const Table3D>(Table3D::by_rows(lo, hi, nodes, threads, [&](int j, int k, double* rgb) {
-            const std::array<double, 3>* log_h = &grid->log_h[(size_t(k) * nodes + size_t(j)) * nodes];
+            const double* log_h = &grid->log_h[grid->rows(j, k)];
             // The rows' scratch, per thread: kept from row to row (nodes^2 rows a table).
             thread_local std::vector<double> at, density, linear;
             thread_local std::vector<float> densities, xyz;
@@ -645,7 +650,8 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
             const float* density_rows[3] = {&densities[0], &densities[size_t(nodes)], &densities[2 * size_t(nodes)]};
             float* xyz_rows[3] = {&xyz[0], &xyz[size_t(nodes)], &xyz[2 * size_t(nodes)]};
             for (int l = 0; l < 3; ++l) {
-                for (int i = 0; i < nodes; ++i) at[size_t(i)] = std::clamp(log_light[l] + log_h[i][size_t(l)], log_min, log_max);
+                for (int i = 0; i < nodes; ++i)
+                    at[size_t(i)] = std::clamp(log_light[l] + log_h[size_t(l) * size_t(nodes) + size_t(i)], log_min, log_max);
                 curves[l].row(at.data(), density.data(), nodes);
                 for (int i = 0; i < nodes; ++i) densities[size_t(l * nodes + i)] = float(density[size_t(i)]);
             }
@@ -823,10 +829,19 @@ Plan Plan::compile_pixels(const Stock& film, const Stock* paper, const DevelopSe
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev, view_settings(settings)});
         if (one_print_table) {
+            // The table is built on a thread of its own while the paper's grain is folded into
+            // the film's: a print edit's table fills the core the fold leaves idle (its halves of
+            // the grey levels take unequal times, and it has serial steps). Neither reads what
+            // the other writes; the future waits for the table even where the fold throws. A
+            // plan compiled on one thread builds it after the fold, on that thread.
+            const auto when = resolve_thread_count(threads) > 1 ? std::launch::async : std::launch::deferred;
+            std::future<std::shared_ptr<const Table3D>> table = std::async(when, [&] {
+                return shared_print_table(film, *paper, *p.print_, tier.print_table_nodes, threads);
+            });
             fold_paper_grain(*film_stages, *paper_stages, *p.print_, p.film_exposure_scale_, tier.curve_table_bits,
                              threads);
             leave_out_paper_grain(*paper_stages, *film_stages, p.skipped_);
-            p.print_table_ = shared_print_table(film, *paper, *p.print_, tier.print_table_nodes, threads);
+            p.print_table_ = table.get();
         }
     } else if (views_film) {
         if (tier.print_table_nodes > 0 && film.is_colour())

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -69,23 +70,6 @@ struct NormalQuadrature {
     std::vector<double> node, weight;
 };
 
-// The x >= 0 that minimises |A x - b| for a 3x3 A, with x_i held at 0 where !free[i]: exact
-// minimisation along one coordinate at a time, projected onto x_i >= 0 (it converges for
-// this convex problem; the sweeps are far more than three unknowns need).
-std::array<double, 3> nonnegative_least_squares(const double (&a)[3][3], const double (&b)[3], const bool (&free)[3]) {
-    std::array<double, 3> x{};
-    for (int sweep = 0; sweep < 300; ++sweep)
-        for (int i = 0; i < 3; ++i) {
-            double column_norm = 0, gradient = 0;  // of |A x - b|^2 / 2 along x_i
-            for (int j = 0; j < 3; ++j) {
-                gradient += a[j][i] * (a[j][0] * x[0] + a[j][1] * x[1] + a[j][2] * x[2] - b[j]);
-                column_norm += a[j][i] * a[j][i];
-            }
-            if (free[i] && column_norm > 0) x[i] = std::max(0.0, x[i] - gradient / column_norm);
-        }
-    return x;
-}
-
 // The x in [lo, hi] where an increasing f reaches `aim` (within `tolerance`), and f there,
 // given f_lo = f(lo); hi and f(hi) where f(hi) < aim. Regula falsi with the Illinois step
 // (Dowell & Jarratt 1971), which keeps the bracket and converges superlinearly: a few
@@ -122,6 +106,38 @@ std::pair<double, double> solve_increasing(const F& f, double lo, double f_lo, d
 constexpr double kMaxFoldedGrainD = 0.5;
 
 }  // namespace
+
+// Minimisation along one coordinate at a time, projected onto x_i >= 0 (it converges for this
+// convex problem; the sweeps are far more than three unknowns need). A sweep's x is a function
+// of the x before it alone, so once x is one it was before, the sweeps repeat themselves from
+// there, and the last sweep's x is known from one period's sweeps: the same bits as sweeping
+// on. In floating point x mostly settles, or alternates among a few values in its last bits,
+// within some 25 sweeps (ill-conditioned equations may change to the last); x is compared with
+// the one marked at each power of two, which finds a period within twice its start and length.
+std::array<double, 3> nonnegative_least_squares(const double (&a)[3][3], const double (&b)[3], const bool (&free)[3]) {
+    constexpr int kSweeps = 300;
+    auto sweep = [&](std::array<double, 3>& x) {
+        for (int i = 0; i < 3; ++i) {
+            double column_norm = 0, gradient = 0;  // of |A x - b|^2 / 2 along x_i
+            for (int j = 0; j < 3; ++j) {
+                gradient += a[j][i] * (a[j][0] * x[0] + a[j][1] * x[1] + a[j][2] * x[2] - b[j]);
+                column_norm += a[j][i] * a[j][i];
+            }
+            if (free[i] && column_norm > 0) x[i] = std::max(0.0, x[i] - gradient / column_norm);
+        }
+    };
+    std::array<double, 3> x{}, marked = x;
+    int marked_sweep = 0;
+    for (int n = 1; n <= kSweeps; ++n) {
+        sweep(x);
+        if (std::memcmp(&x, &marked, sizeof x) == 0) {  // (bits: x repeats exactly)
+            for (int rest = (kSweeps - n) % (n - marked_sweep); rest > 0; --rest) sweep(x);
+            return x;
+        }
+        if ((n & (n - 1)) == 0) marked = x, marked_sweep = n;
+    }
+    return x;
+}
 
 void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
                       double exposure_scale, int curve_table_bits, int threads) {

@@ -3,6 +3,7 @@
 // own grain and halation are left out of the plan. Part of the plan's internals.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,10 @@ namespace darkroom {
 // tabulates curves (`curve_table_bits`) and the film has three layers.
 void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
                       double exposure_scale, int curve_table_bits, int threads);
+
+// The x >= 0 that minimises |A x - b| for a 3x3 A, with x_i held at 0 where !free[i]: 300
+// sweeps of coordinate descent (the fold's equations at each grey level).
+std::array<double, 3> nonnegative_least_squares(const double (&a)[3][3], const double (&b)[3], const bool (&free)[3]);
 
 // Leaves the paper's grain, halation and curve tables out of a plan that prints through one
 // table, saying so in `skipped`.

@@ -322,10 +322,14 @@ void LogAxisTable::apply_row_with_noise(const float* in, const float* noise, flo
 
 namespace {
 
+// Zero (either sign) is its own cube root, taken in the vectors: a print table's colours
+// compressed to the gamut's faces have many zero channels, which std::cbrt a value at a time
+// took as long as the vectors' roots.
 struct CubeRoot {
     template <typename D, typename L>
     __attribute__((always_inline)) static void apply(const D& v, D& root) {
         cube_root_lanes<D, L>(v, root);
+        root = v == 0.0 ? v : root;
     }
 };
 
@@ -334,7 +338,8 @@ struct CubeRoot {
 void cube_root_row(const double* in, double* out, int n) {
     simd::map_doubles<CubeRoot>(in, out, n);
     for (int i = 0; i < n; ++i)
-        if (!(in[i] >= std::numeric_limits<double>::min() && in[i] <= std::numeric_limits<double>::max()))
+        if (!(in[i] >= std::numeric_limits<double>::min() && in[i] <= std::numeric_limits<double>::max()) &&
+            in[i] != 0.0)
             out[i] = std::cbrt(in[i]);
 }
 

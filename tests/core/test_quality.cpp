@@ -14,6 +14,7 @@
 
 #include "core/demo_scene.h"
 #include "core/develop.h"
+#include "core/print_grain_fold.h"
 #include "core/simd.h"
 #include "core/spectral.h"
 #include "core/stages/halation.h"
@@ -485,6 +486,54 @@ TEST_CASE("the fast tiers' print has the grain of both film and paper, the paper
             CHECK(film_alone < 0.97 * folded[1]);  // the paper's grain is worth folding in
         }
     }
+}
+
+TEST_CASE("the print grain fold's least squares give 300 sweeps' bits, its sweeps settled, cycling or not",
+          "[quality][print][grain]") {
+    // The definition: 300 sweeps of coordinate descent, projected onto x >= 0. The function
+    // stops where x repeats an earlier sweep's; equations from well- to ill-conditioned (rows
+    // nearly proportional, as the fold's channels through a near-neutral print) give all three
+    // kinds of ending: x settled, x alternating among values, and x still changing at 300.
+    auto sweeps = [](const double (&a)[3][3], const double (&b)[3], const bool (&free)[3], int count) {
+        std::array<double, 3> x{};
+        for (int sweep = 0; sweep < count; ++sweep)
+            for (int i = 0; i < 3; ++i) {
+                double column_norm = 0, gradient = 0;
+                for (int j = 0; j < 3; ++j) {
+                    gradient += a[j][i] * (a[j][0] * x[0] + a[j][1] * x[1] + a[j][2] * x[2] - b[j]);
+                    column_norm += a[j][i] * a[j][i];
+                }
+                if (free[i] && column_norm > 0) x[i] = std::max(0.0, x[i] - gradient / column_norm);
+            }
+        return x;
+    };
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    int differing = 0, settled = 0, alternating = 0, changing = 0;
+    for (int n = 0; n < 3000; ++n) {
+        const double closeness = std::pow(10.0, -6 * u(rng));  // how far the rows are from proportional
+        double a[3][3], b[3];
+        bool free[3];
+        for (int j = 0; j < 3; ++j) {
+            for (int i = 0; i < 3; ++i) a[j][i] = j == 0 ? u(rng) : a[0][i] * (1 + closeness * (u(rng) - 0.5));
+            b[j] = u(rng) - 0.2;
+            free[j] = u(rng) > 0.1;
+        }
+        const std::array<double, 3> x = nonnegative_least_squares(a, b, free), expected = sweeps(a, b, free, 300);
+        differing += std::memcmp(&x, &expected, sizeof x) != 0;
+        const std::array<double, 3> before = sweeps(a, b, free, 299), two_before = sweeps(a, b, free, 298);
+        if (before == expected)
+            ++settled;
+        else if (two_before == expected)
+            ++alternating;
+        else
+            ++changing;
+    }
+    INFO("settled " << settled << ", alternating " << alternating << ", changing at 300 " << changing);
+    CHECK(differing == 0);
+    CHECK(settled > 100);
+    CHECK(alternating > 100);
+    CHECK(changing > 100);
 }
 
 TEST_CASE("the fast tier's print table is fine enough for the print's grain on a photographic paper",
