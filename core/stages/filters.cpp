@@ -321,7 +321,7 @@ SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters
     // Asked for row y', the stream writes output rows to y' + rows_together - 1, and input rows
     // to R past them (an identity's output rows are its input rows).
     output_slots_ = std::max(rows_together_, rows_kept + rows_together_ - 1);
-    padded_slots_ = std::max(slots_, output_slots_ + radius_);
+    identity_slots_ = std::max(slots_, output_slots_ + radius_);
     // Rows are a cache line more than the width apart: at widths of a power of two, rows
     // exactly 2^k bytes apart share the L1 cache's sets and would evict each other.
     stride_ = size_t(width) + 16;
@@ -335,7 +335,7 @@ SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters
         vertical_.push_back(std::move(vertical));
         centre_.push_back({f.centre});
         ring_.emplace_back(f.terms.size() * slots_ * stride_);
-        padded_.emplace_back((keeps_input_rows(f) ? padded_slots_ : 1) * padded_stride_);
+        padded_.emplace_back(size_t(padded_slots(f)) * padded_stride_);
         output_.emplace_back(size_t(output_slots_) * stride_);
         for (int o = 0; o < rows_together_; ++o) out_rows_[o].push_back(nullptr);
     }
@@ -347,12 +347,18 @@ SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters
 // in a ring as its terms' rows are kept; the others' input rows are read once, as they arrive.
 bool SeparableStream::keeps_input_rows(const SeparableFilter& f) { return f.centre != 0 || f.terms.empty(); }
 
+// The input rows a plane keeps: the identity's are its output rows, kept as long as those.
+int SeparableStream::padded_slots(const SeparableFilter& f) const {
+    return f.is_identity() ? identity_slots_ : keeps_input_rows(f) ? slots_ : 1;
+}
+
 float* SeparableStream::ring_row(size_t plane, int term, int y) {
     return &ring_[plane][(size_t(term) * slots_ + ((y % slots_) + slots_) % slots_) * stride_];
 }
 
 float* SeparableStream::padded_row(size_t plane, int y) {
-    const size_t slot = keeps_input_rows(filters_[plane]) ? size_t(((y % padded_slots_) + padded_slots_) % padded_slots_) : 0;
+    const int slots = padded_slots(filters_[plane]);
+    const size_t slot = size_t(((y % slots) + slots) % slots);
     return &padded_[plane][slot * padded_stride_];
 }
 
@@ -375,7 +381,7 @@ float* const* SeparableStream::row(int y) {
     }
     for (size_t p = 0; p < filters_.size(); ++p) {
         const SeparableFilter& f = filters_[p];
-        if (f.is_identity()) {  // (its input rows outlive the group: the ring holds padded_slots_)
+        if (f.is_identity()) {  // (its input rows outlive the group: the ring holds identity_slots_)
             for (int o = 0; o < rows; ++o) out_rows_[o][p] = padded_row(p, y + o) + radius_;
             continue;
         }

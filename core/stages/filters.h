@@ -90,10 +90,11 @@ public:
 
 private:
     static bool keeps_input_rows(const SeparableFilter& f);
+    int padded_slots(const SeparableFilter& f) const;
     float* ring_row(size_t plane, int term, int y);
     float* padded_row(size_t plane, int y);
     int width_, radius_, row_begin_, row_end_, rows_end_, rows_together_, slots_;
-    int output_slots_, padded_slots_;  // the rings of output rows and of kept input rows
+    int output_slots_, identity_slots_;  // the rings of output rows and of an identity's input rows
     size_t stride_, padded_stride_;
     std::vector<SeparableFilter> filters_;
     std::vector<std::vector<std::vector<float>>> vertical_;  // per plane and term, the sign folded in
@@ -101,8 +102,8 @@ private:
     // Per plane: terms x slots rows, each written before it is read (so left unset, from
     // recycled memory: core/image.h).
     std::vector<std::vector<float, UnsetAllocator<float>>> ring_;
-    // Per plane, the input rows as the source writes them (width + 2R): the last padded_slots_
-    // of them where the plane keeps them (keeps_input_rows), else one.
+    // Per plane, the input rows as the source writes them (width + 2R): the last
+    // padded_slots() of them.
     std::vector<std::vector<float>> padded_;
     std::vector<float*> padded_rows_;
     std::vector<const float*> column_;

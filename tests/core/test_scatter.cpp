@@ -409,14 +409,20 @@ TEST_CASE("separable_approximation: a kernel's singular-value terms, largest fir
     for (int i = 0; i < side * side; ++i) CHECK(outer_back[i] == Approx(outer[i]).epsilon(1e-5));
 }
 
+// Three planes of width x height uniform random values.
+static std::vector<std::vector<float>> random_planes(int width, int height, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0, 1);
+    std::vector<std::vector<float>> planes(3, std::vector<float>(size_t(width) * height));
+    for (auto& plane : planes)
+        for (float& v : plane) v = u(rng);
+    return planes;
+}
+
 TEST_CASE("a separable stream gives the same rows however many it sums at once, wherever it starts and stops",
           "[scatter][filters]") {
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<float> u(0, 1);
     const int width = 37, height = 29;
-    std::vector<std::vector<float>> image(3, std::vector<float>(size_t(width) * height));
-    for (auto& plane : image)
-        for (float& v : plane) v = u(rng);
+    const std::vector<std::vector<float>> image = random_planes(width, height, 11);
     // Three planes: two 7-tap terms (symmetric, and not) with a centre; a 3-tap term; the identity.
     const std::vector<float> three = {0.25f, 0.5f, 0.25f};
     const std::vector<SeparableFilter> filters = {
@@ -460,12 +466,8 @@ TEST_CASE("a separable stream gives the same rows however many it sums at once, 
 }
 
 TEST_CASE("a separable stream's rows stay as given for as many rows as it keeps", "[scatter][filters]") {
-    std::mt19937 rng(12);
-    std::uniform_real_distribution<float> u(0, 1);
     const int width = 23, height = 31;
-    std::vector<std::vector<float>> image(3, std::vector<float>(size_t(width) * height));
-    for (auto& plane : image)
-        for (float& v : plane) v = u(rng);
+    const std::vector<std::vector<float>> image = random_planes(width, height, 12);
     // A 5-tap term with a centre, a 3-tap term, the identity (whose rows are its input rows).
     const std::vector<SeparableFilter> filters = {
         SeparableFilter{{{0.1f, 0.2f, 0.4f, 0.2f, 0.1f}}, {1.0f}, 0.5f},
