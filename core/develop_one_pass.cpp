@@ -110,13 +110,9 @@ public:
     CouplerStream(const CouplerStage& c, const Window& film, const Window& scattered, const Window& frame, int rows_end,
                   ScatteredRow scattered_row)
         : c_(c), offset_(film.x0 - scattered.x0), width_(film.width()), stride_(scattered.width()) {
-        if (c.spread.decimation > 1) {
+        if (c.spread.decimation > 1) {  // (the scatter's rows lent: it keeps c.rows_kept() of them)
             coarse_ = std::make_unique<CoarseCouplerStream>(
-                c, film, frame, [scattered, scattered_row](int y, int x_begin, int x_end, float* const* rows) {
-                    float* const* in = scattered_row(y);
-                    for (size_t l = 0; l < 3; ++l)
-                        std::copy(in[l] + (x_begin - scattered.x0), in[l] + (x_end - scattered.x0), rows[l]);
-                });
+                c, film, frame, CoarseGaussianStream::LentRows{std::move(scattered_row), scattered.x0});
             return;
         }
         slots_ = 2 * c.radius() + 2 * SeparableStream::kMaxRowsTogether + 2;
@@ -221,6 +217,8 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
                     exposure.row(y, x_begin, x_end - x_begin, rows);
                     clock.mark("expose");
                 });
+        // (With the couplers on their coarse grid, each row kept as long as they read it.)
+        const int scattered_rows_kept = film.couplers ? film.couplers->rows_kept() : 0;
         SeparableStream film_scatter(scattered.width(), film_scatter_filters.filters, frame_.y0, frame_.y1,
                                      scattered_rows.y1, [&](int y, float* const* padded) {
             clock.mark(film_scatter_filters.stage);  // (the filtering of the rows read before)
@@ -234,7 +232,7 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
                 clock.mark("expose");
             }
             for (size_t l = 0; l < layers; ++l) hold_frame_edges(padded[l], padded_x0, padded_x1, frame_);
-        });
+        }, SeparableStream::kMaxRowsTogether, scattered_rows_kept);
         std::unique_ptr<CouplerStream> couplers;
         if (film.couplers)
             couplers = std::make_unique<CouplerStream>(*film.couplers, film_window, scattered, frame_, film_rows.y1,

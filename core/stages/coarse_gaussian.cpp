@@ -126,27 +126,44 @@ __attribute__((always_inline)) inline void put_interleaved(float* out, const V& 
     put<multiply>(out + lanes, V(__builtin_shufflevector(a, b, interleaved(int(J) + lanes, lanes)...)));
 }
 
-// out[2k + m] = (or *=) coarse[k] + t[m] (coarse[k + 1] - coarse[k]), m = 0, 1, k < blocks: two
+// The coarse row's value at column k: coarse[k], or (between rows) above[k] + t (below[k] - above[k]),
+// the row interpolated along y on the way (fused with its use, so no row of it is stored).
+struct CoarseRow {
+    const float* above;
+    const float* below;  // null: above is the row itself
+    float t;
+    template <typename V>
+    __attribute__((always_inline)) V at(int k) const {
+        V lo;
+        simd::load(lo, above + k);
+        if (!below) return lo;
+        V hi;
+        simd::load(hi, below + k);
+        return lo + t * (hi - lo);
+    }
+    CoarseRow from(int block) const { return {above + block, below ? below + block : nullptr, t}; }
+};
+
+// out[2k + m] = (or *=) c[k] + t[m] (c[k + 1] - c[k]), m = 0, 1, k < blocks, c the coarse row: two
 // fine columns per block, interpolated along x.
 template <bool multiply>
 struct InterpolatePairs {
     template <int lanes>
-    __attribute__((always_inline)) static void run(const float* coarse, float t0, float t1, int blocks, float* out) {
+    __attribute__((always_inline)) static void run(CoarseRow coarse, float t0, float t1, int blocks, float* out) {
         using V = typename simd::Lanes<lanes>::F;
         int k = 0;
         if constexpr (lanes > 1)
             for (; k + lanes <= blocks; k += lanes) {
                 // (multiplying: a ring row read back, from memory)
                 if constexpr (multiply) simd::prefetch_ahead(out + 2 * k, 2 * lanes * int(sizeof(float)));
-                V b0, b1;
-                simd::load(b0, coarse + k), simd::load(b1, coarse + k + 1);
+                const V b0 = coarse.at<V>(k), b1 = coarse.at<V>(k + 1);
                 const V step = b1 - b0;
                 put_interleaved<multiply>(out + 2 * k, b0 + t0 * step, b0 + t1 * step, std::make_index_sequence<lanes>());
             }
         for (; k < blocks; ++k) {
-            const float step = coarse[k + 1] - coarse[k];
-            put<multiply>(out + 2 * k, simd::Float1{coarse[k] + t0 * step});
-            put<multiply>(out + 2 * k + 1, simd::Float1{coarse[k] + t1 * step});
+            const simd::Float1 b0 = coarse.at<simd::Float1>(k), step = coarse.at<simd::Float1>(k + 1) - b0;
+            put<multiply>(out + 2 * k, simd::Float1{b0 + t0 * step});
+            put<multiply>(out + 2 * k + 1, simd::Float1{b0 + t1 * step});
         }
     }
 };
@@ -201,18 +218,21 @@ CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation) {
 }
 
 CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<float>*>& coarse_taps, int decimation,
-                                           const Window& out, const Window& frame, Source source,
+                                           const Window& out, const Window& frame, Input input,
                                            CoarseMap means_map, CoarseMap blurred_map,
                                            std::vector<float> geometric_floors)
     : out_(out),
       frame_(frame),
-      source_(std::move(source)),
       means_map_(std::move(means_map)),
       blurred_map_(std::move(blurred_map)),
       geometric_floors_(std::move(geometric_floors)),
       planes_(coarse_taps.size()),
       d_(decimation) {
     if (d_ < 2) throw std::invalid_argument("coarse Gaussian: a decimation below 2");
+    if (Source* source = std::get_if<Source>(&input))
+        source_ = std::move(*source);
+    else
+        lent_ = std::move(std::get<LentRows>(input));
     int r = 0;  // the largest coarse Gaussian's radius
     for (size_t p = 0; p < coarse_taps.size(); ++p)
         if (coarse_taps[p]) {
@@ -253,10 +273,7 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
         plane.column_sums.resize(size_t(means_window_.width()) * d_);
         for (auto& row : plane.coarse) row.resize(size_t(blurred_window_.width()));
     }
-    // Every plane's coarse rows from one stream, so that each fine row is read once for all;
-    // two coarse rows summed at once (more would read further ahead, for a ring of fine rows
-    // the deeper, and the coarse rows cost little).
-    constexpr int kCoarseRowsTogether = 2;
+    // Every plane's coarse rows from one stream, so that each fine row is read once for all.
     blur_ = std::make_unique<SeparableStream>(
         blurred_window_.width(), std::move(filters), means_window_.y0, means_window_.y1, blurred_window_.y1,
         [this](int by, float* const* means) { block_means(by, means); }, kCoarseRowsTogether);
@@ -264,10 +281,14 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
     // with it) reads block rows to j + kCoarseRowsTogether + r, the last of them ending at fine
     // row y + (kCoarseRowsTogether + r + 1) d - 1: the ring holds row y to that one (ring_row
     // refuses a row that has left it).
-    slots_ = d_ * (r + kCoarseRowsTogether + 1);
-    ring_.resize(planes_.size());
-    for (auto& ring : ring_) ring.resize(size_t(slots_) * size_t(read_x1_ - read_x0_));
-    ring_rows_.resize(planes_.size());
+    slots_ = rows_kept(r, d_);
+    if (lent_.row) {
+        ring_rows_.resize(size_t(slots_) * planes_.size());
+    } else {
+        ring_.resize(planes_.size());
+        for (auto& ring : ring_) ring.resize(size_t(slots_) * size_t(read_x1_ - read_x0_));
+        ring_rows_.resize(planes_.size());
+    }
     row_.read.resize(planes_.size());
     row_.above.assign(planes_.size(), nullptr);
     row_.below.assign(planes_.size(), nullptr);
@@ -275,16 +296,25 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
 
 float* CoarseGaussianStream::ring_row(size_t plane, int y) {
     if (y < next_ - slots_ || y >= next_) throw std::logic_error("coarse Gaussian: a row outside the stream's ring");
-    return &ring_[plane][size_t(((y % slots_) + slots_) % slots_) * size_t(read_x1_ - read_x0_)];
+    const size_t slot = size_t(((y % slots_) + slots_) % slots_);
+    if (lent_.row) return ring_rows_[slot * planes_.size() + plane];
+    return &ring_[plane][slot * size_t(read_x1_ - read_x0_)];
 }
 
-// Reads fine rows up to y (within the frame) into the ring.
+// Reads fine rows up to y (within the frame) into the ring (or keeps the lent rows' places).
 void CoarseGaussianStream::read_to(int y) {
     if (!started_) {
         next_ = std::clamp(y, frame_.y0, frame_.y1 - 1);
         started_ = true;
     }
     for (; next_ <= y; ++next_) {
+        if (lent_.row) {
+            float* const* rows = lent_.row(next_);
+            const size_t slot = size_t(((next_ % slots_) + slots_) % slots_);
+            for (size_t p = 0; p < planes_.size(); ++p)
+                ring_rows_[slot * planes_.size() + p] = rows[p] + (read_x0_ - lent_.x0);
+            continue;
+        }
         for (size_t p = 0; p < planes_.size(); ++p)
             ring_rows_[p] = &ring_[p][size_t(((next_ % slots_) + slots_) % slots_) * size_t(read_x1_ - read_x0_)];
         source_(next_, read_x0_, read_x1_, ring_rows_.data());
@@ -349,28 +379,32 @@ void CoarseGaussianStream::interpolate(int j) {
     for (size_t b = 0; b < blurred_.size(); ++b) {
         std::vector<float>& row = planes_[blurred_[b]].across[j & 1];
         row.resize(size_t(out_.width()));  // (only row() asks for them)
-        along_x<false>(planes_[blurred_[b]].coarse[j & 1].data(), row.data());
+        along_x<false>(planes_[blurred_[b]].coarse[j & 1].data(), nullptr, 0.0f, row.data());
     }
     across_row_[j & 1] = j;
 }
 
-void CoarseGaussianStream::multiply_by_interpolated(const float* coarse, float* fine) const {
-    along_x<true>(coarse, fine);
+void CoarseGaussianStream::multiply_by_interpolated(const float* above, const float* below, float t,
+                                                    float* fine) const {
+    along_x<true>(above, below, t, fine);
 }
 
 // A run's two coarse values once, then a loop without indirection (which vectorises); with
 // d = 2, the whole runs (two columns each) in vectors.
 template <bool multiply>
-void CoarseGaussianStream::along_x(const float* coarse, float* out) const {
+void CoarseGaussianStream::along_x(const float* above, const float* below, float t, float* out) const {
+    const CoarseRow coarse{above, below, t};
     if (pair_runs_[1] > pair_runs_[0]) {
         const ColumnRun& run = column_runs_[pair_runs_[0]];
-        simd::dispatch<InterpolatePairs<multiply>>(coarse + run.block, tx_[size_t(run.begin)], tx_[size_t(run.begin) + 1],
-                                             int(pair_runs_[1] - pair_runs_[0]), out + run.begin);
+        simd::dispatch<InterpolatePairs<multiply>>(coarse.from(run.block), tx_[size_t(run.begin)],
+                                                   tx_[size_t(run.begin) + 1], int(pair_runs_[1] - pair_runs_[0]),
+                                                   out + run.begin);
     }
     auto runs = [&](size_t first, size_t last) {
         for (size_t r = first; r < last; ++r) {
             const ColumnRun& run = column_runs_[r];
-            const float b0 = coarse[run.block], step = coarse[run.block + 1] - b0;
+            const simd::Float1 b0 = coarse.at<simd::Float1>(run.block),
+                               step = coarse.at<simd::Float1>(run.block + 1) - b0;
             for (int i = run.begin; i < run.end; ++i) put<multiply>(out + i, simd::Float1{b0 + tx_[size_t(i)] * step});
         }
     };

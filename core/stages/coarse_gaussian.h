@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <variant>
 #include <vector>
 
 #include "core/image.h"
@@ -35,6 +36,20 @@ CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation);
 class CoarseGaussianStream {
 public:
     using Source = std::function<void(int y, int x_begin, int x_end, float* const* rows)>;
+    // Or the planes' rows lent, not copied: row(y) gives each plane's row y (from column x0),
+    // asked for as a Source is; each must stay as given until the stream asks for the row
+    // rows_kept() past it (SeparableStream's rows_kept), and out's columns of it are the
+    // caller's to change (row()'s `read`).
+    struct LentRows {
+        std::function<float* const*(int y)> row;
+        int x0 = 0;
+    };
+    using Input = std::variant<Source, LentRows>;
+    // How far ahead of a row the stream reads, with coarse Gaussians up to coarse_radius: the
+    // ring of fine rows it keeps.
+    static int rows_kept(int coarse_radius, int decimation) {
+        return decimation * (coarse_radius + kCoarseRowsTogether + 1);
+    }
     // A map of the blurred planes' coarse rows in place, each plane's row at rows[i] (in the
     // order of the blurred planes).
     using CoarseMap = std::function<void(float* const* rows, int width)>;
@@ -46,7 +61,7 @@ public:
     // coarse_gaussian.cpp) in place of their means, its values below the floor (> 0) counted
     // as the floor.
     CoarseGaussianStream(const std::vector<const std::vector<float>*>& coarse_taps, int decimation, const Window& out,
-                         const Window& frame, Source source, CoarseMap means_map = {}, CoarseMap blurred_map = {},
+                         const Window& frame, Input input, CoarseMap means_map = {}, CoarseMap blurred_map = {},
                          std::vector<float> geometric_floors = {});
     CoarseGaussianStream(const CoarseGaussianStream&) = delete;  // (its coarse streams hold `this`)
     CoarseGaussianStream& operator=(const CoarseGaussianStream&) = delete;
@@ -61,15 +76,18 @@ public:
     };
     const Row& row(int y);
     // Row y of out as row() gives it, with each blurred plane's Gaussian left on the coarse
-    // grid: above and below are its coarse rows either side (on the blurred window's columns,
-    // coarse_width() of them), for the caller to interpolate along y on those fewer values
-    // and then along x, fused with its use of them (multiply_by_interpolated).
+    // grid: above and below are its coarse rows either side (on the blurred window's columns),
+    // for the caller to interpolate along y and then along x, fused with its use of them
+    // (multiply_by_interpolated).
     const Row& coarse_row(int y);
-    int coarse_width() const { return blurred_window_.width(); }
-    // fine[i] *= the coarse row interpolated along x to out's column i (i < out's width).
-    void multiply_by_interpolated(const float* coarse, float* fine) const;
+    // fine[i] *= the coarse rows either side interpolated along y (above + t (below - above),
+    // as they are read) and then along x to out's column i (i < out's width).
+    void multiply_by_interpolated(const float* above, const float* below, float t, float* fine) const;
 
 private:
+    // Two coarse rows summed at once (more would read further ahead, for a ring of fine rows
+    // the deeper, and the coarse rows cost little).
+    static constexpr int kCoarseRowsTogether = 2;
     struct PlaneRows {
         std::vector<float> column_sums;  // none: the plane passes through
         std::vector<float> coarse[2];    // blurred coarse rows j (by j's parity)
@@ -80,13 +98,15 @@ private:
     void block_means(int by, float* const* means);
     void keep_coarse(int j);
     void interpolate(int j);
-    // Each of out's columns gets (or, multiply, is multiplied by) the coarse row interpolated along x.
+    // Each of out's columns gets (or, multiply, is multiplied by) the coarse row interpolated
+    // along x: `above`, or (below given) above + t (below - above).
     template <bool multiply>
-    void along_x(const float* coarse, float* out) const;
+    void along_x(const float* above, const float* below, float t, float* out) const;
     const Row& read_row(int y, bool across);
 
     Window out_, frame_;
-    Source source_;
+    Source source_;  // or:
+    LentRows lent_;
     CoarseMap means_map_, blurred_map_;
     std::vector<float> geometric_floors_;
     std::vector<PlaneRows> planes_;
@@ -107,7 +127,7 @@ private:
     int coarse_row_[2] = {INT32_MIN, INT32_MIN}, across_row_[2] = {INT32_MIN, INT32_MIN};
     int read_x0_ = 0, read_x1_ = 0, slots_ = 0;
     std::vector<std::vector<float, UnsetAllocator<float>>> ring_;  // per plane, the fine rows read (unset till then)
-    std::vector<float*> ring_rows_;
+    std::vector<float*> ring_rows_;  // the planes' rows of the row being read, or (lent) of each slot
     int next_ = 0;  // the next fine row to read
     bool started_ = false;
     Row row_;

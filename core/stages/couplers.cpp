@@ -78,6 +78,10 @@ CouplerStage design_couplers(const Stock& stock, double amount, double spread, d
     return c;
 }
 
+int CouplerStage::rows_kept() const {
+    return spread.decimation > 1 ? CoarseGaussianStream::rows_kept(int(spread.taps.size() / 2), spread.decimation) : 0;
+}
+
 void coupler_donor_row(const CouplerStage& c, size_t layer, const float* exposure, float* net_density, int width) {
     if (!c.sheet_tables.empty()) {
         c.sheet_tables[layer].apply_row(exposure, net_density, width);
@@ -139,17 +143,6 @@ __attribute__((always_inline)) inline void inhibit_by_rows(float* const* e, cons
     scale_by_powers_of_two<V>(e, a, x);
 }
 
-// The factors between two coarse rows of them, interpolated along y: f_i[x] = above + t (below - above).
-template <typename V>
-__attribute__((always_inline)) inline void between_rows(const float* const* above, const float* const* below, float t,
-                                                        float* const* f, int x) {
-    for (int i = 0; i < 3; ++i) {
-        V lo, hi;
-        simd::load(lo, above[i] + x), simd::load(hi, below[i] + x);
-        simd::store(f[i] + x, lo + t * (hi - lo));
-    }
-}
-
 // The exponents in place of the net densities.
 template <typename V>
 __attribute__((always_inline)) inline void exponent_lanes(float* const* n, const float* m, int x) {
@@ -174,16 +167,6 @@ struct InhibitRows {
         int x = 0;
         for (; x + lanes <= width; x += lanes) inhibit_by_rows<typename simd::Lanes<lanes>::F>(e, spread, m, x);
         for (; x < width; ++x) inhibit_by_rows<simd::Float1>(e, spread, m, x);
-    }
-};
-
-struct BetweenRows {
-    template <int lanes>
-    __attribute__((always_inline)) static void run(const float* const* above, const float* const* below, float t,
-                                                   float* const* f, int width) {
-        int x = 0;
-        for (; x + lanes <= width; x += lanes) between_rows<typename simd::Lanes<lanes>::F>(above, below, t, f, x);
-        for (; x < width; ++x) between_rows<simd::Float1>(above, below, t, f, x);
     }
 };
 
@@ -231,10 +214,10 @@ void inhibit_rows(const CouplerStage& c, float* const* exposure, const float* co
 }
 
 CoarseCouplerStream::CoarseCouplerStream(const CouplerStage& c, const Window& out, const Window& frame,
-                                         CoarseGaussianStream::Source source)
+                                         CoarseGaussianStream::Input input)
     : c_(c),
       m_(log2_inhibition(c)),
-      stream_({&c.spread.taps, &c.spread.taps, &c.spread.taps}, c.spread.decimation, out, frame, std::move(source),
+      stream_({&c.spread.taps, &c.spread.taps, &c.spread.taps}, c.spread.decimation, out, frame, std::move(input),
               // The donors from each block's geometric mean exposure (its mean log exposure,
               // which the curves take), and their exponents of 2 (the matrix is linear, so it
               // goes before the Gaussian, on the coarse grid).
@@ -244,17 +227,13 @@ CoarseCouplerStream::CoarseCouplerStream(const CouplerStage& c, const Window& ou
               },
               // The blurred exponents' powers of 2: the pixels then interpolate the factors.
               [](float* const* exponents, int width) { simd::dispatch<PowersOfTwo>(exponents, width); },
-              donor_floors(c)),
-      factor_rows_(3, std::vector<float>(size_t(stream_.coarse_width()))) {
-    for (size_t l = 0; l < 3; ++l) factors_[l] = factor_rows_[l].data();
-}
+              donor_floors(c)) {}
 
 float* const* CoarseCouplerStream::row(int y) {
-    // The factors along y on the coarse grid (fewer values), then along x as they multiply.
+    // The factors along y, then along x, as they multiply.
     const CoarseGaussianStream::Row& r = stream_.coarse_row(y);
-    simd::dispatch<BetweenRows>(r.above.data(), r.below.data(), r.t, factors_.data(), stream_.coarse_width());
     for (size_t l = 0; l < 3; ++l) {
-        stream_.multiply_by_interpolated(factors_[l], r.read[l]);
+        stream_.multiply_by_interpolated(r.above[l], r.below[l], r.t, r.read[l]);
         out_[l] = r.read[l];
     }
     return out_;

@@ -39,6 +39,9 @@ struct CouplerStage {
     std::array<double, 3> d_min{};
     std::vector<LogAxisTable> sheet_tables;  // S_j - Dmin_j tabulated, in the tiers that tabulate curves
     int radius() const { return spread.radius_px; }
+    // On the coarse grid, how long CoarseCouplerStream reads each exposure row it is given
+    // (CoarseGaussianStream::rows_kept; 0 without the grid).
+    int rows_kept() const;
 };
 
 // The stage for a stock's couplers times `amount`, its Gaussian of diffusion_um x `spread` on
@@ -54,8 +57,8 @@ void coupler_donor_row(const CouplerStage& c, size_t layer, const float* exposur
 void inhibit_rows(const CouplerStage& c, float* const* exposure, const float* const* spread_net_density, int width);
 
 // The couplers with their spread on the coarse grid (spread.decimation > 1), streamed down the
-// rows of `out` for one thread: the layers' exposure rows from source(y, x_begin, x_end, rows)
-// (as CoarseGaussianStream reads them: within the frame, each once, in order); on the coarse
+// rows of `out` for one thread: the layers' exposure rows from `input` (copied or lent, as
+// CoarseGaussianStream reads them: within the frame, each once, in order); on the coarse
 // grid, each block's mean exposure through the donors' curves, the matrix (each layer's
 // exponent of 2), the Gaussian and 2^; and row(y) each layer's exposure times its factor
 // interpolated from the coarse nodes, on out's columns (the stream's rows: the caller's to
@@ -64,15 +67,13 @@ void inhibit_rows(const CouplerStage& c, float* const* exposure, const float* co
 class CoarseCouplerStream {
 public:
     CoarseCouplerStream(const CouplerStage& c, const Window& out, const Window& frame,
-                        CoarseGaussianStream::Source source);
+                        CoarseGaussianStream::Input input);
     float* const* row(int y);
 
 private:
     const CouplerStage& c_;
     std::array<float, 9> m_;  // the matrix times -log2 10
     CoarseGaussianStream stream_;  // the three layers' exposures, their inhibition's factors blurred
-    std::vector<std::vector<float>> factor_rows_;  // each layer's factors on a fine row's coarse columns
-    std::array<float*, 3> factors_;
     float* out_[3];
 };
 

@@ -311,13 +311,17 @@ SeparableFilter separable_approximation(const std::vector<double>& taps, int r, 
 }
 
 SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters, int row_begin, int row_end,
-                                 int rows_end, Source source, int rows_together)
+                                 int rows_end, Source source, int rows_together, int rows_kept)
     : width_(width), radius_(0), row_begin_(row_begin), row_end_(row_end), rows_end_(rows_end),
       rows_together_(rows_together), filters_(std::move(filters)), source_(std::move(source)) {
     if (rows_together < 1 || rows_together > kMaxRowsTogether)
         throw std::invalid_argument("separable stream: 1 to 4 rows summed together");
     for (const SeparableFilter& f : filters_) radius_ = std::max(radius_, f.radius());
     slots_ = 2 * radius_ + rows_together_;
+    // Asked for row y', the stream writes output rows to y' + rows_together - 1, and input rows
+    // to R past them (an identity's output rows are its input rows).
+    output_slots_ = std::max(rows_together_, rows_kept + rows_together_ - 1);
+    identity_slots_ = std::max(slots_, output_slots_ + radius_);
     // Rows are a cache line more than the width apart: at widths of a power of two, rows
     // exactly 2^k bytes apart share the L1 cache's sets and would evict each other.
     stride_ = size_t(width) + 16;
@@ -331,11 +335,9 @@ SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters
         vertical_.push_back(std::move(vertical));
         centre_.push_back({f.centre});
         ring_.emplace_back(f.terms.size() * slots_ * stride_);
-        padded_.emplace_back((keeps_input_rows(f) ? slots_ : 1) * padded_stride_);
-        for (int o = 0; o < rows_together_; ++o) {
-            output_[o].emplace_back(size_t(width));
-            out_rows_[o].push_back(output_[o].back().data());
-        }
+        padded_.emplace_back(size_t(padded_slots(f)) * padded_stride_);
+        output_.emplace_back(size_t(output_slots_) * stride_);
+        for (int o = 0; o < rows_together_; ++o) out_rows_[o].push_back(nullptr);
     }
     padded_rows_.resize(filters_.size());
     column_.resize(slots_);
@@ -345,12 +347,18 @@ SeparableStream::SeparableStream(int width, std::vector<SeparableFilter> filters
 // in a ring as its terms' rows are kept; the others' input rows are read once, as they arrive.
 bool SeparableStream::keeps_input_rows(const SeparableFilter& f) { return f.centre != 0 || f.terms.empty(); }
 
+// The input rows a plane keeps: the identity's are its output rows, kept as long as those.
+int SeparableStream::padded_slots(const SeparableFilter& f) const {
+    return f.is_identity() ? identity_slots_ : keeps_input_rows(f) ? slots_ : 1;
+}
+
 float* SeparableStream::ring_row(size_t plane, int term, int y) {
     return &ring_[plane][(size_t(term) * slots_ + ((y % slots_) + slots_) % slots_) * stride_];
 }
 
 float* SeparableStream::padded_row(size_t plane, int y) {
-    const size_t slot = keeps_input_rows(filters_[plane]) ? size_t(((y % slots_) + slots_) % slots_) : 0;
+    const int slots = padded_slots(filters_[plane]);
+    const size_t slot = size_t(((y % slots) + slots) % slots);
     return &padded_[plane][slot * padded_stride_];
 }
 
@@ -373,10 +381,12 @@ float* const* SeparableStream::row(int y) {
     }
     for (size_t p = 0; p < filters_.size(); ++p) {
         const SeparableFilter& f = filters_[p];
-        if (f.is_identity()) {  // (its input rows outlive the group: the ring holds 2R + rows_together)
+        if (f.is_identity()) {  // (its input rows outlive the group: the ring holds identity_slots_)
             for (int o = 0; o < rows; ++o) out_rows_[o][p] = padded_row(p, y + o) + radius_;
             continue;
         }
+        for (int o = 0; o < rows; ++o)
+            out_rows_[o][p] = &output_[p][size_t(((y + o) % output_slots_ + output_slots_) % output_slots_) * stride_];
         const float* pixels[kMaxRowsTogether];  // the rows' own input pixels, for the centre
         for (int o = 0; o < rows; ++o) pixels[o] = padded_row(p, y + o) + radius_;
         if (f.terms.empty()) {

@@ -72,23 +72,29 @@ SeparableFilter separable_approximation(const std::vector<double>& taps, int r, 
 // is asked for. source(y, padded) writes each plane's input row y, the width + 2R values from
 // R before the first output pixel. Each output value is summed in one fixed order (terms, then
 // taps), so a row is the same whatever row a stream starts at and however many are summed at once.
+// rows_kept > 0: each output row stays as given (in a ring of output rows) until the stream is
+// asked for the row rows_kept past it, so that a caller that reads rows again later (a coarse
+// grid's ring: CoarseGaussianStream) need not copy them.
 class SeparableStream {
 public:
     using Source = std::function<void(int y, float* const* padded)>;
     static constexpr int kMaxRowsTogether = 4;
     SeparableStream(int width, std::vector<SeparableFilter> filters, int row_begin, int row_end, int rows_end,
-                    Source source, int rows_together = kMaxRowsTogether);
+                    Source source, int rows_together = kMaxRowsTogether, int rows_kept = 0);
     SeparableStream(const SeparableStream&) = delete;  // (out_rows_ point into its own storage)
     SeparableStream& operator=(const SeparableStream&) = delete;
     // Output row y of each plane (width values each; y never decreases), in the stream's own
-    // rows: valid until the next call, and the caller's to change (the stream reads them no more).
+    // rows: valid until the next call (or as rows_kept says), and the caller's to change (the
+    // stream reads them no more).
     float* const* row(int y);
 
 private:
     static bool keeps_input_rows(const SeparableFilter& f);
+    int padded_slots(const SeparableFilter& f) const;
     float* ring_row(size_t plane, int term, int y);
     float* padded_row(size_t plane, int y);
     int width_, radius_, row_begin_, row_end_, rows_end_, rows_together_, slots_;
+    int output_slots_, identity_slots_;  // the rings of output rows and of an identity's input rows
     size_t stride_, padded_stride_;
     std::vector<SeparableFilter> filters_;
     std::vector<std::vector<std::vector<float>>> vertical_;  // per plane and term, the sign folded in
@@ -96,14 +102,15 @@ private:
     // Per plane: terms x slots rows, each written before it is read (so left unset, from
     // recycled memory: core/image.h).
     std::vector<std::vector<float, UnsetAllocator<float>>> ring_;
-    // Per plane, the input rows as the source writes them (width + 2R): the last slots of them
-    // where the plane keeps them (keeps_input_rows), else one.
+    // Per plane, the input rows as the source writes them (width + 2R): the last
+    // padded_slots() of them.
     std::vector<std::vector<float>> padded_;
     std::vector<float*> padded_rows_;
     std::vector<const float*> column_;
-    // Per plane, the group of output rows summed together; out_rows_[o] points at each plane's
-    // row o of the group (or, for the identity, its input row).
-    std::vector<std::vector<float>> output_[kMaxRowsTogether];
+    // Per plane, a ring of output_slots_ output rows; out_rows_[o] points at each plane's row o
+    // of the group of rows summed together (or, for the identity, its input row). Each row is
+    // written before it is read (left unset, as ring_).
+    std::vector<std::vector<float, UnsetAllocator<float>>> output_;
     std::vector<float*> out_rows_[kMaxRowsTogether];
     int group_y_ = 0, group_rows_ = 0;  // the group's first row and how many it holds
     Source source_;

@@ -409,14 +409,20 @@ TEST_CASE("separable_approximation: a kernel's singular-value terms, largest fir
     for (int i = 0; i < side * side; ++i) CHECK(outer_back[i] == Approx(outer[i]).epsilon(1e-5));
 }
 
+// Three planes of width x height uniform random values.
+static std::vector<std::vector<float>> random_planes(int width, int height, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0, 1);
+    std::vector<std::vector<float>> planes(3, std::vector<float>(size_t(width) * height));
+    for (auto& plane : planes)
+        for (float& v : plane) v = u(rng);
+    return planes;
+}
+
 TEST_CASE("a separable stream gives the same rows however many it sums at once, wherever it starts and stops",
           "[scatter][filters]") {
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<float> u(0, 1);
     const int width = 37, height = 29;
-    std::vector<std::vector<float>> image(3, std::vector<float>(size_t(width) * height));
-    for (auto& plane : image)
-        for (float& v : plane) v = u(rng);
+    const std::vector<std::vector<float>> image = random_planes(width, height, 11);
     // Three planes: two 7-tap terms (symmetric, and not) with a centre; a 3-tap term; the identity.
     const std::vector<float> three = {0.25f, 0.5f, 0.25f};
     const std::vector<SeparableFilter> filters = {
@@ -457,6 +463,43 @@ TEST_CASE("a separable stream gives the same rows however many it sums at once, 
             }
     CHECK_THROWS_AS(SeparableStream(width, filters, 0, height, height, [](int, float* const*) {}, 5),
                     std::invalid_argument);
+}
+
+TEST_CASE("a separable stream's rows stay as given for as many rows as it keeps", "[scatter][filters]") {
+    const int width = 23, height = 31;
+    const std::vector<std::vector<float>> image = random_planes(width, height, 12);
+    // A 5-tap term with a centre, a 3-tap term, the identity (whose rows are its input rows).
+    const std::vector<SeparableFilter> filters = {
+        SeparableFilter{{{0.1f, 0.2f, 0.4f, 0.2f, 0.1f}}, {1.0f}, 0.5f},
+        SeparableFilter{{{0.25f, 0.5f, 0.25f}}, {1.0f}}, SeparableFilter{}};
+    auto source = [&](int y, float* const* padded) {
+        for (int p = 0; p < 3; ++p) {
+            for (int x = 0; x < width; ++x) padded[p][x + 2] = image[p][size_t(y) * width + x];
+            hold_frame_edges(padded[p], -2, width + 2, Window{0, 0, width, height});
+        }
+    };
+    // Each row as a stream that keeps none gives it, at once.
+    std::vector<std::vector<float>> expected;
+    SeparableStream plain(width, filters, 0, height, height, source);
+    for (int y = 0; y < height; ++y) {
+        float* const* r = plain.row(y);
+        for (int p = 0; p < 3; ++p) expected.emplace_back(r[p], r[p] + width);
+    }
+    for (int together : {1, 2, 4})
+        for (int kept : {1, 6, 11}) {
+            INFO(together << " rows together, " << kept << " kept");
+            SeparableStream s(width, filters, 0, height, height, source, together, kept);
+            std::vector<std::vector<float*>> given;  // each row's planes, as the stream gave them
+            for (int y = 0; y < height; ++y) {
+                float* const* r = s.row(y);
+                given.emplace_back(r, r + 3);
+                // Every row asked for from kept - 1 rows back is still as it was given.
+                for (int back = std::max(0, y - kept + 1); back <= y; ++back)
+                    for (int p = 0; p < 3; ++p)
+                        CHECK(std::vector<float>(given[size_t(back)][size_t(p)], given[size_t(back)][size_t(p)] + width) ==
+                              expected[size_t(back) * 3 + size_t(p)]);
+            }
+        }
 }
 
 TEST_CASE("the radix-2 FFT is the DFT up to rounding, and its inverse undoes it", "[scatter][fft]") {
