@@ -155,6 +155,58 @@ FrameGeometry proxy_geometry(const FrameGeometry& frame, int factor) {
     return proxy;
 }
 
+void upsample_proxy(const ConstImageView& proxy, const Window& proxy_frame, int factor, const ConstImageView& in,
+                    const ImageView& out, const Window& out_window, int threads) {
+    // Each proxy row a band reads along x once, into the frame's columns from the first of
+    // the block at out_window's first, each channel a row (and a pixel past each end, the
+    // edge repeated, for the taps at the proxy frame's edges); each output row then along y
+    // and written as the other tiers write, the input's alpha copied.
+    const Window& proxy_out = proxy.window;
+    const int X0 = floor_div(out_window.x0, factor), X1 = ceil_div(out_window.x1, factor), n = X1 - X0;
+    const int skip = out_window.x0 - factor * X0;  // (0 ... factor - 1 columns)
+    parallel_for(out_window.y0, out_window.y1, threads, [&](int band_y0, int band_y1) {
+        // The proxy rows along x, in a ring of four slots by row (an output row reads its
+        // nearer row and the one above or below).
+        constexpr int kSlots = 4;
+        const size_t wide_size = size_t(factor) * size_t(n);
+        std::vector<float> padded(size_t(n) + 2), wide(kSlots * 3 * wide_size), rows(3 * wide_size);
+        int held[kSlots] = {INT_MIN, INT_MIN, INT_MIN, INT_MIN};
+        auto along_x = [&](int Y) {
+            const int slot = ((Y % kSlots) + kSlots) % kSlots;
+            float* into = &wide[size_t(slot) * 3 * wide_size];
+            if (held[slot] != Y) {
+                held[slot] = Y;
+                // (The columns past the proxy's are at the proxy frame's edges: the edge repeats.)
+                const int first = std::max(X0 - 1, proxy_out.x0), last = std::min(X1, proxy_out.x1 - 1);
+                for (int c = 0; c < 3; ++c) {
+                    const float* row = proxy.at(proxy_out.x0, Y) + c;
+                    auto at = [&](int X) { return row[proxy.pixel_stride * (X - proxy_out.x0)]; };
+                    auto column = [&](int X) -> float& { return padded[size_t(X - X0 + 1)]; };
+                    for (int X = first; X <= last; ++X) column(X) = at(X);
+                    for (int X = X0 - 1; X < first; ++X) column(X) = at(first);
+                    for (int X = last + 1; X <= X1; ++X) column(X) = at(last);
+                    const float* proxy_row = &padded[1];
+                    float* frame_row = into + c * wide_size;
+                    const bool vector = with_vector_factor(factor, [&](auto N) {
+                        simd::dispatch<AlongX<decltype(N)::value>>(proxy_row, frame_row, n);
+                    });
+                    if (!vector) along_x_pixels(proxy_row, frame_row, 0, n, factor);
+                }
+            }
+            return into;
+        };
+        for (int y = band_y0; y < band_y1; ++y) {
+            const Taps ty = taps(y, factor, proxy_frame.y0, proxy_frame.y1);
+            const float* near = along_x(ty.near);
+            const float* far = along_x(ty.far);
+            simd::dispatch<AlongY>(near, far, ty.near_weight, ty.far_weight, rows.data(), int(3 * wide_size));
+            const float* planes[3] = {&rows[size_t(skip)], &rows[wide_size + size_t(skip)],
+                                      &rows[2 * wide_size + size_t(skip)]};
+            write_row(planes, 3, in, out, y, out_window.x0, out_window.width());
+        }
+    });
+}
+
 Window Plan::proxy_window(const Window& output) const {
     const Window cover = proxy_cover(output, proxy_factor_);
     return Window{cover.x0 - 1, cover.y0 - 1, cover.x1 + 1, cover.y1 + 1}.intersected(proxy_->frame_);
@@ -182,55 +234,9 @@ void Plan::run_proxy(const ConstImageView& in, const ImageView& out, const Windo
         proxy_->run(small.view, result.view, threads, times);
     }
 
-    // Up: each proxy row a band reads along x once, into the frame's columns from the first
-    // of the block at out_window's first, each channel a row (and a pixel past each end, the
-    // edge repeated, for the taps at the proxy frame's edges); each output row then along y
-    // and written as the other tiers write, the input's alpha copied.
+    // Up.
     const auto start = std::chrono::steady_clock::now();
-    const Window& pf = proxy_->frame_;
-    const int X0 = floor_div(out_window.x0, factor), X1 = ceil_div(out_window.x1, factor), n = X1 - X0;
-    const int skip = out_window.x0 - factor * X0;  // (0 ... factor - 1 columns)
-    parallel_for(out_window.y0, out_window.y1, threads, [&](int band_y0, int band_y1) {
-        // The proxy rows along x, in a ring of four slots by row (an output row reads its
-        // nearer row and the one above or below).
-        constexpr int kSlots = 4;
-        const size_t wide_size = size_t(factor) * size_t(n);
-        std::vector<float> padded(size_t(n) + 2), wide(kSlots * 3 * wide_size), rows(3 * wide_size);
-        int held[kSlots] = {INT_MIN, INT_MIN, INT_MIN, INT_MIN};
-        auto along_x = [&](int Y) {
-            const int slot = ((Y % kSlots) + kSlots) % kSlots;
-            float* into = &wide[size_t(slot) * 3 * wide_size];
-            if (held[slot] != Y) {
-                held[slot] = Y;
-                // (The columns past the proxy's are at the proxy frame's edges: the edge repeats.)
-                const int first = std::max(X0 - 1, proxy_out.x0), last = std::min(X1, proxy_out.x1 - 1);
-                for (int c = 0; c < 3; ++c) {
-                    const float* row = result.view.at(proxy_out.x0, Y) + c;
-                    auto at = [&](int X) { return row[3 * (X - proxy_out.x0)]; };
-                    auto column = [&](int X) -> float& { return padded[size_t(X - X0 + 1)]; };
-                    for (int X = first; X <= last; ++X) column(X) = at(X);
-                    for (int X = X0 - 1; X < first; ++X) column(X) = at(first);
-                    for (int X = last + 1; X <= X1; ++X) column(X) = at(last);
-                    const float* proxy_row = &padded[1];
-                    float* frame_row = into + c * wide_size;
-                    const bool vector = with_vector_factor(factor, [&](auto N) {
-                        simd::dispatch<AlongX<decltype(N)::value>>(proxy_row, frame_row, n);
-                    });
-                    if (!vector) along_x_pixels(proxy_row, frame_row, 0, n, factor);
-                }
-            }
-            return into;
-        };
-        for (int y = band_y0; y < band_y1; ++y) {
-            const Taps ty = taps(y, factor, pf.y0, pf.y1);
-            const float* near = along_x(ty.near);
-            const float* far = along_x(ty.far);
-            simd::dispatch<AlongY>(near, far, ty.near_weight, ty.far_weight, rows.data(), int(3 * wide_size));
-            const float* planes[3] = {&rows[size_t(skip)], &rows[wide_size + size_t(skip)],
-                                      &rows[2 * wide_size + size_t(skip)]};
-            write_row(planes, 3, in, out, y, out_window.x0, out_window.width());
-        }
-    });
+    upsample_proxy(result.view, proxy_->frame_, factor, in, out, out_window, threads);
     add_time(times, "upsample", start);
 }
 

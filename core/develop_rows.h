@@ -66,6 +66,13 @@ constexpr float proxy_upsample_far_weight(int k, int factor) {
                                                       : proxy_upsample_offset(k, factor));
 }
 
+// The proxy's result upsampled to out_window's pixels of `out` at `factor`: `proxy` (RGB
+// interleaved) holds the proxy pixels they interpolate, proxy_frame is the proxy's image
+// window (at its edges the edge pixels repeat); written as the tiers write (write_row: the
+// alpha of `in`, where it has one, copied).
+void upsample_proxy(const ConstImageView& proxy, const Window& proxy_frame, int factor, const ConstImageView& in,
+                    const ImageView& out, const Window& out_window, int threads);
+
 // The standard deviation of a field after the proxy's upsample at `factor` over the field's
 // own (at every frame pixel, its RMS over the pixels), for a field whose neighbouring pixels
 // correlate by lag1_correlation along x and along y (and by its square diagonally).
