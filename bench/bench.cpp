@@ -68,6 +68,14 @@ DevelopSettings density_target(Quality q, uint64_t seed, double pitch_um, int ta
     return s;
 }
 
+// A measurement target of width x height pixels as an image of `frame` at its origin (empty:
+// the target is its own frame): the film frame's width sets the pitch, its size the
+// preview's proxy factor.
+FrameGeometry target_geometry(int width, int height, const FrameGeometry& frame) {
+    if (frame.width == 0) return {width, height};
+    return {width, height, false, 0, 0, frame.film_width_px(), frame.film_height_px()};
+}
+
 // Renders `window` of the frame from the full-frame input `in`.
 Image render(const Plan& plan, const ConstImageView& in, const Window& window, int threads,
              StageTimes* times = nullptr) {
@@ -171,17 +179,18 @@ GrainErrors grain_errors(const GrainProfile& reference, const GrainProfile& test
 }  // namespace
 
 GrainProfile measure_wedge_grain(const Stock& film, const Stock* paper, Quality q, uint64_t seed, double pitch_um,
-                                 int threads, PrintViewing viewing) {
+                                 int threads, PrintViewing viewing, const FrameGeometry& frame) {
     const int width = kWedgePatches * kWedgePatchPx;
-    DevelopSettings s = density_target(q, seed, pitch_um, width);
+    const FrameGeometry geometry = target_geometry(width, kWedgePatchPx, frame);
+    DevelopSettings s = density_target(q, seed, pitch_um, geometry.film_width_px());
     s.mtf = false;
     s.halation = 0;
     s.print_viewing = viewing;
     if (paper) {
         s.output = OutputMode::print;
-        s.print_width_mm = paper->frame_width_mm * width / kTargetWidthPx;
+        s.print_width_mm = paper->frame_width_mm * geometry.film_width_px() / kTargetWidthPx;
     }
-    Plan plan = Plan::compile(film, paper, s, {width, kWedgePatchPx}, threads);
+    Plan plan = Plan::compile(film, paper, s, geometry, threads);
     Image wedge(width, kWedgePatchPx, 3);
     const double h0 = mid_grey_exposure_lux_s(film.iso_speed);
     for (int y = 0; y < kWedgePatchPx; ++y)
@@ -206,18 +215,19 @@ GrainProfile measure_wedge_grain(const Stock& film, const Stock* paper, Quality 
 // middle half, away from the clamped ends. The frame is wide enough that the middle half
 // is further than the kernel's halo from both ends.
 std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality q, double pitch_um,
-                                                     const std::vector<double>& cycles_per_px, int threads) {
+                                                     const std::vector<double>& cycles_per_px, int threads,
+                                                     const FrameGeometry& frame) {
     int width = 2048;
-    DevelopSettings s = density_target(q, 0, pitch_um, width);
+    DevelopSettings s = density_target(q, 0, pitch_um, target_geometry(width, 1, frame).film_width_px());
     s.grain = false;
     s.halation = 0;
     s.dir_couplers = 0;  // (their edge effect raises the density's modulation: the stock's MTF is optical)
-    Plan plan = Plan::compile(film, nullptr, s, {width, 1}, threads);
+    Plan plan = Plan::compile(film, nullptr, s, target_geometry(width, 1, frame), threads);
     int halo = plan.halo_px();
     if (halo >= width / 4) {
         width = 4 * ((halo / 64 + 1) * 64);
-        s.frame_width_mm = pitch_um * width / 1000.0;
-        plan = Plan::compile(film, nullptr, s, {width, 1}, threads);
+        s.frame_width_mm = pitch_um * target_geometry(width, 1, frame).film_width_px() / 1000.0;
+        plan = Plan::compile(film, nullptr, s, target_geometry(width, 1, frame), threads);
     }
     const double h0 = mid_grey_exposure_lux_s(film.iso_speed), modulation = 0.1;
     const int x0 = width / 4, n = width / 2;
@@ -388,7 +398,7 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
         worst.mean = de_sum / worst.pixels;
         tr.print_error = worst;
 
-        tr.mtf = measure_density_mtf(film, q, r.pixel_pitch_um, r.mtf_cycles_per_px, o.threads);
+        tr.mtf = measure_density_mtf(film, q, r.pixel_pitch_um, r.mtf_cycles_per_px, o.threads, frame);
         if (!r.tiers.empty())  // the reference's own error stays 0
             for (size_t l = 0; l < tr.mtf.size(); ++l)
                 for (size_t k = 0; k < tr.mtf[l].size(); ++k)
@@ -400,7 +410,8 @@ BenchReport run_benchmark(const Stock& film, const Stock& paper, const BenchOpti
             GrainErrors e;
             try {
                 auto measure = [&](uint64_t seed) {
-                    return measure_wedge_grain(film, print_paper, q, seed, r.pixel_pitch_um, o.threads);
+                    return measure_wedge_grain(film, print_paper, q, seed, r.pixel_pitch_um, o.threads,
+                                               PrintViewing::media_relative, frame);
                 };
                 if (q == Quality::reference) reference = measure(o.seed);
                 return grain_errors(reference, measure(q == Quality::reference ? o.seed + 1 : o.seed));

@@ -169,16 +169,20 @@ struct BenchReport {
 // per film layer, at `pitch_um` with grain, halation and DIR couplers off: one-row sine targets of
 // modulation 0.1 around mid-grey exposure, read back to exposure through each layer's H&D
 // curve and divided by the input's modulation measured the same way (sine_amplitude).
+// `frame`: the benchmarked frame, which the target is an image of (at its origin), so that
+// the preview tier's proxy factor is the frame's (quality.h); empty: the target is the frame.
 std::vector<std::vector<double>> measure_density_mtf(const Stock& film, Quality quality, double pitch_um,
-                                                     const std::vector<double>& cycles_per_px, int threads);
+                                                     const std::vector<double>& cycles_per_px, int threads,
+                                                     const FrameGeometry& frame = {});
 
 // The grain of a wedge of flat square patches one stop apart around mid grey (grain on, MTF
 // and halation off, so each patch is flat) at `pitch_um` on film, analysed as a plate would be
 // (core/plate/grain_analysis.h): the negative's density or, with a paper, the print's, each
 // channel of its linear Rec.709 read as a density, -log10 (the print at the paper's format's
-// pitch for a 4096 px wide frame), seen as `viewing` says.
+// pitch for a 4096 px wide frame), seen as `viewing` says; `frame` as measure_density_mtf's.
 GrainProfile measure_wedge_grain(const Stock& film, const Stock* paper, Quality quality, uint64_t seed,
-                                 double pitch_um, int threads, PrintViewing viewing = PrintViewing::media_relative);
+                                 double pitch_um, int threads, PrintViewing viewing = PrintViewing::media_relative,
+                                 const FrameGeometry& frame = {});
 
 // Where the reference renders and every tier's colour and density errors are measured: the
 // sample windows (clipped to the frame), or the whole frame.

@@ -59,7 +59,7 @@ FrameWrite develop_frame(const DevelopOptions& o, const Renderer& renderer, Plan
     ConstImageView view = in.pixels.view();
     view.window = view.window.moved(dx, dy);
     view.colour_channels = colour_channel_count(in.spec);
-    const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width), job.frame);
+    const Plan plan = plans.plan_for(frame_geometry(view, in.spec.full_width, in.spec.full_height), job.frame);
     const Window out_window = window_flag(o.window, in.pixels.window, "--window").moved(dx, dy);
     // The output's channels: the developed colour's three, then the input's past its colour.
     require_format_holds(job.output, "", 3 + in.spec.nchannels - view.colour_channels);

@@ -91,9 +91,10 @@ void require_kernel_budget(double radius_px, int frame_width_px, int frame_heigh
                                 fmt(kMaxGrownPlanePx * 4 / 1e9, 2) + " GB): " + remedy);
 }
 
+// proxy_factor: the preview's proxy's pixel pitch over the frame's (1: no proxy).
 MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width_px, int frame_height_px,
                             const DevelopSettings& s, const PlanStructure& structure, uint32_t stream_base,
-                            const char* role,
+                            const char* role, int proxy_factor,
                             std::vector<std::string>& skipped, int threads) {
     const QualityTier& tier = quality_tier(s.quality);
     MaterialStages m;
@@ -161,13 +162,14 @@ MaterialStages build_stages(const Stock& stock, double width_mm, int frame_width
         const bool fast_grain = tier.grain == GrainMethod::hashed_noise;
         GrainModel g = design_grain(spec, layer.density_curve.y_min(), m.pixel_pitch_um, key, fast_grain);
         // The preview's proxy: its grain, drawn at the proxy's pitch and upsampled, keeps the
-        // frame's per-pixel standard deviation (averaging a 2x2 block and interpolating each
-        // lower it: to 0.375 for grain finer than a pixel); its texture stays the coarser one.
-        if (tier.proxy_scale > 1 && !g.is_noop()) {
+        // frame's per-pixel standard deviation (averaging a block and interpolating each lower
+        // it: to 0.375 for grain finer than a pixel at factor 2); its texture stays the coarser one.
+        if (proxy_factor > 1 && !g.is_noop()) {
             const GrainModel frame_grain = design_grain(spec, layer.density_curve.y_min(),
-                                                        m.pixel_pitch_um / tier.proxy_scale, key, fast_grain);
+                                                        m.pixel_pitch_um / proxy_factor, key, fast_grain);
             g.sigma_per_pixel *= frame_grain.pixel_sigma_at_unit_density() /
-                                 (g.pixel_sigma_at_unit_density() * proxy_upsampled_sigma_ratio(g.lag1_correlation()));
+                                 (g.pixel_sigma_at_unit_density() *
+                                  proxy_upsampled_sigma_ratio(g.lag1_correlation(), proxy_factor));
         }
         if (!structure.skip_noop_stages)
             m.grain.back() = g;
@@ -766,17 +768,19 @@ Window image_window(const FrameGeometry& frame) {
 Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings& settings,
                    const FrameGeometry& frame, int threads, const PlanStructure& structure) {
     const Window image = image_window(frame);
-    if (quality_tier(settings.quality).proxy_scale == 1)
-        return compile_pixels(film, paper, settings, frame, threads, structure);
-    // The proxy's film and print widths are its pixels' (a frame of odd width has half a
-    // block past its edge), so its pitch is exactly twice the frame's.
-    const FrameGeometry proxy = proxy_geometry(frame);
-    const double widen = double(proxy.film_width_px()) * 2 / frame.film_width_px();
+    const int factor = proxy_factor(quality_tier(settings.quality), frame);
+    if (factor == 1) return compile_pixels(film, paper, settings, frame, threads, structure);
+    // The proxy's film and print widths are its pixels' (a frame whose width is no multiple
+    // of the factor has part of a block past its edge), so its pitch is exactly `factor`
+    // times the frame's.
+    const FrameGeometry proxy = proxy_geometry(frame, factor);
+    const double widen = double(proxy.film_width_px()) * factor / frame.film_width_px();
     DevelopSettings at_proxy = settings;
     at_proxy.frame_width_mm = (settings.frame_width_mm > 0 ? settings.frame_width_mm : film.frame_width_mm) * widen;
     if (paper) at_proxy.print_width_mm = (settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm) * widen;
-    Plan p = compile_pixels(film, paper, at_proxy, proxy, threads, structure);
+    Plan p = compile_pixels(film, paper, at_proxy, proxy, threads, structure, factor);
     p.proxy_ = std::make_shared<const Plan>(p);
+    p.proxy_factor_ = factor;
     p.settings_ = settings;
     p.frame_ = image;
     p.film_width_px_ = frame.film_width_px();
@@ -784,7 +788,7 @@ Plan Plan::compile(const Stock& film, const Stock* paper, const DevelopSettings&
 }
 
 Plan Plan::compile_pixels(const Stock& film, const Stock* paper, const DevelopSettings& settings,
-                          const FrameGeometry& frame, int threads, const PlanStructure& structure) {
+                          const FrameGeometry& frame, int threads, const PlanStructure& structure, int proxy_factor) {
     const Window image = image_window(frame);
     if (!is_camera_film(film.kind))
         throw std::invalid_argument("'" + film.id + "' is not a film stock (it is a paper or print film)");
@@ -811,7 +815,8 @@ Plan Plan::compile_pixels(const Stock& film, const Stock* paper, const DevelopSe
     const double print_width_mm =
         !printing ? 0.0 : settings.print_width_mm > 0 ? settings.print_width_mm : paper->frame_width_mm;
     auto film_stages = std::make_shared<MaterialStages>(build_stages(
-        film, film_width_mm, p.film_width_px_, frame.height, settings, structure, 0, "film", p.skipped_, threads));
+        film, film_width_mm, p.film_width_px_, frame.height, settings, structure, 0, "film", proxy_factor, p.skipped_,
+        threads));
     auto paper_stages = std::make_shared<MaterialStages>();
     p.monochrome_input_ = frame.monochrome && structure.skip_noop_stages;
     if (p.monochrome_input_ && settings.output != OutputMode::texture)
@@ -824,7 +829,7 @@ Plan Plan::compile_pixels(const Stock& film, const Stock* paper, const DevelopSe
         p.scan_base_density_[l] = scan_base_density(film, l, settings.scan_balance, settings.scan_aim_code);
     if (printing) {
         *paper_stages = build_stages(*paper, print_width_mm, p.film_width_px_, frame.height, settings, structure, 16,
-                                     "paper", p.skipped_, threads);
+                                     "paper", proxy_factor, p.skipped_, threads);
         p.print_ = PrintExposure::design(film, *paper,
                                          {mid_grey_exposure_lux_s(film.iso_speed), settings.printer_lights,
                                           settings.filtration_ymc, settings.print_exposure_ev, view_settings(settings)});
@@ -862,11 +867,13 @@ double scan_base_density(const Stock& film, size_t layer, bool balance, double a
 }
 
 Plan Plan::in_image(const FrameGeometry& image) const {
-    if (image.film_width_px() != film_width_px_ || image.monochrome != monochrome_)
-        throw std::invalid_argument("Plan::in_image: another film frame width or channel count needs its own plan");
+    if (image.film_width_px() != film_width_px_ || image.monochrome != monochrome_ ||
+        (proxy_ && proxy_factor(quality_tier(settings_.quality), image) != proxy_factor_))
+        throw std::invalid_argument(
+            "Plan::in_image: another film frame width, proxy factor or channel count needs its own plan");
     Plan p = *this;
     p.frame_ = image_window(image);
-    if (proxy_) p.proxy_ = std::make_shared<const Plan>(proxy_->in_image(proxy_geometry(image)));
+    if (proxy_) p.proxy_ = std::make_shared<const Plan>(proxy_->in_image(proxy_geometry(image, proxy_factor_)));
     return p;
 }
 
@@ -891,13 +898,14 @@ Plan Plan::for_frame(int frame) const {
 int Plan::halo_px() const {
     const int own = film_stages_->halo_px() + (print_ ? paper_stages_->halo_px() : 0);
     // (A proxy's halo in its pixels, its interpolation's pixel, and a block's rounding.)
-    return proxy_ ? 2 * (own + 1) + 1 : own;
+    return proxy_ ? proxy_factor_ * (own + 1) + proxy_factor_ - 1 : own;
 }
 
 Window Plan::input_window(const Window& output) const {
     if (proxy_) {
         const Window proxy_in = proxy_->input_window(proxy_window(output));
-        return Window{2 * proxy_in.x0, 2 * proxy_in.y0, 2 * proxy_in.x1, 2 * proxy_in.y1}.intersected(frame_);
+        const int n = proxy_factor_;
+        return Window{n * proxy_in.x0, n * proxy_in.y0, n * proxy_in.x1, n * proxy_in.y1}.intersected(frame_);
     }
     return film_stages_->input_window(film_output_window(output), frame_);
 }
@@ -1193,11 +1201,11 @@ std::string check_reference_render_budget(const Plan& plan, const Window& out, c
 std::vector<std::string> Plan::describe() const {
     std::vector<std::string> lines;
     if (proxy_) {
-        const FrameGeometry proxy = proxy_geometry({frame_.width(), frame_.height(), monochrome_, frame_.x0, frame_.y0,
-                                                    film_width_px_});
-        lines.push_back("proxy: the frame at half resolution (" + std::to_string(proxy.width) + "x" +
-                        std::to_string(proxy.height) + " px, twice the pixel pitch), each pixel the mean of a 2x2 "
-                        "block; its result upsampled bilinearly");
+        const Window& proxy = proxy_->frame_;
+        const std::string n = std::to_string(proxy_factor_);
+        lines.push_back("proxy: the frame at 1/" + n + " of its resolution (" + std::to_string(proxy.width()) + "x" +
+                        std::to_string(proxy.height()) + " px, " + n + " times the pixel pitch), each pixel the mean of a " +
+                        n + "x" + n + " block; its result upsampled bilinearly");
         for (const std::string& line : proxy_->describe()) lines.push_back(line);
         return lines;
     }

@@ -141,18 +141,28 @@ struct FrameGeometry {
     // An image that is not exactly the film frame (a file whose data window differs from its
     // display window: a CG element's bounding box, or overscan): where its first pixel sits
     // relative to the film frame's origin, and the film frame's width in pixels (0: the
-    // image's width). The pixel pitch is the film frame's width over film_width, and the
-    // image's pixels have absolute coordinates from (x0, y0), so grain falls on the same
-    // film-frame pixels whatever part of the frame a file holds; filters clamp at the image.
+    // image's width), and its height (0: the image's height; it sets the preview tier's
+    // proxy factor alone: quality.h). The pixel pitch is the film frame's width over
+    // film_width, and the image's pixels have absolute coordinates from (x0, y0), so grain
+    // falls on the same film-frame pixels whatever part of the frame a file holds; filters
+    // clamp at the image.
     int x0 = 0, y0 = 0;
     int film_width = 0;
+    int film_height = 0;
     int film_width_px() const { return film_width > 0 ? film_width : width; }
+    int film_height_px() const { return film_height > 0 ? film_height : height; }
 };
 
-// The frame of the preview tier's proxy (QualityTier::proxy_scale): each of its pixels a 2x2
-// block of the film frame's, blocks counted from the film frame's origin (an image's window
-// grows to whole blocks), so its pixel pitch is twice the frame's.
-FrameGeometry proxy_geometry(const FrameGeometry& frame);
+// The preview tier's proxy factor for this frame (quality.h, proxy_factor; 1: no proxy).
+int proxy_factor(const QualityTier& tier, const FrameGeometry& frame);
+
+// The frame of the preview tier's proxy at `factor` (proxy_factor): each of its pixels a
+// factor x factor block of the film frame's, blocks counted from the film frame's origin (an
+// image's window grows to whole blocks), so its pixel pitch is `factor` times the frame's.
+FrameGeometry proxy_geometry(const FrameGeometry& frame, int factor);
+
+// The frame's pixels the preview's proxy reads (develop_rows.h, block_mean_row).
+struct ProxyBlocks;
 
 // One material's run of the pipeline, precomputed (core/material_stages.h: the plan's
 // internals, not part of the API).
@@ -195,7 +205,8 @@ public:
     Plan for_frame(int frame) const;
     // The same plan for another image of the same film frame (a sequence whose data windows
     // differ, a CG element's bounding box per frame): only the image's window changes. The
-    // film frame's width and the grey input must be the plan's (else std::invalid_argument).
+    // film frame's width and the grey input must be the plan's, and at the preview tier the
+    // film frame's proxy factor (else std::invalid_argument).
     Plan in_image(const FrameGeometry& image) const;
 
     // The silver grains the reference tier draws per pixel at net density 1, summed over
@@ -233,19 +244,21 @@ private:
                              StageTimes* times) const;
     std::vector<Plane> texture(const ConstImageView& in, const Window& out, int threads, StageTimes* times) const;
     // Every stage a row at a time (develop_one_pass.cpp): whether this plan can, and the run.
-    // With `blocks_of`, this is the preview's proxy and `in` the frame's pixels, read in 2x2
-    // blocks (develop_rows.h, block_mean_row), `blocks_of` its image window.
+    // With `blocks_of`, this is the preview's proxy and `in` the frame's pixels, read in
+    // blocks (develop_rows.h, block_mean_row).
     bool runs_in_one_pass() const;
     void run_one_pass(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
-                      StageTimes* times, const Window* blocks_of = nullptr) const;
+                      StageTimes* times, const ProxyBlocks* blocks_of = nullptr) const;
     // The preview tier (develop_proxy.cpp): the proxy's pixels an output window interpolates,
     // and the run: the input averaged down to the proxy, its plan, and the result upsampled.
     Window proxy_window(const Window& output) const;
     void run_proxy(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
                    StageTimes* times) const;
-    // The plan at the frame's own pixels (compile() wraps it for a proxy tier).
+    // The plan at the frame's own pixels (compile() wraps it for a proxy tier: then
+    // `proxy_factor`, the proxy's pixel pitch over the frame's, sets its grain's amplitude).
     static Plan compile_pixels(const Stock& film, const Stock* paper, const DevelopSettings& settings,
-                               const FrameGeometry& frame, int threads, const PlanStructure& structure);
+                               const FrameGeometry& frame, int threads, const PlanStructure& structure,
+                               int proxy_factor = 1);
 
     DevelopSettings settings_;
     PlanStructure structure_;
@@ -275,6 +288,7 @@ private:
     // null where the plan runs at the frame's pixels. (This plan's other members are the
     // proxy's, for the per-pixel stages above, which do not depend on the pitch.)
     std::shared_ptr<const Plan> proxy_;
+    int proxy_factor_ = 1;  // the proxy's pixel pitch over the frame's (proxy_factor)
 };
 
 // The fast tiers' print tables and the parts they are built from (the paper's log exposures

@@ -181,7 +181,7 @@ bool Plan::runs_in_one_pass() const {
 }
 
 void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Window& out_window, int threads,
-                        StageTimes* times, const Window* blocks_of) const {
+                        StageTimes* times, const ProxyBlocks* blocks_of) const {
     const MaterialStages& film = *film_stages_;
     const size_t layers = film.stock.layers.size();
     const int paper_halo = print_ ? paper_stages_->halo_px() : 0;

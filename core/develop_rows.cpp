@@ -128,43 +128,47 @@ __attribute__((always_inline)) inline void exposure_lanes(const float* px, int s
     layer_exposures(c, colours, weights, grey_scale, layers, scale, x, exposure);
 }
 
-// The even (first = 0) or odd (1) lanes of a followed by those of b.
-template <int first, typename V, size_t... J>
-__attribute__((always_inline)) inline V every_other(const V& a, const V& b, std::index_sequence<J...>) {
-    return __builtin_shufflevector(a, b, int(2 * J + first)...);
+// Pixel k of the lanes' blocks of N pixels, from N vectors of the pixels in turn: lane j is
+// pixel N j + k.
+template <int N, int k, int lanes>
+struct BlockPixel {
+    static constexpr int vector(int j) { return (N * j + k) / lanes; }
+    static constexpr int lane(int j) { return (N * j + k) % lanes; }
+};
+
+// sum, then + each block's pixel k of the row of N vectors v, k = 0 ... N - 1 (first: the
+// sum starts at pixel 0).
+template <int N, typename V, size_t... K>
+__attribute__((always_inline)) inline void add_block_row(const V* v, bool first, V& sum, std::index_sequence<K...>) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    V pixel[N];
+    (simd::picked<BlockPixel<N, int(K), lanes>, N>(v, pixel[K], std::make_index_sequence<lanes>()), ...);
+    for (int k = 0; k < N; ++k) sum = first && k == 0 ? pixel[0] : sum + pixel[k];
 }
 
-// The mean colours of the lanes' whole 2x2 blocks (block_mean_row), their first pixels at
-// top and bottom (a row apart), from 2 lanes of pixels of each row: their left pixels the
-// even lanes, their right the odd.
-template <typename V>
-__attribute__((always_inline)) inline void block_mean_lanes(const float* top, const float* bottom, int stride,
+// The mean colours of the lanes' whole NxN blocks (block_mean_row), their first pixels at
+// `top` and the block's rows `row_step` floats apart, from N lanes of pixels of each row.
+template <int N, typename V>
+__attribute__((always_inline)) inline void block_mean_lanes(const float* top, std::ptrdiff_t row_step, int stride,
                                                             bool grey_image, int colours, V* c) {
     constexpr int lanes = sizeof(V) / sizeof(float);
-    const auto j = std::make_index_sequence<lanes>();
-    V row[2][2][3]{};  // top and bottom, their first and second lanes of pixels
-    for (int r = 0; r < 2; ++r)
-        for (int half = 0; half < 2; ++half)
-            channels_at((r ? bottom : top) + size_t(half * lanes) * stride, stride, grey_image, colours, row[r][half]);
-    for (int i = 0; i < colours; ++i) {
-        V v[4];  // top left, top right, bottom left, bottom right
-        for (int r = 0; r < 2; ++r) {
-            for (int half = 0; half < 2; ++half) sanitize_lanes(row[r][half][i]);
-            v[2 * r] = every_other<0>(row[r][0][i], row[r][1][i], j);
-            v[2 * r + 1] = every_other<1>(row[r][0][i], row[r][1][i], j);
+    for (int r = 0; r < N; ++r) {
+        V row[3][N]{};  // per channel, the row's N vectors of pixels
+        for (int q = 0; q < N; ++q) {
+            V px[3]{};
+            channels_at(top + r * row_step + std::ptrdiff_t(q * lanes) * stride, stride, grey_image, colours, px);
+            for (int i = 0; i < colours; ++i) sanitize_lanes(px[i]), row[i][q] = px[i];
         }
-        c[i] = (((v[0] + v[1]) + v[2]) + v[3]) * 0.25f;
+        for (int i = 0; i < colours; ++i) add_block_row<N>(row[i], r == 0, c[i], std::make_index_sequence<N>());
     }
+    for (int i = 0; i < colours; ++i) c[i] /= float(N * N);
 }
 
-// Floor and ceiling of v / 2 for any sign.
-int floor_half(int v) { return v >> 1; }
-int ceil_half(int v) { return -(-v >> 1); }
-
 // The first `colours` mean colours of proxy pixel (X, Y)'s block (as channels_at reads a
-// pixel's), from what of it `image` holds.
-void edge_block_mean(const ConstImageView& in, const Window& image, int X, int Y, int colours, simd::Float1* c) {
-    const Window block = Window{2 * X, 2 * Y, 2 * X + 2, 2 * Y + 2}.intersected(image);
+// pixel's), from what of it the image holds: any factor, a pixel at a time.
+void edge_block_mean(const ConstImageView& in, const ProxyBlocks& blocks, int X, int Y, int colours, simd::Float1* c) {
+    const int n = blocks.factor;
+    const Window block = Window{n * X, n * Y, n * X + n, n * Y + n}.intersected(blocks.image);
     const bool grey_image = colour_channel_count(in) == 1;
     for (int y = block.y0; y < block.y1; ++y)
         for (int x = block.x0; x < block.x1; ++x) {
@@ -175,47 +179,46 @@ void edge_block_mean(const ConstImageView& in, const Window& image, int X, int Y
                 c[i] = x == block.x0 && y == block.y0 ? p[i] : c[i] + p[i];
             }
         }
-    // 1, 2 or 4 pixels: the reciprocal is exact, so this is the sum over the count.
-    const float share = 1.0f / float(block.pixel_count());
-    for (int i = 0; i < colours; ++i) c[i] *= share;
+    for (int i = 0; i < colours; ++i) c[i] /= float(block.pixel_count());
 }
 
-// The proxy pixels from X on of a row of whole blocks (top and bottom: the frame's pixels of
-// proxy pixel X's block), each layer's exposure into exposure[layer] from x on.
-template <int lanes>
-__attribute__((always_inline)) inline void block_exposure_row(const float* top, const float* bottom, int stride,
+// The proxy pixels from X on of a row of whole blocks (top: the frame's first pixel of proxy
+// pixel X's block, the block's rows row_step floats apart), each layer's exposure into
+// exposure[layer] from x on.
+template <int N, int lanes>
+__attribute__((always_inline)) inline void block_exposure_row(const float* top, std::ptrdiff_t row_step, int stride,
                                                               bool grey_image, int colours, const float* weights,
                                                               const float* grey_scale, int layers, float scale, int x,
                                                               int width, float* const* exposure) {
     for (; x + lanes <= width; x += lanes) {
-        const size_t at = size_t(2 * x) * stride;
-        simd::prefetch_ahead(top + at, 2 * lanes * stride * int(sizeof(float)));
-        simd::prefetch_ahead(bottom + at, 2 * lanes * stride * int(sizeof(float)));
+        const float* at = top + std::ptrdiff_t(N * x) * stride;
+        for (int r = 0; r < N; ++r) simd::prefetch_ahead(at + r * row_step, N * lanes * stride * int(sizeof(float)));
         typename simd::Lanes<lanes>::F c[3]{};
-        block_mean_lanes(top + at, bottom + at, stride, grey_image, colours, c);
+        block_mean_lanes<N>(at, row_step, stride, grey_image, colours, c);
         layer_exposures(c, colours, weights, grey_scale, layers, scale, x, exposure);
     }
     for (; x < width; ++x) {
-        const size_t at = size_t(2 * x) * stride;
         simd::Float1 c[3]{};
-        block_mean_lanes(top + at, bottom + at, stride, grey_image, colours, c);
+        block_mean_lanes<N>(top + std::ptrdiff_t(N * x) * stride, row_step, stride, grey_image, colours, c);
         layer_exposures(c, colours, weights, grey_scale, layers, scale, x, exposure);
     }
 }
 
+template <int N>
 struct BlockExposureRow {
     template <int lanes>
-    __attribute__((always_inline)) static void run(const float* top, const float* bottom, int stride, bool grey_image,
-                                                   int colours, const float* weights, const float* grey_scale,
-                                                   int layers, float scale, int x, int width, float* const* exposure) {
+    __attribute__((always_inline)) static void run(const float* top, std::ptrdiff_t row_step, int stride,
+                                                   bool grey_image, int colours, const float* weights,
+                                                   const float* grey_scale, int layers, float scale, int x, int width,
+                                                   float* const* exposure) {
         // (As ExposureRow: the common shapes with their sizes as constants.)
         if (colours == 3 && !grey_image && layers == 3 && stride == 3)
-            block_exposure_row<lanes>(top, bottom, 3, false, 3, weights, grey_scale, 3, scale, x, width, exposure);
+            block_exposure_row<N, lanes>(top, row_step, 3, false, 3, weights, grey_scale, 3, scale, x, width, exposure);
         else if (colours == 3 && !grey_image && layers == 3 && stride == 4)
-            block_exposure_row<lanes>(top, bottom, 4, false, 3, weights, grey_scale, 3, scale, x, width, exposure);
+            block_exposure_row<N, lanes>(top, row_step, 4, false, 3, weights, grey_scale, 3, scale, x, width, exposure);
         else
-            block_exposure_row<lanes>(top, bottom, stride, grey_image, colours, weights, grey_scale, layers, scale, x,
-                                      width, exposure);
+            block_exposure_row<N, lanes>(top, row_step, stride, grey_image, colours, weights, grey_scale, layers,
+                                         scale, x, width, exposure);
     }
 };
 
@@ -348,30 +351,34 @@ double sanitize(float v) {
     return lane[0];
 }
 
-// The proxy columns of row Y from X0 on whose blocks `image` holds whole: [first, last), or
-// none (first = last) in a row of the frame's last odd one.
-static void whole_blocks(const Window& image, int Y, int X0, int width, int& first, int& last) {
-    const bool two_rows = 2 * Y >= image.y0 && 2 * Y + 2 <= image.y1;
-    first = std::clamp(ceil_half(image.x0), X0, X0 + width);
-    last = two_rows ? std::clamp(floor_half(image.x1), first, X0 + width) : first;
+// The proxy columns of row Y from X0 on whose blocks the image holds whole, at a factor
+// with vector code: [first, last), or none (first = last).
+static void whole_blocks(const ProxyBlocks& blocks, int Y, int X0, int width, int& first, int& last) {
+    const int n = blocks.factor;
+    const Window& image = blocks.image;
+    const bool all_rows = n * Y >= image.y0 && n * Y + n <= image.y1 && n <= kMaxVectorProxyFactor;
+    first = std::clamp(ceil_div(image.x0, n), X0, X0 + width);
+    last = all_rows ? std::clamp(floor_div(image.x1, n), first, X0 + width) : first;
 }
 
-void block_mean_row(const ConstImageView& in, const Window& image, int Y, int X0, int width, float* colours) {
+void block_mean_row(const ConstImageView& in, const ProxyBlocks& blocks, int Y, int X0, int width, float* colours) {
     int first, last;
-    whole_blocks(image, Y, X0, width, first, last);
+    whole_blocks(blocks, Y, X0, width, first, last);
     const int n = colour_channel_count(in);
     for (int X = X0; X < X0 + width; ++X) {
         simd::Float1 c[3]{};
-        if (X >= first && X < last)
-            block_mean_lanes(in.at(2 * X, 2 * Y), in.at(2 * X, 2 * Y + 1), int(in.pixel_stride), n == 1, n, c);
-        else
-            edge_block_mean(in, image, X, Y, n, c);
+        const bool whole = X >= first && X < last &&
+                           with_vector_factor(blocks.factor, [&](auto N) {
+                               block_mean_lanes<decltype(N)::value>(in.at(N * X, N * Y), in.row_stride, int(in.pixel_stride), n == 1,
+                                                   n, c);
+                           });
+        if (!whole) edge_block_mean(in, blocks, X, Y, n, c);
         for (int i = 0; i < n; ++i) colours[size_t(X - X0) * n + i] = c[i][0];
     }
 }
 
 FilmExposure::FilmExposure(const ConstImageView& in, const std::vector<std::array<double, 3>>& weights,
-                           bool grey_input, double scale, const Window* blocks_of)
+                           bool grey_input, double scale, const ProxyBlocks* blocks_of)
     : in_(in), layers_(int(weights.size())), colours_(grey_input ? 1 : 3), scale_(float(scale)), blocks_of_(blocks_of) {
     for (const auto& w : weights) {
         for (double v : w) weights_.push_back(float(v));
@@ -399,10 +406,11 @@ void FilmExposure::row(int y, int x0, int width, float* const* exposure) const {
     if (first < last) {
         float* from_first[3];
         for (int l = 0; l < layers_; ++l) from_first[l] = exposure[l] + (first - x0);
-        simd::dispatch<BlockExposureRow>(in_.at(2 * first, 2 * y), in_.at(2 * first, 2 * y + 1),
-                                         int(in_.pixel_stride), grey_image, colours_, weights_.data(),
-                                         grey_scale_.data(), layers_, scale_, 0, last - first,
-                                         static_cast<float* const*>(from_first));
+        with_vector_factor(blocks_of_->factor, [&](auto N) {
+            simd::dispatch<BlockExposureRow<decltype(N)::value>>(in_.at(N * first, N * y), in_.row_stride, int(in_.pixel_stride),
+                                                grey_image, colours_, weights_.data(), grey_scale_.data(), layers_,
+                                                scale_, 0, last - first, static_cast<float* const*>(from_first));
+        });
     }
     for (int X = last; X < x0 + width; ++X) edge(X);
 }

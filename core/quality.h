@@ -16,10 +16,13 @@
 //              spread, the donors and the inhibition's factors there), tabulated
 //              H&D curves, grain from hashed noise (sums of uniform bytes: core/random.h)
 //              through a kernel without its negligible outer taps
-//   preview    as fast, on a proxy of the frame at half its resolution (twice the pixel
-//              pitch: grain, MTF and halation keep their size on the film), averaged down
-//              from the frame's pixels and its result upsampled bilinearly: the film's and
-//              paper's stages on a quarter of the pixels, for scrubbing and dragging sliders
+//   preview    as fast, on a proxy of the frame whose pixels are NxN blocks of the frame's
+//              (N times the pixel pitch: grain, MTF and halation keep their size on the
+//              film), averaged down from the frame's pixels and its result upsampled
+//              bilinearly: N is the smallest factor from 2 that leaves the proxy at most
+//              2^20 pixels (about 1 MP: HD and 2K at half resolution, 4096x2160 at a third,
+//              larger frames coarser), so its stages cost about the same at any frame size,
+//              for scrubbing and dragging sliders
 //
 // Every tier is measured against the reference by `darkroom bench`.
 #pragma once
@@ -61,11 +64,18 @@ struct QualityTier {
     // H&D curves: 0 = evaluated per pixel; otherwise a table with 2^bits samples per
     // octave of exposure (stages/tables.h).
     int curve_table_bits;
-    // 1: every stage at the frame's pixels; 2: on a proxy at half the resolution (twice the
-    // pixel pitch, so grain, MTF and halation keep their size on the film), with the settings
-    // above, its result upsampled to the frame's pixels (core/develop_proxy.cpp).
-    int proxy_scale;
+    // 0: every stage at the frame's pixels; otherwise on a proxy of at most this many pixels
+    // (proxy_factor), with the settings above, its result upsampled to the frame's pixels
+    // (core/develop_proxy.cpp).
+    long long proxy_pixel_budget;
 };
+
+// The proxy's pixel pitch over the frame's for a film frame of this many pixels: 1 where the
+// tier has no proxy, else the smallest integer N >= 2 whose proxy frame (ceil(width / N) x
+// ceil(height / N) pixels, blocks counted from the film frame's origin) holds at most
+// tier.proxy_pixel_budget pixels. It depends on the film frame alone, never on an image's
+// window, a tile or the threads, so every render of a frame reads the same proxy.
+int proxy_factor(const QualityTier& tier, int film_width_px, int film_height_px);
 
 // The default of the command line, the plugin and the Python module: the fastest tier
 // within the colour budget (mean CIEDE2000 <= 0.5 against the reference), from the

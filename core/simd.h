@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 
 namespace darkroom::simd {
 
@@ -68,6 +69,22 @@ __attribute__((always_inline)) inline void int32_lanes(int32_t (&lanes)[n], cons
         const int64_t pair = pairs[k];
         lanes[2 * k] = int32_t(pair);  // (x86 is little-endian: lane 2k is the low half)
         lanes[2 * k + 1] = int32_t(pair >> 32);
+    }
+}
+
+// Lanes picked from `count` vectors v[0] ... v[count - 1] (count >= 2) into `result`: lane j
+// is lane Pick::lane(j) of v[Pick::vector(j)], by count - 1 shuffles of two vectors (each
+// takes the lanes of the next vector). Pick's functions are constexpr.
+template <typename Pick, int count, typename V, size_t... J>
+__attribute__((always_inline)) inline void picked(const V* v, V& result, std::index_sequence<J...> j) {
+    constexpr int lanes = sizeof...(J);
+    if constexpr (count == 2) {
+        result = __builtin_shufflevector(v[0], v[1], (Pick::vector(J) < 2 ? Pick::vector(J) * lanes + Pick::lane(J) : 0)...);
+    } else {
+        V before;
+        picked<Pick, count - 1>(v, before, j);
+        result = __builtin_shufflevector(before, v[count - 1],
+                                         (Pick::vector(J) == count - 1 ? lanes + Pick::lane(J) : int(J))...);
     }
 }
 

@@ -127,7 +127,7 @@ std::vector<Parameter> make_table() {
     add(choice<Quality>("quality", [](Look& l) -> auto& { return l.settings.quality; }, quality_choices()), kStocks,
         "Quality", "quality", "",
         "How each stage is computed: reference (from its definition; slow), high, fast, or preview (fast on a "
-        "half-resolution proxy, upsampled: for interactive work); 'darkroom bench' measures each against the "
+        "proxy of about 1 MP, upsampled: for interactive work); 'darkroom bench' measures each against the "
         "reference")
         .per_pixel = true;
     add(choice<InputUnits>("input-units", [](Look& l) -> auto& { return l.settings.input_units; },

@@ -81,9 +81,10 @@ std::optional<Stock> find_paper(const Look& look, const Naming& name) {
     return find_named_stock(look.paper, parameter("paper"), name);
 }
 
-FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px) {
+FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px, int film_height_px) {
     return FrameGeometry{in.window.width(), in.window.height(), colour_channel_count(in) == 1,
-                         in.window.x0,      in.window.y0,       film_width_px};
+                         in.window.x0,      in.window.y0,       film_width_px,
+                         film_height_px};
 }
 
 GrainSynthesisPlan read_plate_grain(const std::string& profile_path, const GrainControls& controls) {
@@ -205,9 +206,10 @@ std::vector<std::string> non_finite_warnings(const Plan& plan, const ConstImageV
 Plan PlanCache::plan_for(const FrameGeometry& frame, int frame_number) {
     // Held while compiling: the other frames of this size need the same plan.
     std::lock_guard<std::mutex> lock(mutex_);
-    // The film frame's width and grey input need their own compile; each image's window of
-    // that frame (its data window) is a copy of it.
-    const auto key = std::make_pair(frame.film_width_px(), frame.monochrome);
+    // The film frame's size (its width sets the pitch, its height with it the preview's proxy
+    // factor) and grey input need their own compile; each image's window of that frame (its
+    // data window) is a copy of it.
+    const auto key = std::make_tuple(frame.film_width_px(), frame.film_height_px(), frame.monochrome);
     auto it = plans_.find(key);
     if (it == plans_.end()) it = plans_.emplace(key, renderer_.compile(frame, threads_)).first;
     return it->second.in_image(frame).for_frame(frame_number);

@@ -12,6 +12,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "core/develop.h"
@@ -29,8 +30,8 @@ std::optional<Stock> find_paper(const Look& look, const Naming& name);
 
 // The frame an input image is: its size, and grey when it has one or two channels (Y, Y+A),
 // whose channel 0 the plan reads as R, G and B. Its window is in the film frame's
-// coordinates, which is `film_width_px` wide (0: the image is the whole frame).
-FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px = 0);
+// coordinates, which is `film_width_px` wide and `film_height_px` high (0: the image's).
+FrameGeometry frame_geometry(const ConstImageView& in, int film_width_px = 0, int film_height_px = 0);
 
 // A grain profile file read and planned for synthesis; a bad file is the user's error.
 GrainSynthesisPlan read_plate_grain(const std::string& profile_path, const GrainControls& controls = {});
@@ -106,7 +107,7 @@ private:
     const Renderer& renderer_;
     int threads_;
     std::mutex mutex_;
-    std::map<std::pair<int, bool>, Plan> plans_;  // by the film frame's width and grey input
+    std::map<std::tuple<int, int, bool>, Plan> plans_;  // by the film frame's size and grey input
 };
 
 }  // namespace darkroom

@@ -145,7 +145,8 @@ std::shared_ptr<const Plan> plan_for(Instance& inst, const Renderer& renderer, c
                                      const NodeSettings& n, const FrameGeometry& frame) {
     // One compile per film frame and look; each image window (the Source's region) and
     // frame is a copy of it.
-    const std::string any_frame = look_key + "|film " + std::to_string(frame.film_width) + (frame.monochrome ? " grey" : ""),
+    const std::string any_frame = look_key + "|film " + std::to_string(frame.film_width) + "x" +
+                                  std::to_string(frame.film_height) + (frame.monochrome ? " grey" : ""),
                       this_frame = any_frame + "|image " + std::to_string(frame.x0) + ',' + std::to_string(frame.y0) +
                                    ',' + std::to_string(frame.width) + 'x' + std::to_string(frame.height) + "|frame " +
                                    std::to_string(n.frame);
@@ -369,9 +370,10 @@ FrameGeometry frame_geometry(const Placement& p) {
         throw RenderError("the Source image is " + std::to_string(w) + "x" + std::to_string(h) +
                           " pixels; Darkroom renders frames up to " + std::to_string(kMaxFrameSidePx) +
                           " pixels a side and 2^30 pixels in all");
-    const long long film_width = (long long)p.film.x2 - p.film.x1;
+    const long long film_width = (long long)p.film.x2 - p.film.x1, film_height = (long long)p.film.y2 - p.film.y1;
     const Window image = to_core(p.image, p.film);
-    return {(int)w, (int)h, false, image.x0, image.y0, (int)std::clamp(film_width, 1LL, (long long)kMaxFrameSidePx)};
+    return {(int)w, (int)h, false, image.x0, image.y0, (int)std::clamp(film_width, 1LL, (long long)kMaxFrameSidePx),
+            (int)std::clamp(film_height, 1LL, (long long)kMaxFrameSidePx)};
 }
 
 // The Source image and the film frame at `scale`; throws when the Source is not connected.

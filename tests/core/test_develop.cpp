@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <vector>
 
 #include "core/demo_scene.h"
@@ -525,4 +526,78 @@ TEST_CASE("the reference tier's budget refuses a render of more than a day befor
     const Plan high = Plan::compile(film, &paper, s, {frame.width(), frame.height()}, 1);
     CHECK(high.silver_grains_drawn(frame) == 0);
     CHECK(check_reference_render_budget(high, frame, "--quality ").empty());
+}
+
+TEST_CASE("the proxy's upsample keeps a constant and reproduces a linear ramp, held at the edges",
+          "[develop][preview]") {
+    // Bilinear interpolation at frame pixel x's centre, proxy coordinate t = (x + 1/2) / N - 1/2,
+    // with the edge pixels repeated: a linear function of the proxy's pixels gives that function
+    // at t clamped to the proxy frame's first and last centres. Factors with vector code
+    // (2, 3, 8) and without (9), every instruction set, windows at any offset in a block.
+    test::IsaScope scope;
+    const Window proxy_frame{-3, 2, 31, 19};
+    Image proxy(proxy_frame, 3);
+    auto ramp = [](double X, double Y) { return std::array<double, 3>{0.37, 0.5 + 0.25 * X, -1 + 0.125 * Y}; };
+    for (int Y = proxy_frame.y0; Y < proxy_frame.y1; ++Y)
+        for (int X = proxy_frame.x0; X < proxy_frame.x1; ++X)
+            for (int c = 0; c < 3; ++c) proxy.at(X, Y)[c] = float(ramp(X, Y)[size_t(c)]);
+    for (simd::Isa isa : test::runnable_isas()) {
+        simd::set_isa(isa);
+        for (int n : {2, 3, 8, 9}) {
+            const Window frame{n * proxy_frame.x0, n * proxy_frame.y0, n * proxy_frame.x1, n * proxy_frame.y1};
+            const Image in(frame, 3);
+            for (const Window& w : {frame, Window{frame.x0 + 1, frame.y0 + n + 2, frame.x1 - n - 1, frame.y1 - 1}}) {
+                INFO(simd::isa_name(isa) << ", factor " << n << ", window from " << w.x0 << "," << w.y0);
+                Image out(w, 3);
+                upsample_proxy(proxy.view(), proxy_frame, n, in.view(), out.view(), w, 2);
+                for (int y = w.y0; y < w.y1; ++y)
+                    for (int x = w.x0; x < w.x1; ++x) {
+                        const double tx = std::clamp((x + 0.5) / n - 0.5, proxy_frame.x0 + 0.0, proxy_frame.x1 - 1.0);
+                        const double ty = std::clamp((y + 0.5) / n - 0.5, proxy_frame.y0 + 0.0, proxy_frame.y1 - 1.0);
+                        for (int c = 0; c < 3; ++c)
+                            REQUIRE(out.at(x, y)[c] == Approx(ramp(tx, ty)[size_t(c)]).margin(2e-6));
+                    }
+            }
+        }
+    }
+}
+
+TEST_CASE("the grain's standard deviation after the proxy's upsample is proxy_upsampled_sigma_ratio's",
+          "[develop][preview][grain]") {
+    // At factor 2 the closed form it had: along an axis 3/4 a + 1/4 b, variance 9/16 + 1/16 +
+    // 6/16 rho; both axes: (0.625 + 0.375 rho)^2.
+    for (double rho : {0.0, 0.3, 0.8}) CHECK(proxy_upsampled_sigma_ratio(rho, 2) == Approx(0.625 + 0.375 * rho));
+    // Monte Carlo: unit Gaussian noise with lag-1 correlation rho along x and y (an AR(1)
+    // filter along each axis: correlation rho^|dx| rho^|dy|), upsampled; its RMS over the
+    // frame's pixels away from the proxy frame's edges.
+    constexpr int kSide = 400;
+    const Window proxy_frame{0, 0, kSide, kSide};
+    for (double rho : {0.0, 0.6})
+        for (int n : {2, 3, 5}) {
+            std::mt19937 random(7);
+            std::normal_distribution<double> normal;
+            std::vector<double> field(size_t(kSide) * kSide);
+            for (double& v : field) v = normal(random);
+            const double innovation = std::sqrt(1 - rho * rho);
+            for (int y = 0; y < kSide; ++y)
+                for (int x = 1; x < kSide; ++x)
+                    field[size_t(y) * kSide + x] = rho * field[size_t(y) * kSide + x - 1] + innovation * field[size_t(y) * kSide + x];
+            for (int y = 1; y < kSide; ++y)
+                for (int x = 0; x < kSide; ++x)
+                    field[size_t(y) * kSide + x] = rho * field[size_t(y - 1) * kSide + x] + innovation * field[size_t(y) * kSide + x];
+            Image proxy(proxy_frame, 3);
+            for (size_t i = 0; i < field.size(); ++i)
+                for (int c = 0; c < 3; ++c) proxy.pixels[3 * i + size_t(c)] = float(field[i]);
+            const Window frame{0, 0, n * kSide, n * kSide};
+            const Window inside = frame.grown(-n);
+            const Image in(inside, 3);
+            Image out(inside, 3);
+            upsample_proxy(proxy.view(), proxy_frame, n, in.view(), out.view(), inside, 2);
+            double proxy_sum2 = 0, out_sum2 = 0;
+            for (double v : field) proxy_sum2 += v * v;
+            for (size_t i = 0; i < out.pixels.size(); i += 3) out_sum2 += double(out.pixels[i]) * out.pixels[i];
+            const double ratio = std::sqrt(out_sum2 / double(inside.pixel_count()) / (proxy_sum2 / double(field.size())));
+            INFO("rho " << rho << ", factor " << n);
+            CHECK(ratio == Approx(proxy_upsampled_sigma_ratio(rho, n)).epsilon(0.01));
+        }
 }

@@ -11,6 +11,7 @@
 #include <random>
 #include <set>
 #include <thread>
+#include <tuple>
 
 #include "core/demo_scene.h"
 #include "core/develop.h"
@@ -615,96 +616,149 @@ TEST_CASE("quality tiers are named, parsed and ordered reference first", "[quali
     CHECK(kQualities[0] == Quality::reference);
 }
 
-TEST_CASE("the preview tier is the fast tier on a half-resolution proxy, upsampled", "[quality][preview]") {
-    // Independently of develop_proxy.cpp: the scene averaged over 2x2 blocks of the film
-    // frame's pixels (an odd frame's last blocks hold what it has), developed at the fast tier
-    // at twice the pixel pitch, and interpolated bilinearly at the frame's pixel centres. So
-    // MTF and halation are fast's at the proxy's pitch: their size on the film is kept. So is
-    // the grain's, but its amplitude is raised to the frame's (the print-grain test above), so
-    // it is off here.
+TEST_CASE("the preview's proxy factor is the smallest from 2 that leaves at most 2^20 pixels", "[quality][preview]") {
+    const QualityTier& preview = quality_tier(Quality::preview);
+    CHECK(preview.proxy_pixel_budget == 1 << 20);
+    for (Quality q : {Quality::reference, Quality::high, Quality::fast}) CHECK(proxy_factor(quality_tier(q), 4096, 2160) == 1);
+    // The proxy frame: blocks counted from the film frame's origin, the last ones partial.
+    auto proxy_pixels = [](long long width, long long height, long long n) {
+        return ((width + n - 1) / n) * ((height + n - 1) / n);
+    };
+    // HD, 2K flat and full aperture, the benchmark's 4096x2160, 6K: by hand, 4096x2160 at 2 has
+    // 2048 x 1080 = 2.2 M pixels and at 3 1366 x 720 = 0.98 M; 6144x3160 at 4 1536 x 790 = 1.2 M
+    // and at 5 1229 x 632 = 0.78 M.
+    for (auto [width, height, expected] : {std::tuple{1920, 1080, 2}, std::tuple{2048, 1080, 2},
+                                           std::tuple{2048, 1556, 2}, std::tuple{4096, 2160, 3},
+                                           std::tuple{6144, 3160, 5}}) {
+        INFO(width << "x" << height);
+        const int n = proxy_factor(preview, width, height);
+        CHECK(n == expected);
+        CHECK(proxy_pixels(width, height, n) <= 1 << 20);
+        if (n > 2) CHECK(proxy_pixels(width, height, n - 1) > 1 << 20);
+    }
+    // The film frame's, whatever part of it an image holds.
+    CHECK(proxy_factor(preview, FrameGeometry{97, 63, false, 1000, 500, 4096, 2160}) == 3);
+    CHECK(proxy_factor(preview, FrameGeometry{4096, 2160}) == 3);
+    CHECK(proxy_factor(preview, FrameGeometry{97, 63}) == 2);
+}
+
+TEST_CASE("the preview tier is the fast tier on a proxy, upsampled", "[quality][preview]") {
+    // Independently of develop_proxy.cpp: the scene averaged over NxN blocks of the film
+    // frame's pixels (the image's blocks at its edges hold what it has), developed at the
+    // fast tier at N times the pixel pitch, and interpolated bilinearly at the frame's pixel
+    // centres (pixel N X + k at proxy coordinate X + (k + 1/2) / N - 1/2). So MTF and
+    // halation are fast's at the proxy's pitch: their size on the film is kept. So is the
+    // grain's, but its amplitude is raised to the frame's (the print-grain test above), so
+    // it is off here. N = 2 for a small frame, 3 for an image of a 4096x2160 frame that
+    // starts within a block.
     // The input as grey, grey and alpha, RGB and RGBA, with values the film sees as others in
     // some blocks (NaN and -Inf as no light, +Inf and 1e38 held at 1e30), inside and at the
-    // frame's edges.
+    // image's edges.
     const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
-    constexpr int kWidth = 97, kHeight = 63, kProxyWidth = 49, kProxyHeight = 32;
-    const Image rgb = demo_scene(kWidth, kHeight);
+    constexpr int kWidth = 97, kHeight = 63;
     const float inf = std::numeric_limits<float>::infinity();
     const std::pair<int, int> bad_at[] = {{10, 10}, {41, 20}, {96, 30}, {50, 62}, {96, 62}};
     const float bad[] = {std::numeric_limits<float>::quiet_NaN(), -inf, inf, 1e38f, -1e38f};
     const auto film_sees = [inf](float v) { return v != v || v == -inf ? 0.0f : std::clamp(v, -1e30f, 1e30f); };
-    DevelopSettings s;
-    s.quality = Quality::preview;
-    s.grain = false;
-    s.frame_width_mm = kWidth * 0.006;  // a 4K frame's pitch: MTF and halation act
-    s.print_width_mm = kWidth * 0.0054;
-    for (int channels : {1, 2, 3, 4}) {
-        INFO(channels << " channels");
-        const int colours = channels >= 3 ? 3 : 1;  // (grey: the green channel)
-        Image scene(kWidth, kHeight, channels, 0.5f);
-        for (int y = 0; y < kHeight; ++y)
-            for (int x = 0; x < kWidth; ++x)
-                for (int c = 0; c < colours; ++c) scene.at(x, y)[c] = rgb.at(x, y)[colours == 3 ? c : 1];
-        for (size_t i = 0; i < std::size(bad_at); ++i)
-            scene.at(bad_at[i].first, bad_at[i].second)[int(i) % colours] = bad[i];
-        const Image preview = test::render(film, &paper, s, scene, 2);
-
-        Image small(kProxyWidth, kProxyHeight, colours);
-        for (int Y = 0; Y < kProxyHeight; ++Y)
-            for (int X = 0; X < kProxyWidth; ++X)
-                for (int c = 0; c < colours; ++c) {
-                    float sum = 0;
-                    int count = 0;
-                    for (int y = 2 * Y; y < std::min(2 * Y + 2, kHeight); ++y)
-                        for (int x = 2 * X; x < std::min(2 * X + 2, kWidth); ++x, ++count)
-                            sum += film_sees(scene.at(x, y)[c]);
-                    small.at(X, Y)[c] = sum / float(count);
-                }
+    for (const FrameGeometry& frame :
+         {FrameGeometry{kWidth, kHeight}, FrameGeometry{kWidth, kHeight, false, 1000, 500, 4096, 2160}}) {
+        const int n = proxy_factor(quality_tier(Quality::preview), frame);
+        INFO("factor " << n);
+        const Window image{frame.x0, frame.y0, frame.x0 + kWidth, frame.y0 + kHeight};
+        // (The frame's and the print's widths at a 4K frame's pitch: MTF and halation act.)
+        DevelopSettings s;
+        s.quality = Quality::preview;
+        s.grain = false;
+        s.frame_width_mm = frame.film_width_px() * 0.006;
+        s.print_width_mm = frame.film_width_px() * 0.0054;
+        const Plan plan = Plan::compile(film, &paper, s, frame);
+        const Window proxy_window{image.x0 / n, image.y0 / n, (image.x1 + n - 1) / n, (image.y1 + n - 1) / n};
+        const int proxy_film_width = (frame.film_width_px() + n - 1) / n;
         DevelopSettings fast = s;
         fast.quality = Quality::fast;
-        const double widen = double(kProxyWidth) * 2 / kWidth;  // (the proxy's pitch exactly twice the frame's)
+        const double widen = double(proxy_film_width) * n / frame.film_width_px();  // (the pitch exactly n times)
         fast.frame_width_mm = s.frame_width_mm * widen;
         fast.print_width_mm = s.print_width_mm * widen;
-        const Image proxy = test::render(film, &paper, fast, small, 2);
-
-        auto taps = [](int x, int n) {  // the nearer and the farther proxy pixel of frame pixel x
-            const int near = x / 2, far = x % 2 == 0 ? near - 1 : near + 1;
-            return std::pair{std::clamp(near, 0, n - 1), std::clamp(far, 0, n - 1)};
+        const Plan fast_plan = Plan::compile(film, &paper, fast,
+                                             {proxy_window.width(), proxy_window.height(), false, proxy_window.x0,
+                                              proxy_window.y0, proxy_film_width});
+        // The nearer and the farther proxy pixel of frame pixel x, and the farther's weight.
+        auto taps = [n](int x, int lo, int hi) {
+            const int near = x / n;
+            const double offset = (x - n * near + 0.5) / n - 0.5;
+            const int far = offset < 0 ? near - 1 : near + 1;
+            return std::tuple{std::clamp(near, lo, hi - 1), std::clamp(far, lo, hi - 1), float(std::abs(offset))};
         };
-        for (int y = 0; y < kHeight; ++y)
-            for (int x = 0; x < kWidth; ++x) {
-                const auto [xn, xf] = taps(x, kProxyWidth);
-                const auto [yn, yf] = taps(y, kProxyHeight);
-                for (int c = 0; c < 3; ++c) {
-                    const float near_row = 0.75f * proxy.at(xn, yn)[c] + 0.25f * proxy.at(xf, yn)[c];
-                    const float far_row = 0.75f * proxy.at(xn, yf)[c] + 0.25f * proxy.at(xf, yf)[c];
-                    REQUIRE(preview.at(x, y)[c] == 0.75f * near_row + 0.25f * far_row);
+        const Image rgb = demo_scene(kWidth, kHeight);
+        for (int channels : {1, 2, 3, 4}) {
+            INFO(channels << " channels");
+            const int colours = channels >= 3 ? 3 : 1;  // (grey: the green channel)
+            Image scene(image, channels);
+            std::fill(scene.pixels.begin(), scene.pixels.end(), 0.5f);
+            for (int y = 0; y < kHeight; ++y)
+                for (int x = 0; x < kWidth; ++x)
+                    for (int c = 0; c < colours; ++c)
+                        scene.at(image.x0 + x, image.y0 + y)[c] = rgb.at(x, y)[colours == 3 ? c : 1];
+            for (size_t i = 0; i < std::size(bad_at); ++i)
+                scene.at(image.x0 + bad_at[i].first, image.y0 + bad_at[i].second)[int(i) % colours] = bad[i];
+            Image preview(image, 3);
+            plan.run(scene.view(), preview.view(), 2);
+
+            Image small(proxy_window, colours);
+            for (int Y = proxy_window.y0; Y < proxy_window.y1; ++Y)
+                for (int X = proxy_window.x0; X < proxy_window.x1; ++X)
+                    for (int c = 0; c < colours; ++c) {
+                        float sum = 0;
+                        int count = 0;
+                        for (int y = std::max(n * Y, image.y0); y < std::min(n * Y + n, image.y1); ++y)
+                            for (int x = std::max(n * X, image.x0); x < std::min(n * X + n, image.x1); ++x, ++count)
+                                sum += film_sees(scene.at(x, y)[c]);
+                        small.at(X, Y)[c] = sum / float(count);
+                    }
+            Image proxy(proxy_window, 3);
+            fast_plan.run(small.view(), proxy.view(), 2);
+
+            for (int y = image.y0; y < image.y1; ++y)
+                for (int x = image.x0; x < image.x1; ++x) {
+                    const auto [xn, xf, wx] = taps(x, proxy_window.x0, proxy_window.x1);
+                    const auto [yn, yf, wy] = taps(y, proxy_window.y0, proxy_window.y1);
+                    for (int c = 0; c < 3; ++c) {
+                        const float near_row = (1.0f - wx) * proxy.at(xn, yn)[c] + wx * proxy.at(xf, yn)[c];
+                        const float far_row = (1.0f - wx) * proxy.at(xn, yf)[c] + wx * proxy.at(xf, yf)[c];
+                        REQUIRE(preview.at(x, y)[c] == (1.0f - wy) * near_row + wy * far_row);
+                    }
                 }
-            }
+        }
     }
 }
 
 TEST_CASE("the preview tier's negative has the frame's grain per pixel, coarser", "[quality][preview][grain]") {
-    // Averaging 2x2 blocks quarters fine grain's variance and the bilinear upsample keeps
-    // (0.625 + 0.375 rho)^2 of the rest: the proxy's amplitude is raised by both. On a flat
-    // field the negative's grain is the filtered noise alone (its MTF acts before the grain).
+    // Averaging NxN blocks divides fine grain's variance by N^2 and the bilinear upsample keeps
+    // proxy_upsampled_sigma_ratio^2 of the rest: the proxy's amplitude is raised by both. On a
+    // flat field the negative's grain is the filtered noise alone (its MTF acts before the
+    // grain). A window of a 4096 px wide frame: 2160 high its factor is 3, 256 high 2.
     const Stock film = find_stock("kodak-vision3-250d");
     constexpr int kSide = 256;
     Image flat(Window{0, 0, kSide, kSide}, 3);
     std::fill(flat.pixels.begin(), flat.pixels.end(), 0.18f);
-    std::array<std::array<double, 3>, 2> rms{};
-    for (int tier = 0; tier < 2; ++tier) {
-        DevelopSettings s;
-        s.quality = tier == 0 ? Quality::fast : Quality::preview;
-        s.output = OutputMode::negative;
-        s.frame_width_mm = 4096 * 0.00608;
-        Plan plan = Plan::compile(film, nullptr, s, {kSide, kSide, false, 0, 0, 4096});
-        Image out(flat.window, 3);
-        plan.run(flat.view(), out.view(), 2);
-        rms[size_t(tier)] = log_rms(out);
-    }
-    for (int c = 0; c < 3; ++c) {
-        INFO("channel " << c << ": fast " << rms[0][size_t(c)] << ", preview " << rms[1][size_t(c)]);
-        CHECK(rms[1][size_t(c)] == Approx(rms[0][size_t(c)]).epsilon(0.03));
+    for (int film_height : {kSide, 2160}) {
+        const FrameGeometry frame{kSide, kSide, false, 0, 0, 4096, film_height};
+        INFO("factor " << proxy_factor(quality_tier(Quality::preview), frame));
+        std::array<std::array<double, 3>, 2> rms{};
+        for (int tier = 0; tier < 2; ++tier) {
+            DevelopSettings s;
+            s.quality = tier == 0 ? Quality::fast : Quality::preview;
+            s.output = OutputMode::negative;
+            s.frame_width_mm = 4096 * 0.00608;
+            Plan plan = Plan::compile(film, nullptr, s, frame);
+            Image out(flat.window, 3);
+            plan.run(flat.view(), out.view(), 2);
+            rms[size_t(tier)] = log_rms(out);
+        }
+        for (int c = 0; c < 3; ++c) {
+            INFO("channel " << c << ": fast " << rms[0][size_t(c)] << ", preview " << rms[1][size_t(c)]);
+            CHECK(rms[1][size_t(c)] == Approx(rms[0][size_t(c)]).epsilon(0.03));
+        }
     }
 }
 
@@ -750,6 +804,39 @@ TEST_CASE("the preview tier's pixels are the same for any thread count and windo
     frame2.frame = 2;
     CHECK(test::render(film, &paper, frame2, scene, 2).pixels == other.pixels);
     CHECK(other.pixels != whole.pixels);
+}
+
+TEST_CASE("the preview tier's pixels at factor 3 are the same for any thread count and window",
+          "[quality][preview][determinism]") {
+    // An image of a 4096x2160 frame (its proxy factor 3) that starts within a block: windows
+    // at each offset within a block, one pixel wide, and at the image's edges.
+    const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
+    const FrameGeometry frame{101, 67, false, 2000, 1001, 4096, 2160};
+    REQUIRE(proxy_factor(quality_tier(Quality::preview), frame) == 3);
+    const Image rgb = demo_scene(101, 67);
+    Image scene(Window{frame.x0, frame.y0, frame.x0 + 101, frame.y0 + 67}, 3);
+    std::copy(rgb.pixels.begin(), rgb.pixels.end(), scene.pixels.begin());
+    DevelopSettings s;
+    s.quality = Quality::preview;
+    s.seed = 3;
+    s.frame_width_mm = 4096 * 0.006;
+    s.print_width_mm = 4096 * 0.0054;
+    const Plan plan = Plan::compile(film, &paper, s, frame);
+    Image whole(scene.window, 3);
+    plan.run(scene.view(), whole.view(), 1);
+    for (Window w : {Window{2000, 1001, 2037, 1030}, Window{2001, 1002, 2050, 1040}, Window{2002, 1003, 2101, 1068},
+                     Window{2077, 1004, 2078, 1005}, Window{2100, 1001, 2101, 1068}, Window{2000, 1067, 2101, 1068}})
+        for (int threads : {1, 3}) {
+            INFO(w.x0 << "," << w.y0 << " " << w.width() << "x" << w.height() << ", " << threads << " threads");
+            Image part(w, 3);
+            plan.run(scene.view(), part.view(), threads);
+            for (int y = w.y0; y < w.y1; ++y)
+                for (int x = w.x0; x < w.x1; ++x)
+                    for (int c = 0; c < 3; ++c) REQUIRE(part.at(x, y)[c] == whole.at(x, y)[c]);
+        }
+    Image five(scene.window, 3);
+    plan.run(scene.view(), five.view(), 5);
+    CHECK(five.pixels == whole.pixels);
 }
 
 TEST_CASE("a plan compiled after a print setting changed prints as one compiled afresh", "[quality][print]") {

@@ -293,9 +293,9 @@ TEST_CASE("bad and extreme pixels give finite, in-range output in every mode and
 TEST_CASE("without grain, MTF and halation each bad pixel develops as its documented replacement", "[stability]") {
     const std::vector<float> values = bad_values(1);
     for (Quality q : kQualities) {
-        // (A proxy averages each 2x2 block and interpolates between blocks, so no pixel is its
+        // (A proxy averages each block and interpolates between blocks, so no pixel is its
         // own; its blocks take bad values as the film does: "the preview tier is the fast tier ...")
-        if (quality_tier(q).proxy_scale > 1) continue;
+        if (quality_tier(q).proxy_pixel_budget > 0) continue;
         for (const StockPair& p : stock_pairs())
             for (OutputMode mode : kModes) {
                 INFO(quality_name(q) << ", " << p.name << ", " << mode_name(mode));
