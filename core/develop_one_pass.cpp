@@ -141,7 +141,7 @@ public:
 
 private:
     float* kept(size_t layer, int y) {
-        return ring_[layer].data() + size_t(((y % slots_) + slots_) % slots_) * size_t(stride_);
+        return ring_[layer].data() + size_t(floor_mod(y, slots_)) * size_t(stride_);
     }
     const CouplerStage& c_;
     int offset_, width_, stride_, slots_ = 0;

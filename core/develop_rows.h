@@ -22,11 +22,6 @@ int colour_channel(const ConstImageView& in, int c);
 // An input value as the film sees it: NaN and -Inf are 0, the rest held within +-kMaxInput.
 double sanitize(float v);
 
-// Floor and ceiling of v / n (n > 0) for any sign of v: the block of pixel v, and the blocks
-// that pixels below v fill.
-inline int floor_div(int v, int n) { return v >= 0 ? v / n : -((-v + n - 1) / n); }
-inline int ceil_div(int v, int n) { return -floor_div(-v, n); }
-
 // The proxy factors whose block means and upsample run in vector code, each its own
 // instantiation (a frame of up to about 64 MP); the others a pixel at a time, the same values.
 constexpr int kMaxVectorProxyFactor = 8;

@@ -22,6 +22,12 @@
 
 namespace darkroom {
 
+// Floor and ceiling of v / n, and v's remainder in [0, n), for n > 0 and any sign of v: the
+// block of pixel v among blocks of n pixels from 0, and row v's slot in a ring of n rows.
+inline int floor_div(int v, int n) { return v >= 0 ? v / n : -((-v + n - 1) / n); }
+inline int ceil_div(int v, int n) { return -floor_div(-v, n); }
+inline int floor_mod(int v, int n) { return ((v % n) + n) % n; }
+
 // A rectangle of pixels in absolute frame coordinates; x1, y1 are exclusive.
 struct Window {
     int x0 = 0, y0 = 0, x1 = 0, y1 = 0;

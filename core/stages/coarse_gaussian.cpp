@@ -17,8 +17,6 @@ namespace darkroom {
 
 namespace {
 
-int floor_div(int a, int d) { return a >= 0 ? a / d : -((-a + d - 1) / d); }
-
 // The row loops, in vectors of any width then one value at a time (core/simd.h): the same
 // float operations on every value.
 template <typename V>
@@ -296,7 +294,7 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
 
 float* CoarseGaussianStream::ring_row(size_t plane, int y) {
     if (y < next_ - slots_ || y >= next_) throw std::logic_error("coarse Gaussian: a row outside the stream's ring");
-    const size_t slot = size_t(((y % slots_) + slots_) % slots_);
+    const size_t slot = size_t(floor_mod(y, slots_));
     if (lent_.row) return ring_rows_[slot * planes_.size() + plane];
     return &ring_[plane][slot * size_t(read_x1_ - read_x0_)];
 }
@@ -310,13 +308,13 @@ void CoarseGaussianStream::read_to(int y) {
     for (; next_ <= y; ++next_) {
         if (lent_.row) {
             float* const* rows = lent_.row(next_);
-            const size_t slot = size_t(((next_ % slots_) + slots_) % slots_);
+            const size_t slot = size_t(floor_mod(next_, slots_));
             for (size_t p = 0; p < planes_.size(); ++p)
                 ring_rows_[slot * planes_.size() + p] = rows[p] + (read_x0_ - lent_.x0);
             continue;
         }
         for (size_t p = 0; p < planes_.size(); ++p)
-            ring_rows_[p] = &ring_[p][size_t(((next_ % slots_) + slots_) % slots_) * size_t(read_x1_ - read_x0_)];
+            ring_rows_[p] = &ring_[p][size_t(floor_mod(next_, slots_)) * size_t(read_x1_ - read_x0_)];
         source_(next_, read_x0_, read_x1_, ring_rows_.data());
     }
 }

@@ -353,12 +353,12 @@ int SeparableStream::padded_slots(const SeparableFilter& f) const {
 }
 
 float* SeparableStream::ring_row(size_t plane, int term, int y) {
-    return &ring_[plane][(size_t(term) * slots_ + ((y % slots_) + slots_) % slots_) * stride_];
+    return &ring_[plane][(size_t(term) * slots_ + floor_mod(y, slots_)) * stride_];
 }
 
 float* SeparableStream::padded_row(size_t plane, int y) {
     const int slots = padded_slots(filters_[plane]);
-    const size_t slot = size_t(((y % slots) + slots) % slots);
+    const size_t slot = size_t(floor_mod(y, slots));
     return &padded_[plane][slot * padded_stride_];
 }
 
@@ -386,7 +386,7 @@ float* const* SeparableStream::row(int y) {
             continue;
         }
         for (int o = 0; o < rows; ++o)
-            out_rows_[o][p] = &output_[p][size_t(((y + o) % output_slots_ + output_slots_) % output_slots_) * stride_];
+            out_rows_[o][p] = &output_[p][size_t(floor_mod(y + o, output_slots_)) * stride_];
         const float* pixels[kMaxRowsTogether];  // the rows' own input pixels, for the centre
         for (int o = 0; o < rows; ++o) pixels[o] = padded_row(p, y + o) + radius_;
         if (f.terms.empty()) {

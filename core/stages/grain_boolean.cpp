@@ -65,8 +65,6 @@ double table_at(const std::vector<double>& table, double net) {
     return table[i] + t * (table[i + 1] - table[i]);
 }
 
-int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
-
 // The density a cell's grains follow: NaN counts as d_min, infinities as the float range.
 double sanitized_density(float d, float d_min) {
     if (std::isnan(d)) return d_min;
@@ -472,7 +470,7 @@ private:
 
     CellGrains& grains(int cx, int cy) {
         const int rows = 2 * g_.grain_reach_cells + 1;
-        return ring_[size_t(((cy % rows) + rows) % rows)][size_t(cx - grain_x0_)];
+        return ring_[size_t(floor_mod(cy, rows))][size_t(cx - grain_x0_)];
     }
 
     void render_strip(int sx0, int sx1, int cy0, int cy1) {

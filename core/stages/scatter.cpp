@@ -357,8 +357,6 @@ void scatter_direct(const Plane& src, Plane& dst, const ScatterKernel& kernel, c
 
 namespace {
 
-int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
-
 // The FFT's side for a kernel: at least two kernel widths, so that a tile's outputs are at
 // least a quarter of its grid. A window computes its tiles whole, and under a print the
 // film's stages (its silver grain) over the paper's tiles: smaller grids keep a small
