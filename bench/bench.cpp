@@ -41,7 +41,7 @@ double stage_seconds_when_on(const std::vector<StageTime>& on, const std::vector
     return seconds;
 }
 
-// The target frame is this wide; every frame size is benchmarked at its pixel pitch.
+// The benchmark's frame is this wide; every frame size is benchmarked at its pixel pitch.
 constexpr int kTargetWidthPx = 4096;
 
 // The look the benchmark develops: film to print with grain, MTF and halation on, at the

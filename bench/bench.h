@@ -2,7 +2,7 @@
 //
 // Timing: each tier develops the whole frame (the demo scene, core/demo_scene.h) through
 // the look (film to print, grain, MTF and halation on; at the pixel pitch of a 4096 px
-// wide frame whatever the size, so a smaller frame is a piece of the target), one warm-up run then `runs` timed
+// wide frame whatever the size, so a smaller frame is a piece of the benchmark's frame), one warm-up run then `runs` timed
 // runs, the fastest kept with its per-stage times (Plan::run's StageTimes). A plain copy
 // of the same float RGB buffer on the same threads is timed in the same run, so every
 // time is also a multiple of the copy (its fastest of 20 runs, timed in turn with the fast
@@ -44,7 +44,7 @@
 namespace darkroom::bench {
 
 struct BenchOptions {
-    int width = 4096, height = 2160;  // the target frame
+    int width = 4096, height = 2160;  // the benchmark's frame
     int threads = 0;                  // 0 = all cores
     std::vector<Quality> tiers{std::begin(kQualities), std::end(kQualities)};  // reference is always run
     int runs = 3;                     // timed whole-frame runs after one warm-up; the fastest is kept

@@ -78,7 +78,7 @@ struct QualityTier {
 int proxy_factor(const QualityTier& tier, int film_width_px, int film_height_px);
 
 // The default of the command line, the plugin and the Python module: the fastest tier
-// within the colour budget (mean CIEDE2000 <= 0.5 against the reference), from the
+// within the product's colour budget (mean CIEDE2000 <= 0.5 against the reference), from the
 // benchmark's Pareto table (docs/development/quality-tiers.md).
 constexpr Quality kDefaultQuality = Quality::fast;
 
