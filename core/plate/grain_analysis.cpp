@@ -651,8 +651,33 @@ double sum_rho2(const std::vector<double>& rho, const LagGrid& lags, int size) {
     return sum;
 }
 
+// The block size whose lag grid holds the measured grain's correlation (kBlockPerGrainSize).
+int block_size_for_grain(const BlockAnalysis& a) {
+    int needed = kSmallestBlockPx;
+    for (const ChannelState& s : a.state) {
+        const double lag1 = std::max(s.rho[a.lags.index(1, 0)], s.rho[a.lags.index(0, 1)]);
+        if (!(lag1 > 0.01)) continue;
+        const double size_px = lag1 < 1 ? std::sqrt(-1.0 / (4.0 * std::log(lag1))) : INFINITY;
+        const double block = std::min<double>(kLargestBlockPx, kBlockPerGrainSize * size_px);
+        needed = std::max(needed, kBlockStepPx * (int)std::ceil(block / kBlockStepPx));
+    }
+    return needed;
+}
+
+// The block size the automatic analysis takes after one at a.block_px: larger while the
+// grain needs it and the plate holds enough blocks of it.
+int next_block_size(const std::vector<ConstImageView>& frames, const BlockAnalysis& a) {
+    const int needed = std::min(block_size_for_grain(a), kLargestBlockPx);
+    int size = a.block_px;
+    while (size + kBlockStepPx <= needed && count_blocks(frames, size + kBlockStepPx) >= kMinAutoBlockCount)
+        size += kBlockStepPx;
+    return size;
+}
+
+// `automatic`: the block size is the automatic one, and an analysis it moves on from needs no
+// response.
 BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const GrainAnalysisSettings& settings, int nch,
-                             int bs) {
+                             int bs, bool automatic) {
     BlockAnalysis a;
     a.block_px = bs;
     a.channels = nch;
@@ -972,6 +997,7 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
             }
         });
     }
+    if (automatic && next_block_size(frames, a) != bs) return a;
     // The final autocorrelation sets the fit's degrees of freedom for the final curve, and the
     // whitening of the response.
     parallel_for(0, nch, settings.threads, [&](int c_begin, int c_end) {
@@ -982,19 +1008,6 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
         }
     });
     return a;
-}
-
-// The block size whose lag grid holds the measured grain's correlation (kBlockPerGrainSize).
-int block_size_for_grain(const BlockAnalysis& a) {
-    int needed = kSmallestBlockPx;
-    for (const ChannelState& s : a.state) {
-        const double lag1 = std::max(s.rho[a.lags.index(1, 0)], s.rho[a.lags.index(0, 1)]);
-        if (!(lag1 > 0.01)) continue;
-        const double size_px = lag1 < 1 ? std::sqrt(-1.0 / (4.0 * std::log(lag1))) : INFINITY;
-        const double block = std::min<double>(kLargestBlockPx, kBlockPerGrainSize * size_px);
-        needed = std::max(needed, kBlockStepPx * (int)std::ceil(block / kBlockStepPx));
-    }
-    return needed;
 }
 
 }  // namespace
@@ -1016,15 +1029,12 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                                  std::to_string(kMinBlockCount) + " blocks of " + std::to_string(first_size) + "x" +
                                  std::to_string(first_size) + " px");
     }
-    BlockAnalysis a = analyse_blocks(frames, settings, nch, first_size);
+    BlockAnalysis a = analyse_blocks(frames, settings, nch, first_size, automatic);
     // Automatic: larger blocks while the grain needs them and the plate has them.
     while (automatic) {
-        const int needed = std::min(block_size_for_grain(a), kLargestBlockPx);
-        int size = a.block_px;
-        while (size + kBlockStepPx <= needed && count_blocks(frames, size + kBlockStepPx) >= kMinAutoBlockCount)
-            size += kBlockStepPx;
+        const int size = next_block_size(frames, a);
         if (size == a.block_px) break;
-        a = analyse_blocks(frames, settings, nch, size);
+        a = analyse_blocks(frames, settings, nch, size, automatic);
     }
     const int bs = a.block_px, npx = bs * bs, nblocks = (int)a.blocks.size(), nbins = a.bins;
     const std::vector<Block>& blocks = a.blocks;
