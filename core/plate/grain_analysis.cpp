@@ -477,7 +477,8 @@ struct PatchSpace {
     // the block: a summed-area table per lag, not a product per pair and patch.
     void accumulate(const double* block, int n, PatchMoments& m) const {
         const int origins = n - side + 1;  // patch positions along each axis
-        std::vector<double> values((size_t)n * n), table((size_t)(n + 1) * (n + 1), 0.0);  // of values: sums over [0, x) x [0, y)
+        std::vector<double> values((size_t)n * n);
+        std::vector<double> table((size_t)(n + 1) * (n + 1), 0.0);  // of values: sums over [0, x) x [0, y)
         auto fill_table = [&]() {
             for (int y = 0; y < n; ++y) {
                 double row = 0;
@@ -489,14 +490,14 @@ struct PatchSpace {
         };
         auto origins_sum = [&](int i) {  // of values at patch pixel i over all patches
             const int x0 = i % side, y0 = i / side, x1 = x0 + origins, y1 = y0 + origins;
-            return table[(size_t)y1 * (n + 1) + x1] - table[(size_t)y0 * (n + 1) + x1] - table[(size_t)y1 * (n + 1) + x0] +
-                   table[(size_t)y0 * (n + 1) + x0];
+            auto at = [&](int x, int y) { return table[(size_t)y * (n + 1) + x]; };
+            return at(x1, y1) - at(x1, y0) - at(x0, y1) + at(x0, y0);
         };
         std::copy(block, block + values.size(), values.begin());
         fill_table();
         for (int i = 0; i < dim; ++i) m.first[i] += origins_sum(i);
-        // The lags from a pixel to the ones after it in row-major order; a pixel without a
-        // partner at the lag lies outside every patch's pair.
+        // The lags from a pixel to the ones after it in row-major order (a pixel without a partner
+        // at the lag is in no patch's pair: 0).
         for (int dy = 0; dy < side; ++dy)
             for (int dx = dy == 0 ? 0 : 1 - side; dx < side; ++dx) {
                 std::fill(values.begin(), values.end(), 0.0);
