@@ -10,6 +10,7 @@
 
 #include "core/parallel.h"
 #include "core/plate/grain_synthesis.h"
+#include "core/plate/symmetric_eigenvalues.h"
 #include "core/stages/filters.h"
 
 namespace darkroom {
@@ -471,19 +472,45 @@ struct PatchSpace {
         }
     }
 
-    // Every patch of an n x n block (row-major).
+    // Every patch of an n x n block (row-major). Patch pixels i and j lie a fixed lag apart, so
+    // their products over all patches sum the block's products at that lag over a square of
+    // the block: a summed-area table per lag, not a product per pair and patch.
     void accumulate(const double* block, int n, PatchMoments& m) const {
-        std::vector<double> x(dim);
-        for (int y0 = 0; y0 + side <= n; ++y0)
-            for (int x0 = 0; x0 + side <= n; ++x0) {
-                for (int i = 0; i < dim; ++i) x[i] = block[(size_t)(y0 + i / side) * n + x0 + i % side];
-                for (int i = 0; i < dim; ++i) {
-                    m.first[i] += x[i];
-                    double* row = &m.second[(size_t)i * dim];
-                    for (int j = i; j < dim; ++j) row[j] += x[i] * x[j];
+        const int origins = n - side + 1;  // patch positions along each axis
+        std::vector<double> values((size_t)n * n);
+        std::vector<double> table((size_t)(n + 1) * (n + 1), 0.0);  // of values: sums over [0, x) x [0, y)
+        auto fill_table = [&]() {
+            for (int y = 0; y < n; ++y) {
+                double row = 0;
+                for (int x = 0; x < n; ++x) {
+                    row += values[(size_t)y * n + x];
+                    table[(size_t)(y + 1) * (n + 1) + x + 1] = table[(size_t)y * (n + 1) + x + 1] + row;
                 }
-                ++m.count;
             }
+        };
+        auto origins_sum = [&](int i) {  // of values at patch pixel i over all patches
+            const int x0 = i % side, y0 = i / side, x1 = x0 + origins, y1 = y0 + origins;
+            auto at = [&](int x, int y) { return table[(size_t)y * (n + 1) + x]; };
+            return at(x1, y1) - at(x1, y0) - at(x0, y1) + at(x0, y0);
+        };
+        std::copy(block, block + values.size(), values.begin());
+        fill_table();
+        for (int i = 0; i < dim; ++i) m.first[i] += origins_sum(i);
+        // The lags from a pixel to the ones after it in row-major order (a pixel without a partner
+        // at the lag is in no patch's pair: 0).
+        for (int dy = 0; dy < side; ++dy)
+            for (int dx = dy == 0 ? 0 : 1 - side; dx < side; ++dx) {
+                std::fill(values.begin(), values.end(), 0.0);
+                for (int y = 0; y + dy < n; ++y)
+                    for (int x = std::max(0, -dx); x < std::min(n, n - dx); ++x)
+                        values[(size_t)y * n + x] = block[(size_t)y * n + x] * block[(size_t)(y + dy) * n + x + dx];
+                fill_table();
+                for (int i = 0; i < dim; ++i) {
+                    const int x = i % side + dx, y = i / side + dy;
+                    if (x >= 0 && x < side && y < side) m.second[(size_t)i * dim + y * side + x] += origins_sum(i);
+                }
+            }
+        m.count += (long long)origins * origins;
     }
 
     // The grain's variance from the patches' whitened covariance (accumulate's upper triangle),
@@ -494,7 +521,7 @@ struct PatchSpace {
             for (int j = i; j < dim; ++j)
                 covariance[(size_t)i * dim + j] = covariance[(size_t)j * dim + i] =
                     (m.second[(size_t)i * dim + j] - m.first[i] * m.first[j] / m.count) / (m.count - 1);
-        std::vector<double> half((size_t)kept * dim, 0.0), whitened((size_t)kept * kept, 0.0), values, vectors;
+        std::vector<double> half((size_t)kept * dim, 0.0), whitened((size_t)kept * kept, 0.0);
         for (int k = 0; k < kept; ++k)
             for (int i = 0; i < dim; ++i)
                 for (int j = 0; j < dim; ++j)
@@ -503,8 +530,7 @@ struct PatchSpace {
             for (int l = 0; l < kept; ++l)
                 for (int j = 0; j < dim; ++j)
                     whitened[(size_t)k * kept + l] += half[(size_t)k * dim + j] * whitening[(size_t)l * dim + j];
-        symmetric_eigen(whitened, kept, values, vectors);
-        std::sort(values.begin(), values.end());
+        const std::vector<double> values = symmetric_eigenvalues(whitened, kept);
         auto mean_of_smallest = [&](int m) { return std::accumulate(values.begin(), values.begin() + m, 0.0) / m; };
         auto median_of_smallest = [&](int m) { return m % 2 ? values[m / 2] : 0.5 * (values[m / 2 - 1] + values[m / 2]); };
         int grain_count = kept;
@@ -626,8 +652,33 @@ double sum_rho2(const std::vector<double>& rho, const LagGrid& lags, int size) {
     return sum;
 }
 
+// The block size whose lag grid holds the measured grain's correlation (kBlockPerGrainSize).
+int block_size_for_grain(const BlockAnalysis& a) {
+    int needed = kSmallestBlockPx;
+    for (const ChannelState& s : a.state) {
+        const double lag1 = std::max(s.rho[a.lags.index(1, 0)], s.rho[a.lags.index(0, 1)]);
+        if (!(lag1 > 0.01)) continue;
+        const double size_px = lag1 < 1 ? std::sqrt(-1.0 / (4.0 * std::log(lag1))) : INFINITY;
+        const double block = std::min<double>(kLargestBlockPx, kBlockPerGrainSize * size_px);
+        needed = std::max(needed, kBlockStepPx * (int)std::ceil(block / kBlockStepPx));
+    }
+    return needed;
+}
+
+// The block size the automatic analysis takes after one at a.block_px: larger while the
+// grain needs it and the plate holds enough blocks of it.
+int next_block_size(const std::vector<ConstImageView>& frames, const BlockAnalysis& a) {
+    const int needed = std::min(block_size_for_grain(a), kLargestBlockPx);
+    int size = a.block_px;
+    while (size + kBlockStepPx <= needed && count_blocks(frames, size + kBlockStepPx) >= kMinAutoBlockCount)
+        size += kBlockStepPx;
+    return size;
+}
+
+// `automatic`: the block size is the automatic one, and an analysis it moves on from needs no
+// response.
 BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const GrainAnalysisSettings& settings, int nch,
-                             int bs) {
+                             int bs, bool automatic) {
     BlockAnalysis a;
     a.block_px = bs;
     a.channels = nch;
@@ -947,6 +998,7 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
             }
         });
     }
+    if (automatic && next_block_size(frames, a) != bs) return a;
     // The final autocorrelation sets the fit's degrees of freedom for the final curve, and the
     // whitening of the response.
     parallel_for(0, nch, settings.threads, [&](int c_begin, int c_end) {
@@ -957,19 +1009,6 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
         }
     });
     return a;
-}
-
-// The block size whose lag grid holds the measured grain's correlation (kBlockPerGrainSize).
-int block_size_for_grain(const BlockAnalysis& a) {
-    int needed = kSmallestBlockPx;
-    for (const ChannelState& s : a.state) {
-        const double lag1 = std::max(s.rho[a.lags.index(1, 0)], s.rho[a.lags.index(0, 1)]);
-        if (!(lag1 > 0.01)) continue;
-        const double size_px = lag1 < 1 ? std::sqrt(-1.0 / (4.0 * std::log(lag1))) : INFINITY;
-        const double block = std::min<double>(kLargestBlockPx, kBlockPerGrainSize * size_px);
-        needed = std::max(needed, kBlockStepPx * (int)std::ceil(block / kBlockStepPx));
-    }
-    return needed;
 }
 
 }  // namespace
@@ -991,15 +1030,12 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                                  std::to_string(kMinBlockCount) + " blocks of " + std::to_string(first_size) + "x" +
                                  std::to_string(first_size) + " px");
     }
-    BlockAnalysis a = analyse_blocks(frames, settings, nch, first_size);
+    BlockAnalysis a = analyse_blocks(frames, settings, nch, first_size, automatic);
     // Automatic: larger blocks while the grain needs them and the plate has them.
     while (automatic) {
-        const int needed = std::min(block_size_for_grain(a), kLargestBlockPx);
-        int size = a.block_px;
-        while (size + kBlockStepPx <= needed && count_blocks(frames, size + kBlockStepPx) >= kMinAutoBlockCount)
-            size += kBlockStepPx;
+        const int size = next_block_size(frames, a);
         if (size == a.block_px) break;
-        a = analyse_blocks(frames, settings, nch, size);
+        a = analyse_blocks(frames, settings, nch, size, automatic);
     }
     const int bs = a.block_px, npx = bs * bs, nblocks = (int)a.blocks.size(), nbins = a.bins;
     const std::vector<Block>& blocks = a.blocks;

@@ -1,10 +1,13 @@
 // Grain analysis and comparison: the null test, the negative controls, picture content,
 // and bad plates.
 #include <catch2/catch.hpp>
+#include <random>
 
 #include "core/plate/grain_analysis.h"
 #include "core/plate/grain_compare.h"
 #include "core/plate/grain_synthesis.h"
+#include "core/plate/symmetric_eigenvalues.h"
+#include "core/stages/filters.h"
 #include "tests/core/plate_test_support.h"
 
 using namespace darkroom;
@@ -139,4 +142,40 @@ TEST_CASE("the trust verdict weighs each level by the plate's pixels at it", "[p
     INFO(sky.reason << " / " << texture.reason);
     CHECK(sky.quality == ProfileQuality::good);  // 240 of 264 blocks
     CHECK(texture.quality == ProfileQuality::unreliable);  // 40 of 280 blocks
+}
+
+TEST_CASE("the patch space's eigenvalues: a second difference's closed form, Jacobi's on dense matrices",
+          "[plate][analysis]") {
+    // The second difference (2 on the diagonal, -1 beside it), already tridiagonal:
+    // 2 - 2 cos(k pi / (n + 1)), k = 1..n.
+    const int n = 25;
+    std::vector<double> second_difference((size_t)n * n, 0.0);
+    for (int i = 0; i < n; ++i) {
+        second_difference[(size_t)i * n + i] = 2;
+        if (i + 1 < n) second_difference[(size_t)i * n + i + 1] = second_difference[(size_t)(i + 1) * n + i] = -1;
+    }
+    const std::vector<double> closed = symmetric_eigenvalues(second_difference, n);
+    for (int k = 1; k <= n; ++k) CHECK(closed[k - 1] == Approx(2 - 2 * std::cos(k * M_PI / (n + 1))).margin(1e-12));
+    // Dense matrices, one with an eigenvalue repeated n - 1 times (c I + v v^T), against
+    // the cyclic Jacobi rotations' eigenvalues.
+    std::mt19937_64 random(5);
+    std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+    for (int size : {1, 2, 3, 7, 25})
+        for (bool repeated : {false, true}) {
+            std::vector<double> a((size_t)size * size), v(size);
+            for (double& x : v) x = uniform(random);
+            for (int i = 0; i < size; ++i)
+                for (int j = 0; j <= i; ++j)
+                    a[(size_t)i * size + j] = a[(size_t)j * size + i] =
+                        repeated ? (i == j ? 0.5 : 0.0) + v[i] * v[j] : uniform(random);
+            std::vector<double> scratch = a, jacobi, vectors;
+            symmetric_eigen(scratch, size, jacobi, vectors);
+            std::sort(jacobi.begin(), jacobi.end());
+            const std::vector<double> values = symmetric_eigenvalues(a, size);
+            REQUIRE(values.size() == jacobi.size());
+            for (int k = 0; k < size; ++k) {
+                INFO(size << " x " << size << (repeated ? ", repeated" : "") << ": eigenvalue " << k);
+                CHECK(values[k] == Approx(jacobi[k]).margin(1e-12));
+            }
+        }
 }
