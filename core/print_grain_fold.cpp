@@ -158,7 +158,7 @@ struct LeastSquaresLanes {
         int marked_sweep = 0;
         for (int n = 1; n <= kSweeps; ++n) {
             const L sweeping = ~repeated | (left > 0);
-            if (!any(sweeping)) break;
+            if (!simd::any_lane(sweeping)) break;
             for (int i = 0; i < 3; ++i) {
                 D gradient{};
                 for (int j = 0; j < 3; ++j) gradient += a[j][i] * (a[j][0] * x[0] + a[j][1] * x[1] + a[j][2] * x[2] - b[j]);
@@ -172,7 +172,7 @@ struct LeastSquaresLanes {
                 std::memcpy(&bits, &x[i], sizeof bits), std::memcpy(&marked_bits, &marked[i], sizeof bits);
                 same &= bits == marked_bits;
             }
-            if (any(same)) {
+            if (simd::any_lane(same)) {
                 left = same ? L{} + int64_t((kSweeps - n) % (n - marked_sweep)) : left;
                 repeated |= same;
             }
@@ -183,12 +183,6 @@ struct LeastSquaresLanes {
         }
         for (int l = 0; l < lanes && first + l < count; ++l)
             for (int i = 0; i < 3; ++i) out[first + l][size_t(i)] = x[i][l];
-    }
-    template <typename L>
-    __attribute__((always_inline)) static bool any(const L& mask) {
-        bool set = false;
-        for (size_t l = 0; l < sizeof(L) / sizeof(int64_t); ++l) set = set || mask[l] != 0;
-        return set;
     }
 };
 }  // namespace

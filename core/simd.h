@@ -101,6 +101,14 @@ __attribute__((always_inline)) inline void prefetch_ahead(const void* p, int byt
     for (int b = 0; b < bytes; b += 64) __builtin_prefetch(reinterpret_cast<const void*>(ahead + b), for_writing);
 }
 
+// Whether any lane of a mask of int64 lanes (a comparison of doubles) is set.
+template <typename L>
+__attribute__((always_inline)) inline bool any_lane(const L& mask) {
+    bool set = false;
+    for (size_t l = 0; l < sizeof(L) / sizeof(int64_t); ++l) set = set || mask[l] != 0;
+    return set;
+}
+
 // Added to a double of magnitude under 2^51 (and taken away), it rounds it to an integer,
 // which the sum then holds in its low bits.
 constexpr double kRoundToInteger = 0x1.8p52;

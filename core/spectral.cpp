@@ -459,8 +459,8 @@ __attribute__((always_inline)) inline void compress_to_gamut_lanes(D& r, D& g, D
     constexpr double s = kGamutCompressionStart;
     const L black = ~(y > 0), compressed_lanes = ~black & ~(distance <= s);
     const D over = (distance - s) / (1 - s);
-    D tanh_over;
-    simd::tanh_lanes<D, L>(over, tanh_over);
+    D tanh_over{};
+    if (simd::any_lane(compressed_lanes)) simd::tanh_lanes<D, L>(over, tanh_over);
     const D k = (s + (1 - s) * tanh_over) / distance;
     // (Where tanh has reached 1 in doubles a component lands on 0 give or take rounding.)
     for (D* c : {&r, &g, &b}) {
