@@ -7,13 +7,30 @@
 
 namespace darkroom {
 
-double Curve::operator()(double at) const {
+// (Inline: in operator(), whose hi is 0, the walk is left out.)
+inline double Curve::at_from(double at, size_t& hi) const {
     if (!(at > x.front())) return y.front();  // also catches NaN: held at the low end
     if (at >= x.back()) return y.back();
-    size_t hi = std::upper_bound(x.begin(), x.end(), at) - x.begin();
+    // The upper bound: the first node past `at` (there is one, and it is not the first).
+    if (hi == 0) {
+        hi = size_t(std::upper_bound(x.begin(), x.end(), at) - x.begin());
+    } else {
+        while (x[hi] <= at) ++hi;
+        while (x[hi - 1] > at) --hi;
+    }
     size_t lo = hi - 1;
     double t = (at - x[lo]) / (x[hi] - x[lo]);
     return y[lo] + t * (y[hi] - y[lo]);
+}
+
+double Curve::operator()(double at) const {
+    size_t hi = 0;
+    return at_from(at, hi);
+}
+
+void Curve::row(const double* at, double* out, int n) const {
+    size_t hi = 0;
+    for (int i = 0; i < n; ++i) out[i] = at_from(at[i], hi);
 }
 
 double Curve::y_min() const { return *std::min_element(y.begin(), y.end()); }

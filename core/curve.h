@@ -6,6 +6,7 @@
 // and rejects what cannot be a function (empty, non-finite).
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,10 @@ struct Curve {
     std::vector<double> x, y;
 
     double operator()(double at) const;
+    // operator() of n values, bit for bit, each one's segment found by walking from the one
+    // before's (the first's by a binary search): for rows of values that change little from
+    // one to the next (the print table's, where the binary search was most of its build).
+    void row(const double* at, double* out, int n) const;
     double x_min() const { return x.front(); }
     double x_max() const { return x.back(); }
     double y_min() const;
@@ -24,6 +29,11 @@ struct Curve {
     bool first_x_at(double target, double* at) const;
     // Smallest x at which the curve falls to `target` (a reversal film's curve).
     bool first_x_down_to(double target, double* at) const;
+
+private:
+    // The curve at `at`, its segment's upper node found from `hi` (0: by a binary search), and
+    // kept in `hi` for the next value.
+    double at_from(double at, size_t& hi) const;
 };
 
 // Sorts and validates samples; throws std::invalid_argument naming `what` on bad data.

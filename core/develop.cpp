@@ -548,74 +548,6 @@ std::shared_ptr<const PrintViewTable> paper_view_table(const Stock& paper, Print
     });
 }
 
-// A curve's values as Curve::operator() gives them, bit for bit, its segment found from a
-// uniform grid of buckets instead of a binary search (the print tables' nodes evaluate the
-// paper's three curves each), a row of values at a time in vectors of doubles: the lookups'
-// divisions and the segments' varying searches were most of the table's build in scalar code.
-class CurveLookup {
-public:
-    explicit CurveLookup(const Curve& curve) : x_(curve.x), y_(curve.y) {
-        step_ = (x_.back() - x_.front()) / (4 * double(x_.size()));
-        // Each bucket starts from the segment the bucket before it starts in, so that a value
-        // rounded into the next bucket never starts past its own segment.
-        for (size_t b = 0; b <= 4 * x_.size(); ++b)
-            first_.push_back(int64_t(std::upper_bound(x_.begin(), x_.end(), x_.front() + (double(b) - 1) * step_) - x_.begin()));
-    }
-    // out[i] = the curve at at[i], for n values.
-    void row(const double* at, double* out, int n) const { simd::dispatch_doubles<Row>(this, at, out, n); }
-
-private:
-    struct Row {
-        template <int lanes>
-        __attribute__((always_inline)) static void run(const CurveLookup* curve, const double* at, double* out, int n) {
-            int i = 0;
-            for (; i + lanes <= n; i += lanes)
-                lookup<typename simd::Lanes<lanes>::D, typename simd::Lanes<lanes>::L>(*curve, at, out, i);
-            for (; i < n; ++i) lookup<simd::Double1, simd::Lanes<1>::L>(*curve, at, out, i);
-        }
-        template <typename D, typename L>
-        __attribute__((always_inline)) static void lookup(const CurveLookup& c, const double* at_row, double* out, int i) {
-            constexpr int lanes = sizeof(D) / sizeof(double);
-            const double* x = c.x_.data();
-            const double* y = c.y_.data();
-            D at;
-            simd::load(at, at_row + i);
-            // Values at or past the ends take the end's value (NaN the low end's, as Curve's),
-            // and search the first segment meanwhile.
-            const L low = ~(at > x[0]), high = at >= c.x_.back();
-            const D inside = (low | high) ? D{} + x[0] : at;
-            L bucket = __builtin_convertvector((inside - x[0]) / c.step_, L);
-            bucket = bucket < int64_t(c.first_.size() - 1) ? bucket : L{} + int64_t(c.first_.size() - 1);
-            L hi;
-            D x_hi;
-            for (int l = 0; l < lanes; ++l) hi[l] = c.first_[size_t(bucket[l])], x_hi[l] = x[hi[l]];
-            // The upper bound: the first node past the value.
-            for (L past = x_hi <= inside; any(past); past = x_hi <= inside) {
-                hi -= past;  // (true lanes are -1)
-                for (int l = 0; l < lanes; ++l) x_hi[l] = x[hi[l]];
-            }
-            D x_lo, y_lo, y_hi;
-            for (int l = 0; l < lanes; ++l) x_lo[l] = x[hi[l] - 1], y_lo[l] = y[hi[l] - 1], y_hi[l] = y[hi[l]];
-            const D t = (inside - x_lo) / (x_hi - x_lo);
-            D v = y_lo + t * (y_hi - y_lo);
-            v = low ? D{} + y[0] : v;
-            v = high ? D{} + c.y_.back() : v;
-            simd::store(out + i, v);
-        }
-        template <typename L>
-        __attribute__((always_inline)) static bool any(const L& mask) {
-            bool set = false;
-            for (size_t l = 0; l < sizeof(L) / sizeof(int64_t); ++l) set = set || mask[l] != 0;
-            return set;
-        }
-    };
-
-    const std::vector<double>& x_;
-    const std::vector<double>& y_;
-    double step_ = 0;
-    std::vector<int64_t> first_;
-};
-
 // The one print table of a colour negative on colour paper: the negative's densities -> the
 // print's linear Rec.709, held as cube roots (tables.h). Each node is the paper's curves at
 // its log exposures (paper_log_exposures, shifted by the lights) viewed through the paper's
@@ -638,9 +570,6 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
         double log_light[3];
         for (int j = 0; j < 3; ++j) log_light[j] = std::log10(enlarger.light_lux_s()[size_t(j)]);
         const double log_max = std::log10(kMaxInput), log_min = -30;  // (develop_paper's clamp)
-        const CurveLookup curves[3] = {CurveLookup(paper.layers[0].density_curve),
-                                       CurveLookup(paper.layers[1].density_curve),
-                                       CurveLookup(paper.layers[2].density_curve)};
         // A row of nodes at a time: the paper's densities, then their view in vectors.
         return std::make_shared<const Table3D>(Table3D::by_rows(lo, hi, nodes, threads, [&](int j, int k, double* rgb) {
             const double* log_h = &grid->log_h[grid->rows(j, k)];
@@ -654,7 +583,7 @@ std::shared_ptr<const Table3D> shared_print_table(const Stock& film, const Stock
             for (int l = 0; l < 3; ++l) {
                 for (int i = 0; i < nodes; ++i)
                     at[size_t(i)] = std::clamp(log_light[l] + log_h[size_t(l) * size_t(nodes) + size_t(i)], log_min, log_max);
-                curves[l].row(at.data(), density.data(), nodes);
+                paper.layers[size_t(l)].density_curve.row(at.data(), density.data(), nodes);
                 for (int i = 0; i < nodes; ++i) densities[size_t(l * nodes + i)] = float(density[size_t(i)]);
             }
             view->xyz.apply_row(density_rows, xyz_rows, nodes);

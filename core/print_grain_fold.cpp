@@ -10,8 +10,13 @@
 
 #include "core/develop_rows.h"
 #include "core/parallel.h"
+#include "core/simd.h"
 #include "core/spectral.h"
 #include "core/stages/filters.h"
+
+// GCC warns that a vector value would be passed differently without AVX; the vector
+// helpers here are inlined, so no vector crosses a call.
+#pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace darkroom {
 
@@ -114,29 +119,85 @@ constexpr double kMaxFoldedGrainD = 0.5;
 // on. In floating point x mostly settles, or alternates among a few values in its last bits,
 // within some 25 sweeps (ill-conditioned equations may change to the last); x is compared with
 // the one marked at each power of two, which finds a period within twice its start and length.
-std::array<double, 3> nonnegative_least_squares(const double (&a)[3][3], const double (&b)[3], const bool (&free)[3]) {
-    constexpr int kSweeps = 300;
-    auto sweep = [&](std::array<double, 3>& x) {
-        for (int i = 0; i < 3; ++i) {
-            double column_norm = 0, gradient = 0;  // of |A x - b|^2 / 2 along x_i
-            for (int j = 0; j < 3; ++j) {
-                gradient += a[j][i] * (a[j][0] * x[0] + a[j][1] * x[1] + a[j][2] * x[2] - b[j]);
-                column_norm += a[j][i] * a[j][i];
-            }
-            if (free[i] && column_norm > 0) x[i] = std::max(0.0, x[i] - gradient / column_norm);
-        }
-    };
-    std::array<double, 3> x{}, marked = x;
-    int marked_sweep = 0;
-    for (int n = 1; n <= kSweeps; ++n) {
-        sweep(x);
-        if (std::memcmp(&x, &marked, sizeof x) == 0) {  // (bits: x repeats exactly)
-            for (int rest = (kSweeps - n) % (n - marked_sweep); rest > 0; --rest) sweep(x);
-            return x;
-        }
-        if ((n & (n - 1)) == 0) marked = x, marked_sweep = n;
+// Each lane of D (L: as many int64) sweeps systems[first + l] (the last system again in the
+// lanes past `count`, whose x is not stored) while it has sweeps to make, and keeps its x after.
+namespace {
+struct LeastSquaresLanes {
+    template <int lanes>
+    __attribute__((always_inline)) static void run(const LeastSquaresSystem* systems, int count, std::array<double, 3>* x) {
+        for (int first = 0; first < count; first += lanes)
+            solve<typename simd::Lanes<lanes>::D, typename simd::Lanes<lanes>::L>(systems, count, first, x);
     }
+    template <typename D, typename L>
+    __attribute__((always_inline)) static void solve(const LeastSquaresSystem* systems, int count, int first,
+                                                     std::array<double, 3>* out) {
+        constexpr int lanes = sizeof(D) / sizeof(double);
+        constexpr int kSweeps = 300;
+        double lane_a[3][3][lanes], lane_b[3][lanes];  // the lanes' systems, loaded below
+        int64_t lane_free[3][lanes];
+        for (int l = 0; l < lanes; ++l) {
+            const LeastSquaresSystem& s = systems[std::min(first + l, count - 1)];
+            for (int j = 0; j < 3; ++j) {
+                lane_b[j][l] = s.b[j];
+                for (int i = 0; i < 3; ++i) lane_a[j][i][l] = s.a[j][i];
+            }
+            for (int i = 0; i < 3; ++i) lane_free[i][l] = s.free[i] ? -1 : 0;
+        }
+        D a[3][3], b[3], column_norm[3]{};  // column_norm: of |A x - b|^2 / 2 along x_i
+        L free[3];
+        for (int j = 0; j < 3; ++j) {
+            simd::load(b[j], lane_b[j]), simd::load(free[j], lane_free[j]);
+            for (int i = 0; i < 3; ++i) simd::load(a[j][i], lane_a[j][i]);
+        }
+        for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j) column_norm[i] += a[j][i] * a[j][i];
+            free[i] &= column_norm[i] > 0;
+        }
+        D x[3]{}, marked[3]{};
+        L repeated{}, left{};  // lanes whose x repeated the marked one; the sweeps they still make
+        int marked_sweep = 0;
+        for (int n = 1; n <= kSweeps; ++n) {
+            const L sweeping = ~repeated | (left > 0);
+            if (!simd::any_lane(sweeping)) break;
+            for (int i = 0; i < 3; ++i) {
+                D gradient{};
+                for (int j = 0; j < 3; ++j) gradient += a[j][i] * (a[j][0] * x[0] + a[j][1] * x[1] + a[j][2] * x[2] - b[j]);
+                const D next = x[i] - gradient / column_norm[i];
+                x[i] = (free[i] & sweeping) ? (D{} < next ? next : D{}) : x[i];  // (std::max(0.0, next))
+            }
+            left += repeated & sweeping;  // (true lanes are -1)
+            L same = ~repeated;  // (bits: x repeats exactly)
+            for (int i = 0; i < 3; ++i) {
+                L bits, marked_bits;
+                std::memcpy(&bits, &x[i], sizeof bits), std::memcpy(&marked_bits, &marked[i], sizeof bits);
+                same &= bits == marked_bits;
+            }
+            if (simd::any_lane(same)) {
+                left = same ? L{} + int64_t((kSweeps - n) % (n - marked_sweep)) : left;
+                repeated |= same;
+            }
+            if ((n & (n - 1)) == 0) {
+                for (int i = 0; i < 3; ++i) marked[i] = x[i];
+                marked_sweep = n;
+            }
+        }
+        for (int l = 0; l < lanes && first + l < count; ++l)
+            for (int i = 0; i < 3; ++i) out[first + l][size_t(i)] = x[i][l];
+    }
+};
+}  // namespace
+
+std::array<double, 3> nonnegative_least_squares(const double (&a)[3][3], const double (&b)[3], const bool (&free)[3]) {
+    LeastSquaresSystem system;
+    std::memcpy(system.a, a, sizeof system.a), std::memcpy(system.b, b, sizeof system.b);
+    std::memcpy(system.free, free, sizeof system.free);
+    std::array<double, 3> x;
+    LeastSquaresLanes::run<1>(&system, 1, &x);
     return x;
+}
+
+void nonnegative_least_squares(const LeastSquaresSystem* systems, int count, std::array<double, 3>* x) {
+    simd::dispatch_doubles<LeastSquaresLanes>(systems, count, x);
 }
 
 void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const PrintExposure& enlarger,
@@ -273,27 +334,51 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
             for (int k = 0; k < 3; ++k) correlation[i][j] += factor[size_t(i) * 3 + k] * factor[size_t(j) * 3 + k];
             correlation[i][j] *= kernels[size_t(i) * 3 + j];
         }
-    // 3 with the cross terms, each level on its own.
+    // 3 with the cross terms, each level on its own: solved without them, then again with those
+    // of the last solution until it settles (30 times at most), the levels still unsettled
+    // solved together in vectors of systems.
     std::vector<std::array<double, 3>> extra(levels.size());  // e_i at each level
     parallel_for(0, int(levels.size()), threads, [&](int begin, int end) {
+        std::vector<LeastSquaresSystem> systems;
+        std::vector<int> unsettled;  // the levels' indices
+        std::vector<std::array<double, 3>> t(size_t(end - begin)), next;
         for (int level = begin; level < end; ++level) {
             const Level& e = equations[size_t(level)];
-            std::array<double, 3> t = nonnegative_least_squares(e.a, e.b, grained);
-            for (int iteration = 0; iteration < 30; ++iteration) {
-                double s[3], b[3];
-                for (int i = 0; i < 3; ++i) s[i] = std::sqrt(e.film_variance[i] + t[i]);
+            systems.push_back({});
+            std::memcpy(systems.back().a, e.a, sizeof e.a), std::memcpy(systems.back().b, e.b, sizeof e.b);
+            std::memcpy(systems.back().free, grained, sizeof grained);
+            unsettled.push_back(level);
+        }
+        nonnegative_least_squares(systems.data(), int(systems.size()), t.data());
+        for (int iteration = 0; iteration < 30 && !unsettled.empty(); ++iteration) {
+            for (size_t u = 0; u < unsettled.size(); ++u) {
+                const Level& e = equations[size_t(unsettled[u])];
+                const std::array<double, 3>& t_level = t[size_t(unsettled[u] - begin)];
+                double s[3];
+                for (int i = 0; i < 3; ++i) s[i] = std::sqrt(e.film_variance[i] + t_level[i]);
+                double* const b = systems[u].b;
+                std::memcpy(systems[u].a, e.a, sizeof e.a);
                 for (int c = 0; c < 3; ++c) {
                     b[c] = e.b[c];
                     for (int i = 0; i < 3; ++i)
                         for (int j = 0; j < 3; ++j)
                             if (i != j) b[c] -= e.m[c][i] * e.m[c][j] * s[i] * s[j] * correlation[i][j];
                 }
-                const std::array<double, 3> next = nonnegative_least_squares(e.a, b, grained);
-                if (next == t) break;  // (settled: every later sweep would repeat it)
-                t = next;
             }
-            for (int i = 0; i < 3; ++i) extra[size_t(level)][size_t(i)] = grained[i] ? std::sqrt(t[i]) / gain[i] : 0.0;
+            next.resize(unsettled.size());
+            nonnegative_least_squares(systems.data(), int(unsettled.size()), next.data());
+            size_t still = 0;
+            for (size_t u = 0; u < unsettled.size(); ++u) {
+                std::array<double, 3>& t_level = t[size_t(unsettled[u] - begin)];
+                if (next[u] == t_level) continue;  // (settled: every later sweep would repeat it)
+                t_level = next[u];
+                unsettled[still++] = unsettled[u];
+            }
+            unsettled.resize(still);
         }
+        for (int level = begin; level < end; ++level)
+            for (int i = 0; i < 3; ++i)
+                extra[size_t(level)][size_t(i)] = grained[i] ? std::sqrt(t[size_t(level - begin)][size_t(i)]) / gain[i] : 0.0;
     });
     for (size_t i = 0; i < 3; ++i) {
         if (!grained[i]) continue;

@@ -21,6 +21,15 @@ void fold_paper_grain(MaterialStages& film, const MaterialStages& paper, const P
 // The x >= 0 that minimises |A x - b| for a 3x3 A, with x_i held at 0 where !free[i]: 300
 // sweeps of coordinate descent (the fold's equations at each grey level).
 std::array<double, 3> nonnegative_least_squares(const double (&a)[3][3], const double (&b)[3], const bool (&free)[3]);
+// The same of `count` systems into x[0 .. count), in vectors of systems (each lane sweeping
+// its own, and stopping where that one would): bit for bit the values above, on every
+// instruction set. Most of the fold's systems sweep all 300 times, one dependent division
+// after another: a vector of them costs what one did.
+struct LeastSquaresSystem {
+    double a[3][3], b[3];
+    bool free[3];
+};
+void nonnegative_least_squares(const LeastSquaresSystem* systems, int count, std::array<double, 3>* x);
 
 // Leaves the paper's grain, halation and curve tables out of a plan that prints through one
 // table, saying so in `skipped`.

@@ -448,7 +448,7 @@ Matrix3 adaptation_to_d65(const Rgb& white) {
 namespace {
 
 // compress_to_gamut on each lane of D (L: as many int64), in place: one piece of code for a
-// colour and for rows of them. tanh lane by lane, where a colour is compressed.
+// colour and for rows of them.
 template <typename D, typename L>
 __attribute__((always_inline)) inline void compress_to_gamut_lanes(D& r, D& g, D& b) {
     const D y = kLinearSrgbToXyz[1][0] * r + kLinearSrgbToXyz[1][1] * g + kLinearSrgbToXyz[1][2] * b;  // luminance
@@ -460,8 +460,7 @@ __attribute__((always_inline)) inline void compress_to_gamut_lanes(D& r, D& g, D
     const L black = ~(y > 0), compressed_lanes = ~black & ~(distance <= s);
     const D over = (distance - s) / (1 - s);
     D tanh_over{};
-    for (size_t l = 0; l < sizeof(D) / sizeof(double); ++l)
-        if (compressed_lanes[l]) tanh_over[l] = std::tanh(over[l]);
+    if (simd::any_lane(compressed_lanes)) simd::tanh_lanes<D, L>(over, tanh_over);
     const D k = (s + (1 - s) * tanh_over) / distance;
     // (Where tanh has reached 1 in doubles a component lands on 0 give or take rounding.)
     for (D* c : {&r, &g, &b}) {

@@ -1,6 +1,9 @@
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <random>
+#include <vector>
 
 #include "core/curve.h"
 
@@ -15,6 +18,33 @@ TEST_CASE("curves interpolate linearly between samples and hold their ends", "[c
     CHECK(c(std::nan("")) == Approx(0.2));
     CHECK(c(-INFINITY) == Approx(0.2));
     CHECK(c(INFINITY) == Approx(2.2));
+}
+
+TEST_CASE("a curve's row of values is its value at each, bit for bit, the values in any order (the print table's)",
+          "[curve][tables]") {
+    // The row walks from one value's segment to the next's; each value alone is found by a
+    // binary search. Rows falling (as the print table's), rising, jumping at random, on the
+    // nodes themselves, past the ends and NaN, on a curve of 601 samples.
+    ParametricCurve p;
+    const Curve c = sample_parametric_curve(p, -2.0, 0.2, -5.0, 1.0);
+    REQUIRE(c.x.size() > 500);
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> u(-5.5, 1.5);
+    std::vector<double> at;
+    for (int i = 0; i < 400; ++i) at.push_back(1.5 - 7.0 * i / 399);
+    for (int i = 0; i < 400; ++i) at.push_back(-5.5 + 7.0 * i / 399);
+    for (int i = 0; i < 2000; ++i) at.push_back(u(rng));
+    for (size_t i = 0; i < c.x.size(); i += 7) at.push_back(c.x[i]);
+    for (size_t i = c.x.size(); i-- > 0;) at.push_back(c.x[i]);
+    for (double v : {-double(INFINITY), double(INFINITY), double(NAN), -1.0, double(NAN), -1.0001}) at.push_back(v);
+    std::vector<double> row(at.size());
+    c.row(at.data(), row.data(), int(at.size()));
+    int differing = 0;
+    for (size_t i = 0; i < at.size(); ++i) {
+        const double one = c(at[i]);
+        differing += std::memcmp(&one, &row[i], sizeof one) != 0;
+    }
+    CHECK(differing == 0);
 }
 
 TEST_CASE("unsorted samples are sorted and duplicate x merged", "[curve]") {
