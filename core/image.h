@@ -96,7 +96,9 @@ inline int colour_channel_count(const ConstImageView& view) {
 
 // Storage whose resize() leaves new floats unset: a stage that writes every pixel of its
 // output plane need not pay for zeroing it first (about a copy pass per plane). Large
-// blocks are recycled (core/plane_memory.h).
+// blocks are recycled (core/plane_memory.h). All are 64-byte aligned: the streams' rings
+// keep rows a whole number of cache lines apart, so that a vector of a row loads from one
+// line, not two.
 template <typename T>
 struct UnsetAllocator : std::allocator<T> {
     template <typename U>
@@ -108,12 +110,12 @@ struct UnsetAllocator : std::allocator<T> {
     UnsetAllocator(const UnsetAllocator<U>&) noexcept {}
     T* allocate(size_t n) {
         if (n > std::numeric_limits<size_t>::max() / sizeof(T)) throw std::bad_array_new_length();
-        if (n * sizeof(T) < kPooledBytes) return std::allocator<T>::allocate(n);
+        if (n * sizeof(T) < kPooledBytes) return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t{64}));
         return static_cast<T*>(take_plane_memory(n * sizeof(T)));
     }
     void deallocate(T* p, size_t n) noexcept {
         if (n * sizeof(T) < kPooledBytes)
-            std::allocator<T>::deallocate(p, n);
+            ::operator delete(p, std::align_val_t{64});
         else
             give_plane_memory(p, n * sizeof(T));
     }

@@ -401,9 +401,16 @@ void CoarseGaussianStream::along_x(const float* above, const float* below, float
     auto runs = [&](size_t first, size_t last) {
         for (size_t r = first; r < last; ++r) {
             const ColumnRun& run = column_runs_[r];
-            const simd::Float1 b0 = coarse.at<simd::Float1>(run.block),
-                               step = coarse.at<simd::Float1>(run.block + 1) - b0;
-            for (int i = run.begin; i < run.end; ++i) put<multiply>(out + i, simd::Float1{b0 + tx_[size_t(i)] * step});
+            // (In plain floats: GCC vectorises the loop over a run, not one of one-lane vectors.)
+            const float b0 = coarse.at<simd::Float1>(run.block)[0],
+                        step = coarse.at<simd::Float1>(run.block + 1)[0] - b0;
+            for (int i = run.begin; i < run.end; ++i) {
+                const float v = b0 + tx_[size_t(i)] * step;
+                if constexpr (multiply)
+                    out[i] *= v;
+                else
+                    out[i] = v;
+            }
         }
     };
     runs(0, pair_runs_[0]);

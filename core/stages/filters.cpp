@@ -112,6 +112,67 @@ __attribute__((always_inline)) inline int tap_blocks(const float* tap, int n, in
     return x;
 }
 
+// A row's inputs from x on: row_of(k) = in + k (a horizontal pass).
+struct RowFrom {
+    const float* in;
+    const float* operator()(int k) const { return in + k; }
+};
+
+// Lanes k ... k + lanes - 1 of the consecutive vectors v[0], v[1], ... (k known when compiled).
+template <int k, typename V, size_t... J>
+__attribute__((always_inline)) inline V shifted(const V* v, std::index_sequence<J...>) {
+    constexpr int lanes = sizeof...(J);
+    if constexpr (k % lanes == 0)
+        return v[k / lanes];
+    else
+        return __builtin_shufflevector(v[k / lanes], v[k / lanes + 1], (k % lanes + int(J))...);
+}
+
+// tap_blocks for a horizontal pass of kTaps symmetric taps, not accumulated: each block's inputs
+// loaded once as whole vectors and each tap's window of them shifted in registers (one
+// instruction with AVX-512), where tap_blocks loads each tap's window from memory, which
+// straddles two cache lines (a 4K frame's MTF and the couplers' coarse Gaussian were bound by
+// those loads). The same sums in the same order. Blocks only while their last vector lies
+// within the row's width + kTaps - 1 values.
+template <int lanes, int vecs, int kTaps, size_t... K>
+__attribute__((always_inline)) inline int shifted_row_blocks(const float* tap, int x, int width, float* __restrict out,
+                                                             const float* in, std::index_sequence<K...>) {
+    using Vec = typename simd::Lanes<lanes>::F;
+    constexpr int block = lanes * vecs, pairs = kTaps / 2;
+    constexpr int chunks = vecs + (kTaps - 1 + lanes - 1) / lanes;  // the vectors a block reads
+    const Vec kept_tap[kTaps] = {(Vec{} + tap[K])...};
+    for (; x + chunks * lanes <= width + kTaps - 1; x += block) {
+        Vec chunk[chunks];
+        for (int c = 0; c < chunks; ++c) load(chunk[c], in + x + c * lanes);
+        Vec sum[vecs];
+        for (int v = 0; v < vecs; ++v) sum[v] = Vec{};
+        (
+            [&] {
+                if constexpr (int(K) < pairs)
+                    for (int v = 0; v < vecs; ++v)
+                        sum[v] += kept_tap[K] * (shifted<int(K)>(chunk + v, std::make_index_sequence<lanes>()) +
+                                                 shifted<kTaps - 1 - int(K)>(chunk + v, std::make_index_sequence<lanes>()));
+            }(),
+            ...);
+        for (int v = 0; v < vecs; ++v)
+            sum[v] += kept_tap[pairs] * shifted<pairs>(chunk + v, std::make_index_sequence<lanes>());
+        for (int v = 0; v < vecs; ++v) store(out + x + v * lanes, sum[v]);
+    }
+    return x;
+}
+
+// A horizontal pass's blocks by shifted_row_blocks where it applies (AVX-512, kTaps known
+// and odd, written, not added): the x the other loops go on from.
+template <int lanes, bool adds, int kTaps, typename RowOf>
+__attribute__((always_inline)) inline int shifted_row_start(const float* tap, int width, float* const* out,
+                                                            const RowOf& row_of) {
+    if constexpr (std::is_same_v<RowOf, RowFrom> && kTaps > 0 && kTaps % 2 == 1 && lanes == 16 && !adds)
+        return shifted_row_blocks<lanes, kVecs, kTaps>(tap, 0, width, out[0], row_of.in,
+                                                       std::make_index_sequence<kTaps>());
+    (void)tap, (void)width, (void)out, (void)row_of;
+    return 0;
+}
+
 // out[o][x] (+)= sum_k taps[k] row_of(k + o)[x] for each of `outputs` outputs (1, or 2 or 4: a
 // column pass's consecutive rows, which share all but a few of their input rows, so that
 // each is read from memory once for all).
@@ -126,15 +187,18 @@ __attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int
     // kernels called that.)
     auto run = [&](auto taps) __attribute__((always_inline)) {
         constexpr int kTaps = decltype(taps)::value;
-        int x = tap_blocks<lanes, kVecs / outputs, outputs, accumulate, kCentred, kTaps>(tap, n, pairs, 0, width, out,
-                                                                                         row_of, centre, centre_rows);
+        int x = shifted_row_start<lanes, accumulate || kCentred, kTaps>(tap, width, out, row_of);
+        x = tap_blocks<lanes, kVecs / outputs, outputs, accumulate, kCentred, kTaps>(tap, n, pairs, x, width, out,
+                                                                                     row_of, centre, centre_rows);
         x = tap_blocks<lanes, 1, outputs, accumulate, kCentred, kTaps>(tap, n, pairs, x, width, out, row_of, centre,
                                                                        centre_rows);
         tap_blocks<1, 1, outputs, accumulate, kCentred, kTaps>(tap, n, pairs, x, width, out, row_of, centre, centre_rows);
     };
     // The fast tiers' kernels: the MTF's 5 taps where tapered (up to 7 where not; preview's 3
-    // to 5), the grain's 3.
-    if (symmetric && n == 7)
+    // to 5), the grain's 3, the DIR couplers' 11 on their coarse grid at a 4K frame's pitch.
+    if (symmetric && n == 11)
+        run(std::integral_constant<int, 11>());
+    else if (symmetric && n == 7)
         run(std::integral_constant<int, 7>());
     else if (symmetric && n == 5)
         run(std::integral_constant<int, 5>());
@@ -147,7 +211,7 @@ __attribute__((always_inline)) inline void tap_sums(const float* tap, int n, int
 struct ConvolveRow {
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* in, const float* taps, int n, int width, float* out) {
-        tap_sums<lanes, 1, false>(taps, n, width, &out, [in](int k) { return in + k; });
+        tap_sums<lanes, 1, false>(taps, n, width, &out, RowFrom{in});
     }
 };
 

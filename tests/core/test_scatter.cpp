@@ -291,9 +291,11 @@ TEST_CASE("row and column convolutions sum their taps in the documented order, i
           "[scatter][filters]") {
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> u(-1, 3);
-    const int width = 64 * 3 + 13;  // three vector blocks and a scalar tail
-    // 3 and 7 taps have loops compiled for them (the fast tiers' grain and MTF); 9 any count.
-    for (int n : {3, 7, 9})
+    // Three blocks of eight vectors of the widest lanes (16), a single vector and a scalar tail.
+    const int width = 128 * 3 + 16 + 13;
+    // 3, 5, 7 and 11 taps have loops compiled for them (the fast tiers' grain, MTF and the
+    // couplers' coarse Gaussian; with AVX-512 a row's inputs shifted in registers); 9 any count.
+    for (int n : {3, 5, 7, 9, 11})
         for (bool symmetric : {true, false}) {
             const int half = n / 2;
             std::vector<float> taps(n);
