@@ -623,6 +623,7 @@ struct ChannelState {
 // The blocks of the frames at one block size, and what the passes made of them.
 struct BlockAnalysis {
     int block_px = 0, channels = 0, bins = 0;
+    int next_block_px = 0;  // the block size to analyse next: block_px where this one is final
     LagGrid lags;
     std::vector<Block> blocks;
     std::vector<ChannelState> state;
@@ -675,8 +676,8 @@ int next_block_size(const std::vector<ConstImageView>& frames, const BlockAnalys
     return size;
 }
 
-// `automatic`: the block size is the automatic one, and an analysis it moves on from needs no
-// response.
+// `automatic`: the block size is the automatic one; a.next_block_px says which size comes next
+// (next_block_size), and an analysis it moves on from needs no response.
 BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const GrainAnalysisSettings& settings, int nch,
                              int bs, bool automatic) {
     BlockAnalysis a;
@@ -998,7 +999,8 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
             }
         });
     }
-    if (automatic && next_block_size(frames, a) != bs) return a;
+    a.next_block_px = automatic ? next_block_size(frames, a) : bs;
+    if (a.next_block_px != bs) return a;
     // The final autocorrelation sets the fit's degrees of freedom for the final curve, and the
     // whitening of the response.
     parallel_for(0, nch, settings.threads, [&](int c_begin, int c_end) {
@@ -1032,11 +1034,7 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
     }
     BlockAnalysis a = analyse_blocks(frames, settings, nch, first_size, automatic);
     // Automatic: larger blocks while the grain needs them and the plate has them.
-    while (automatic) {
-        const int size = next_block_size(frames, a);
-        if (size == a.block_px) break;
-        a = analyse_blocks(frames, settings, nch, size, automatic);
-    }
+    while (a.next_block_px != a.block_px) a = analyse_blocks(frames, settings, nch, a.next_block_px, automatic);
     const int bs = a.block_px, npx = bs * bs, nblocks = (int)a.blocks.size(), nbins = a.bins;
     const std::vector<Block>& blocks = a.blocks;
     const std::vector<ChannelState>& state = a.state;
