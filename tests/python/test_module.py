@@ -41,7 +41,7 @@ def run_program(*args):
 
 class ModuleEqualsProgram(unittest.TestCase):
     def setUp(self):
-        self.dir = tempfile.mkdtemp(prefix="darkroom-python-")
+        self.dir = self.enterContext(tempfile.TemporaryDirectory(prefix="darkroom-python-"))
         height, width = 30, 40
         y, x = np.mgrid[0:height, 0:width].astype(np.float32)
         self.plate = np.stack([0.02 + x / width, 0.05 + y / height, 0.1 + 0.5 * x * y / (width * height),
@@ -193,7 +193,7 @@ class TheParameterTable(unittest.TestCase):
     """The keywords, the program's flags and look files are one table, with one schema."""
 
     def test_the_keywords_defaults_and_ranges_are_the_programs(self):
-        folder = tempfile.mkdtemp(prefix="darkroom-table-")
+        folder = self.enterContext(tempfile.TemporaryDirectory(prefix="darkroom-table-"))
         path = os.path.join(folder, "defaults.json")
         run_program("develop", "--save-look", path)
         with open(path) as f:
@@ -235,6 +235,7 @@ class TheParameterTable(unittest.TestCase):
         validator.validate(darkroom.look(film="kodak-tri-x-400", grain_amount=[0.5, 1, 2], seed=2**64 - 1,
                                          ociodisplay=["sRGB", "Film"]))
         good = darkroom.look()
+        folder = self.enterContext(tempfile.TemporaryDirectory(prefix="darkroom-look-"))
         for key, bad in (("exposure", 65), ("grain-amount", [1, 2]), ("output", "slide"), ("seed", -1),
                          ("grain", 1), ("ociodisplay", ["sRGB"]), ("exposur", 0)):
             with self.subTest(key=key):
@@ -242,7 +243,7 @@ class TheParameterTable(unittest.TestCase):
                 broken["settings"][key] = bad
                 self.assertFalse(validator.is_valid(broken))
                 with self.assertRaises((ValueError, TypeError)):
-                    path = os.path.join(tempfile.mkdtemp(prefix="darkroom-look-"), "broken.json")
+                    path = os.path.join(folder, "broken.json")
                     with open(path, "w") as f:
                         json.dump(broken, f)
                     darkroom.look(look=path)

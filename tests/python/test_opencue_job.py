@@ -70,7 +70,7 @@ class OpenCueJob(unittest.TestCase):
             self.assertEqual(seen, list(range(first, last + 1, step)))
 
     def test_a_chunk_command_develops_its_frames(self):
-        work = tempfile.mkdtemp(prefix="darkroom-opencue-")
+        work = self.enterContext(tempfile.TemporaryDirectory(prefix="darkroom-opencue-"))
         plate = os.path.join(work, "plate.exr")
         subprocess.run(["oiiotool", "--pattern", "fill:top=0.1,0.1,0.1:bottom=0.9,0.6,0.3", "24x16", "3",
                         "-d", "float", "-o", plate], check=True)

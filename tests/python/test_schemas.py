@@ -67,7 +67,7 @@ class GrainProfileSchema(unittest.TestCase):
         self.assertGreaterEqual(len(profiles), 1)
         # And one measured from a plate: grain put on a grey ramp, analysed back.
         darkroom = os.environ["DARKROOM_EXE"]
-        folder = tempfile.mkdtemp(prefix="darkroom-schema-")
+        folder = self.enterContext(tempfile.TemporaryDirectory(prefix="darkroom-schema-"))
         ramp, grained, measured = (os.path.join(folder, n) for n in ("ramp.exr", "grained.exr", "measured.json"))
         subprocess.run(["oiiotool", "--pattern", "fill:left=0.15,0.15,0.15:right=0.9,0.9,0.9", "512x256", "3",
                         "-d", "float", "-o", ramp], check=True)
