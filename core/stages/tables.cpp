@@ -251,7 +251,8 @@ __attribute__((always_inline)) inline void add_grain(const V& g, const float* no
     V n;
     load(n, noise);
     v = v + g * n;
-    v = floor < v ? v : V{} + floor;  // as std::max(floor, v): NaN gives floor
+    const V floors = V{} + floor;
+    v = v > floors ? v : floors;  // as std::max(floor, v), NaN gives floor: in this form one max instruction
 }
 
 // The points a row's kernels take a block at a time, each of their steps a loop over the
