@@ -428,14 +428,17 @@ __attribute__((always_inline)) inline void cell_weights(int nodes, const float* 
                                                         const float* const* in, int i, I* corner, V* w) {
     I index[3];
     V t[3];
+    // (The bounds as vectors, each held in its selection as it is compared: one min instruction.)
+    const V last_node = V{} + float(nodes - 1);
+    const I last_cell = I{} + (nodes - 2);
     for (int a = 0; a < 3; ++a) {
         V u;
         load(u, in[a] + i);
         u = (u - lo[a]) * scale[a];
         u = u >= 0.0f ? u : V{} + 0.0f;  // NaN too: a density that is not a number reads the grid's first node
-        u = u > float(nodes - 1) ? V{} + float(nodes - 1) : u;
+        u = u < last_node ? u : last_node;
         index[a] = __builtin_convertvector(u, I);
-        index[a] = index[a] > nodes - 2 ? I{} + (nodes - 2) : index[a];
+        index[a] = index[a] < last_cell ? index[a] : last_cell;
         t[a] = u - __builtin_convertvector(index[a], V);
     }
     const I base = ((index[2] * nodes + index[1]) * nodes + index[0]) * 4;
