@@ -146,10 +146,29 @@ __attribute__((always_inline)) inline U lane_everywhere(const U& v, std::index_s
 // by the sign bits of each 16 bytes (SSE's movmskps, which every instruction set here has).
 // (Was: the lanes ORed by halving shuffles, then compared: a longer chain before the branch
 // that the lookups wait on; the H&D lookups 9-18 % faster so with AVX2 on a Zen 3, 3-8 %
-// on a Xeon, the same with its AVX-512.)
+// on a Xeon, the same with its AVX-512.) Sixteen lanes by AVX-512's unsigned comparison
+// into a mask register, which the branch tests (kortest): three instructions where the
+// quarters took ten, four of them extracts; eight by one 32-byte movmskps, where the
+// quarters took an extract and two. By assembly, as simd::sqrt_lanes, so not with clang
+// (whose kernels read no windows: window_values).
 template <typename U>
 __attribute__((always_inline)) inline bool any_lane_at_least(const U& v, uint32_t bound) {
+#if !defined(__clang__)
+    if constexpr (sizeof(U) == 64) {
+        const U bounds = U{} + bound;
+        uint16_t at_least;
+        asm("vpcmpud $5, %2, %1, %0" : "=k"(at_least) : "v"(v), "v"(bounds));  // (5: not less than)
+        return at_least != 0;
+    }
+#endif
     const U at_least = v >= bound;
+#if !defined(__clang__)
+    if constexpr (sizeof(U) == 32) {
+        int signs;
+        asm("vmovmskps %1, %0" : "=r"(signs) : "x"(at_least));
+        return signs != 0;
+    }
+#endif
     simd::Float4 quarters[sizeof(U) / 16];
     std::memcpy(quarters, &at_least, sizeof at_least);
     int signs = 0;
@@ -232,7 +251,8 @@ __attribute__((always_inline)) inline void add_grain(const V& g, const float* no
     V n;
     load(n, noise);
     v = v + g * n;
-    v = floor < v ? v : V{} + floor;  // as std::max(floor, v): NaN gives floor
+    const V floors = V{} + floor;
+    v = v > floors ? v : floors;  // as std::max(floor, v), NaN gives floor: in this form one max instruction
 }
 
 // The points a row's kernels take a block at a time, each of their steps a loop over the
@@ -408,14 +428,17 @@ __attribute__((always_inline)) inline void cell_weights(int nodes, const float* 
                                                         const float* const* in, int i, I* corner, V* w) {
     I index[3];
     V t[3];
+    // (The bounds as vectors, each held in its selection as it is compared: one min instruction.)
+    const V last_node = V{} + float(nodes - 1);
+    const I last_cell = I{} + (nodes - 2);
     for (int a = 0; a < 3; ++a) {
         V u;
         load(u, in[a] + i);
         u = (u - lo[a]) * scale[a];
         u = u >= 0.0f ? u : V{} + 0.0f;  // NaN too: a density that is not a number reads the grid's first node
-        u = u > float(nodes - 1) ? V{} + float(nodes - 1) : u;
+        u = u < last_node ? u : last_node;
         index[a] = __builtin_convertvector(u, I);
-        index[a] = index[a] > nodes - 2 ? I{} + (nodes - 2) : index[a];
+        index[a] = index[a] < last_cell ? index[a] : last_cell;
         t[a] = u - __builtin_convertvector(index[a], V);
     }
     const I base = ((index[2] * nodes + index[1]) * nodes + index[0]) * 4;
