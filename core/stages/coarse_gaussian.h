@@ -80,17 +80,20 @@ public:
     // for the caller to interpolate along y and then along x, fused with its use of them
     // (multiply_by_interpolated).
     const Row& coarse_row(int y);
-    // fine[i] *= the coarse rows either side interpolated along y (above + t (below - above),
-    // as they are read) and then along x to out's column i (i < out's width).
-    void multiply_by_interpolated(const float* above, const float* below, float t, float* fine) const;
+    // product[i] = fine[i] times the coarse rows either side interpolated along y (above + t
+    // (below - above), as they are read) and then along x to out's column i (i < out's width).
+    void multiply_by_interpolated(const float* above, const float* below, float t, const float* fine,
+                                  float* product) const;
 
 private:
     // Two coarse rows summed at once (more would read further ahead, for a ring of fine rows
     // the deeper, and the coarse rows cost little).
     static constexpr int kCoarseRowsTogether = 2;
+    // The blurred coarse rows kept where the blur wrote them: the two either side of a fine row.
+    static constexpr int kCoarseRowsKept = 2;
     struct PlaneRows {
         std::vector<float> column_sums;  // none: the plane passes through
-        std::vector<float> coarse[2];    // blurred coarse rows j (by j's parity)
+        const float* coarse[2] = {};     // blurred coarse rows j (by j's parity), in blur_'s rows
         std::vector<float> across[2];    // ... interpolated to out's columns
     };
     float* ring_row(size_t plane, int y);
@@ -98,10 +101,10 @@ private:
     void block_means(int by, float* const* means);
     void keep_coarse(int j);
     void interpolate(int j);
-    // Each of out's columns gets (or, multiply, is multiplied by) the coarse row interpolated
-    // along x: `above`, or (below given) above + t (below - above).
+    // Each of out's columns gets the coarse row interpolated along x (or, multiply, in's column
+    // times it): `above`, or (below given) above + t (below - above).
     template <bool multiply>
-    void along_x(const float* above, const float* below, float t, float* out) const;
+    void along_x(const float* above, const float* below, float t, const float* in, float* out) const;
     const Row& read_row(int y, bool across);
 
     Window out_, frame_;

@@ -227,15 +227,17 @@ CoarseCouplerStream::CoarseCouplerStream(const CouplerStage& c, const Window& ou
               },
               // The blurred exponents' powers of 2: the pixels then interpolate the factors.
               [](float* const* exponents, int width) { simd::dispatch<PowersOfTwo>(exponents, width); },
-              donor_floors(c)) {}
+              donor_floors(c)) {
+    for (size_t l = 0; l < 3; ++l) {
+        rows_[l].resize(size_t(out.width()));
+        out_[l] = rows_[l].data();
+    }
+}
 
 float* const* CoarseCouplerStream::row(int y) {
     // The factors along y, then along x, as they multiply.
     const CoarseGaussianStream::Row& r = stream_.coarse_row(y);
-    for (size_t l = 0; l < 3; ++l) {
-        stream_.multiply_by_interpolated(r.above[l], r.below[l], r.t, r.read[l]);
-        out_[l] = r.read[l];
-    }
+    for (size_t l = 0; l < 3; ++l) stream_.multiply_by_interpolated(r.above[l], r.below[l], r.t, r.read[l], out_[l]);
     return out_;
 }
 
