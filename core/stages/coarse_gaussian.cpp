@@ -200,7 +200,7 @@ std::pair<int, int> coarse_range(int lo, int hi, int d) {
 
 }  // namespace
 
-CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation) {
+CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation, double coarse_reach_sigmas) {
     CoarseGaussian g;
     g.decimation = std::max(1, decimation);
     const int d = g.decimation;
@@ -211,7 +211,10 @@ CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation) {
         // The block means and the interpolation add d^2/12 + d^2/6 of variance, taken off the
         // coarse Gaussian's.
         if (!(sigma_px * sigma_px > d * d / 4.0)) throw std::logic_error("a coarse Gaussian narrower than its grid");
-        g.taps = pixel_integrated_gaussian(std::sqrt(sigma_px * sigma_px - d * d / 4.0) / d);
+        const double coarse_sigma = std::sqrt(sigma_px * sigma_px - d * d / 4.0) / d;
+        g.taps = coarse_reach_sigmas > 0
+                     ? pixel_integrated_gaussian(coarse_sigma, int(std::ceil(coarse_reach_sigmas * coarse_sigma - 0.5)))
+                     : pixel_integrated_gaussian(coarse_sigma);
         g.radius_px = (int(g.taps.size() / 2) + 2) * d;
     }
     return g;

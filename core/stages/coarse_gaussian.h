@@ -23,7 +23,10 @@ struct CoarseGaussian {
     std::vector<float> taps;  // pixel-integrated, unit sum, on the coarse grid
     int radius_px = 0;        // what a pixel's result reads around it
 };
-CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation);
+// The taps truncated at 4 of their sigmas (pixel_integrated_gaussian), or, with coarse_reach_sigmas
+// > 0 on a coarse grid, where their last pixel reaches that many: a shorter reach is fewer taps
+// and a shallower ring of rows read ahead, for the Gaussian's tail beyond it, renormalised.
+CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation, double coarse_reach_sigmas = 0);
 
 // Planes' rows streamed down the rows of `out` for one thread, the blurred planes' Gaussians
 // (one decimation for all) on the coarse grid. The planes' rows come from
