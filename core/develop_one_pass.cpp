@@ -237,6 +237,8 @@ void Plan::run_one_pass(const ConstImageView& in, const ImageView& out, const Wi
         if (film.couplers)
             couplers = std::make_unique<CouplerStream>(*film.couplers, film_window, scattered, frame_, film_rows.y1,
                                                        [&](int y) {
+                                                           // (the coarse grid's work on the rows before)
+                                                           clock.mark("DIR couplers");
                                                            float* const* rows = film_scatter.row(y);
                                                            clock.mark(film_scatter_filters.stage);
                                                            return rows;

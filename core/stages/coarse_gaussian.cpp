@@ -104,24 +104,24 @@ struct Exp2OfPseudoLog2Row {
 constexpr int interleaved(int j, int lanes) { return j / 2 + (j % 2) * lanes; }  // a0 b0 a1 b1 ...
 
 // What the interpolation along x does with each fine column's value: writes it, or
-// (multiply) multiplies the column by it.
+// (multiply) writes the column of `in` times it.
 template <bool multiply, typename V>
-__attribute__((always_inline)) inline void put(float* out, const V& v) {
+__attribute__((always_inline)) inline void put(const float* in, float* out, const V& v) {
     if constexpr (!multiply) {
         simd::store(out, v);
     } else {
         V o;
-        simd::load(o, out);
+        simd::load(o, in);
         simd::store(out, o * v);
     }
 }
 
 template <bool multiply, typename V, size_t... J>
-__attribute__((always_inline)) inline void put_interleaved(float* out, const V& a, const V& b,
+__attribute__((always_inline)) inline void put_interleaved(const float* in, float* out, const V& a, const V& b,
                                                            std::index_sequence<J...>) {
     constexpr int lanes = sizeof(V) / sizeof(float);
-    put<multiply>(out, V(__builtin_shufflevector(a, b, interleaved(int(J), lanes)...)));
-    put<multiply>(out + lanes, V(__builtin_shufflevector(a, b, interleaved(int(J) + lanes, lanes)...)));
+    put<multiply>(in, out, V(__builtin_shufflevector(a, b, interleaved(int(J), lanes)...)));
+    put<multiply>(in + lanes, out + lanes, V(__builtin_shufflevector(a, b, interleaved(int(J) + lanes, lanes)...)));
 }
 
 // The coarse row's value at column k: coarse[k], or (between rows) above[k] + t (below[k] - above[k]),
@@ -142,26 +142,28 @@ struct CoarseRow {
     CoarseRow from(int block) const { return {above + block, below ? below + block : nullptr, t}; }
 };
 
-// out[2k + m] = (or *=) c[k] + t[m] (c[k + 1] - c[k]), m = 0, 1, k < blocks, c the coarse row: two
-// fine columns per block, interpolated along x.
+// out[2k + m] = c[k] + t[m] (c[k + 1] - c[k]) (multiply: times in[2k + m]), m = 0, 1, k < blocks, c
+// the coarse row: two fine columns per block, interpolated along x.
 template <bool multiply>
 struct InterpolatePairs {
     template <int lanes>
-    __attribute__((always_inline)) static void run(CoarseRow coarse, float t0, float t1, int blocks, float* out) {
+    __attribute__((always_inline)) static void run(CoarseRow coarse, float t0, float t1, int blocks, const float* in,
+                                                   float* out) {
         using V = typename simd::Lanes<lanes>::F;
         int k = 0;
         if constexpr (lanes > 1)
             for (; k + lanes <= blocks; k += lanes) {
                 // (multiplying: a ring row read back, from memory)
-                if constexpr (multiply) simd::prefetch_ahead(out + 2 * k, 2 * lanes * int(sizeof(float)));
+                if constexpr (multiply) simd::prefetch_ahead(in + 2 * k, 2 * lanes * int(sizeof(float)));
                 const V b0 = coarse.at<V>(k), b1 = coarse.at<V>(k + 1);
                 const V step = b1 - b0;
-                put_interleaved<multiply>(out + 2 * k, b0 + t0 * step, b0 + t1 * step, std::make_index_sequence<lanes>());
+                put_interleaved<multiply>(in + 2 * k, out + 2 * k, b0 + t0 * step, b0 + t1 * step,
+                                          std::make_index_sequence<lanes>());
             }
         for (; k < blocks; ++k) {
             const simd::Float1 b0 = coarse.at<simd::Float1>(k), step = coarse.at<simd::Float1>(k + 1) - b0;
-            put<multiply>(out + 2 * k, simd::Float1{b0 + t0 * step});
-            put<multiply>(out + 2 * k + 1, simd::Float1{b0 + t1 * step});
+            put<multiply>(in + 2 * k, out + 2 * k, simd::Float1{b0 + t0 * step});
+            put<multiply>(in + 2 * k + 1, out + 2 * k + 1, simd::Float1{b0 + t1 * step});
         }
     }
 };
@@ -198,7 +200,7 @@ std::pair<int, int> coarse_range(int lo, int hi, int d) {
 
 }  // namespace
 
-CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation) {
+CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation, double coarse_reach_sigmas) {
     CoarseGaussian g;
     g.decimation = std::max(1, decimation);
     const int d = g.decimation;
@@ -209,7 +211,10 @@ CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation) {
         // The block means and the interpolation add d^2/12 + d^2/6 of variance, taken off the
         // coarse Gaussian's.
         if (!(sigma_px * sigma_px > d * d / 4.0)) throw std::logic_error("a coarse Gaussian narrower than its grid");
-        g.taps = pixel_integrated_gaussian(std::sqrt(sigma_px * sigma_px - d * d / 4.0) / d);
+        const double coarse_sigma = std::sqrt(sigma_px * sigma_px - d * d / 4.0) / d;
+        g.taps = coarse_reach_sigmas > 0
+                     ? pixel_integrated_gaussian(coarse_sigma, int(std::ceil(coarse_reach_sigmas * coarse_sigma - 0.5)))
+                     : pixel_integrated_gaussian(coarse_sigma);
         g.radius_px = (int(g.taps.size() / 2) + 2) * d;
     }
     return g;
@@ -269,12 +274,11 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
         PlaneRows& plane = planes_[p];
         filters.push_back(SeparableFilter{{*coarse_taps[p]}, {1.0f}});
         plane.column_sums.resize(size_t(means_window_.width()) * d_);
-        for (auto& row : plane.coarse) row.resize(size_t(blurred_window_.width()));
     }
     // Every plane's coarse rows from one stream, so that each fine row is read once for all.
     blur_ = std::make_unique<SeparableStream>(
         blurred_window_.width(), std::move(filters), means_window_.y0, means_window_.y1, blurred_window_.y1,
-        [this](int by, float* const* means) { block_means(by, means); }, kCoarseRowsTogether);
+        [this](int by, float* const* means) { block_means(by, means); }, kCoarseRowsTogether, kCoarseRowsKept);
     // Output row y lies above coarse row j + 1 (j d <= y), whose blur (with the rows summed
     // with it) reads block rows to j + kCoarseRowsTogether + r, the last of them ending at fine
     // row y + (kCoarseRowsTogether + r + 1) d - 1: the ring holds row y to that one (ring_row
@@ -360,13 +364,13 @@ void CoarseGaussianStream::block_means(int by, float* const* means) {
     if (means_map_) means_map_(means, means_window_.width());
 }
 
-// Coarse row j of every plane's blurred means, mapped (the last two rows are kept).
+// Coarse row j of every plane's blurred means, mapped (the last two rows are kept, in the blur's
+// own rows: it keeps them while rows to j + 1 are asked for).
 void CoarseGaussianStream::keep_coarse(int j) {
     if (coarse_row_[j & 1] == j) return;
     float* const* blurred_rows = blur_->row(j);  // (the stream's to change: it reads them no more)
     if (blurred_map_) blurred_map_(blurred_rows, blurred_window_.width());
-    for (size_t b = 0; b < blurred_.size(); ++b)
-        std::copy_n(blurred_rows[b], blurred_window_.width(), planes_[blurred_[b]].coarse[j & 1].data());
+    for (size_t b = 0; b < blurred_.size(); ++b) planes_[blurred_[b]].coarse[j & 1] = blurred_rows[b];
     coarse_row_[j & 1] = j;
 }
 
@@ -377,26 +381,27 @@ void CoarseGaussianStream::interpolate(int j) {
     for (size_t b = 0; b < blurred_.size(); ++b) {
         std::vector<float>& row = planes_[blurred_[b]].across[j & 1];
         row.resize(size_t(out_.width()));  // (only row() asks for them)
-        along_x<false>(planes_[blurred_[b]].coarse[j & 1].data(), nullptr, 0.0f, row.data());
+        along_x<false>(planes_[blurred_[b]].coarse[j & 1], nullptr, 0.0f, nullptr, row.data());
     }
     across_row_[j & 1] = j;
 }
 
 void CoarseGaussianStream::multiply_by_interpolated(const float* above, const float* below, float t,
-                                                    float* fine) const {
-    along_x<true>(above, below, t, fine);
+                                                    const float* fine, float* out) const {
+    along_x<true>(above, below, t, fine, out);
 }
 
 // A run's two coarse values once, then a loop without indirection (which vectorises); with
 // d = 2, the whole runs (two columns each) in vectors.
 template <bool multiply>
-void CoarseGaussianStream::along_x(const float* above, const float* below, float t, float* out) const {
+void CoarseGaussianStream::along_x(const float* above, const float* below, float t, const float* in,
+                                   float* out) const {
     const CoarseRow coarse{above, below, t};
     if (pair_runs_[1] > pair_runs_[0]) {
         const ColumnRun& run = column_runs_[pair_runs_[0]];
         simd::dispatch<InterpolatePairs<multiply>>(coarse.from(run.block), tx_[size_t(run.begin)],
                                                    tx_[size_t(run.begin) + 1], int(pair_runs_[1] - pair_runs_[0]),
-                                                   out + run.begin);
+                                                   multiply ? in + run.begin : nullptr, out + run.begin);
     }
     auto runs = [&](size_t first, size_t last) {
         for (size_t r = first; r < last; ++r) {
@@ -407,7 +412,7 @@ void CoarseGaussianStream::along_x(const float* above, const float* below, float
             for (int i = run.begin; i < run.end; ++i) {
                 const float v = b0 + tx_[size_t(i)] * step;
                 if constexpr (multiply)
-                    out[i] *= v;
+                    out[i] = in[i] * v;
                 else
                     out[i] = v;
             }
@@ -435,8 +440,8 @@ const CoarseGaussianStream::Row& CoarseGaussianStream::read_row(int y, bool acro
     for (size_t p = 0; p < planes_.size(); ++p) {
         row_.read[p] = ring_row(p, y) + (out_.x0 - read_x0_);
         if (planes_[p].column_sums.empty()) continue;
-        row_.above[p] = (across ? planes_[p].across[j & 1] : planes_[p].coarse[j & 1]).data();
-        row_.below[p] = (across ? planes_[p].across[(j + 1) & 1] : planes_[p].coarse[(j + 1) & 1]).data();
+        row_.above[p] = across ? planes_[p].across[j & 1].data() : planes_[p].coarse[j & 1];
+        row_.below[p] = across ? planes_[p].across[(j + 1) & 1].data() : planes_[p].coarse[(j + 1) & 1];
     }
     return row_;
 }

@@ -23,7 +23,10 @@ struct CoarseGaussian {
     std::vector<float> taps;  // pixel-integrated, unit sum, on the coarse grid
     int radius_px = 0;        // what a pixel's result reads around it
 };
-CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation);
+// The taps truncated at 4 of their sigmas (pixel_integrated_gaussian), or, with coarse_reach_sigmas
+// > 0 on a coarse grid, where their last pixel reaches that many: a shorter reach is fewer taps
+// and a shallower ring of rows read ahead, for the Gaussian's tail beyond it, renormalised.
+CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation, double coarse_reach_sigmas = 0);
 
 // Planes' rows streamed down the rows of `out` for one thread, the blurred planes' Gaussians
 // (one decimation for all) on the coarse grid. The planes' rows come from
@@ -80,17 +83,20 @@ public:
     // for the caller to interpolate along y and then along x, fused with its use of them
     // (multiply_by_interpolated).
     const Row& coarse_row(int y);
-    // fine[i] *= the coarse rows either side interpolated along y (above + t (below - above),
-    // as they are read) and then along x to out's column i (i < out's width).
-    void multiply_by_interpolated(const float* above, const float* below, float t, float* fine) const;
+    // product[i] = fine[i] times the coarse rows either side interpolated along y (above + t
+    // (below - above), as they are read) and then along x to out's column i (i < out's width).
+    void multiply_by_interpolated(const float* above, const float* below, float t, const float* fine,
+                                  float* product) const;
 
 private:
     // Two coarse rows summed at once (more would read further ahead, for a ring of fine rows
     // the deeper, and the coarse rows cost little).
     static constexpr int kCoarseRowsTogether = 2;
+    // The blurred coarse rows kept where the blur wrote them: the two either side of a fine row.
+    static constexpr int kCoarseRowsKept = 2;
     struct PlaneRows {
         std::vector<float> column_sums;  // none: the plane passes through
-        std::vector<float> coarse[2];    // blurred coarse rows j (by j's parity)
+        const float* coarse[2] = {};     // blurred coarse rows j (by j's parity), in blur_'s rows
         std::vector<float> across[2];    // ... interpolated to out's columns
     };
     float* ring_row(size_t plane, int y);
@@ -98,10 +104,10 @@ private:
     void block_means(int by, float* const* means);
     void keep_coarse(int j);
     void interpolate(int j);
-    // Each of out's columns gets (or, multiply, is multiplied by) the coarse row interpolated
-    // along x: `above`, or (below given) above + t (below - above).
+    // Each of out's columns gets the coarse row interpolated along x (or, multiply, in's column
+    // times it): `above`, or (below given) above + t (below - above).
     template <bool multiply>
-    void along_x(const float* above, const float* below, float t, float* out) const;
+    void along_x(const float* above, const float* below, float t, const float* in, float* out) const;
     const Row& read_row(int y, bool across);
 
     Window out_, frame_;

@@ -48,6 +48,16 @@ std::array<Curve, 3> curves_before_inhibition(const std::array<const Curve*, 3>&
     return before;
 }
 
+namespace {
+
+// How far the coarse Gaussian's taps reach, in its sigmas: its tail beyond 3 (0.2 % of it at a 4K
+// frame's pitch, where the last tap's pixel ends at 3.1) moves a step's spread by less than that,
+// a tenth of the grid's interpolation error; 4 would be 11 taps, not 7, and a deeper ring of the
+// rows read ahead (docs/model/dir-couplers.md).
+constexpr double kCoarseReachSigmas = 3;
+
+}  // namespace
+
 CouplerStage design_couplers(const Stock& stock, double amount, double spread, double pixel_pitch_um,
                              int curve_table_bits, int max_decimation) {
     const DirCouplerSpec spec = stock_dir_couplers(stock);
@@ -72,9 +82,11 @@ CouplerStage design_couplers(const Stock& stock, double amount, double spread, d
     }
     c.before = curves_before_inhibition(sheet, m, names);
     // The coarse grid's spacing at most the Gaussian's standard deviation: a step's spread is
-    // then within 0.03 (d / sigma)^2 of the step of the exact one (docs/model/dir-couplers.md).
+    // then within 0.03 (d / sigma)^2 of the step of the exact one, and the taps' truncation
+    // within their tail (docs/model/dir-couplers.md).
     const double sigma_px = spec.diffusion_um * spread / pixel_pitch_um;
-    c.spread = design_coarse_gaussian(sigma_px, std::clamp(int(sigma_px), 1, std::max(1, max_decimation)));
+    c.spread = design_coarse_gaussian(sigma_px, std::clamp(int(sigma_px), 1, std::max(1, max_decimation)),
+                                      kCoarseReachSigmas);
     return c;
 }
 
@@ -227,15 +239,17 @@ CoarseCouplerStream::CoarseCouplerStream(const CouplerStage& c, const Window& ou
               },
               // The blurred exponents' powers of 2: the pixels then interpolate the factors.
               [](float* const* exponents, int width) { simd::dispatch<PowersOfTwo>(exponents, width); },
-              donor_floors(c)) {}
+              donor_floors(c)) {
+    for (size_t l = 0; l < 3; ++l) {
+        rows_[l].resize(size_t(out.width()));
+        out_[l] = rows_[l].data();
+    }
+}
 
 float* const* CoarseCouplerStream::row(int y) {
     // The factors along y, then along x, as they multiply.
     const CoarseGaussianStream::Row& r = stream_.coarse_row(y);
-    for (size_t l = 0; l < 3; ++l) {
-        stream_.multiply_by_interpolated(r.above[l], r.below[l], r.t, r.read[l]);
-        out_[l] = r.read[l];
-    }
+    for (size_t l = 0; l < 3; ++l) stream_.multiply_by_interpolated(r.above[l], r.below[l], r.t, r.read[l], out_[l]);
     return out_;
 }
 

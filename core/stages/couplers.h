@@ -74,6 +74,9 @@ private:
     const CouplerStage& c_;
     std::array<float, 9> m_;  // the matrix times -log2 10
     CoarseGaussianStream stream_;  // the three layers' exposures, their inhibition's factors blurred
+    // The inhibited rows, apart from the exposure's ring: each ring row is written once, by the
+    // scatter, and the rows multiplied stay in the cache for the develop that reads them.
+    std::array<std::vector<float, UnsetAllocator<float>>, 3> rows_;
     float* out_[3];
 };
 

@@ -16,7 +16,10 @@
 namespace darkroom {
 
 std::vector<float> pixel_integrated_gaussian(double sigma_px) {
-    int radius = sigma_px < 1e-3 ? 0 : (int)std::ceil(4.0 * sigma_px);
+    return pixel_integrated_gaussian(sigma_px, sigma_px < 1e-3 ? 0 : (int)std::ceil(4.0 * sigma_px));
+}
+
+std::vector<float> pixel_integrated_gaussian(double sigma_px, int radius) {
     auto cdf = [&](double x) { return 0.5 * std::erfc(-x / (sigma_px * std::sqrt(2.0))); };
     std::vector<double> w;
     double sum = 0;

@@ -13,6 +13,8 @@ namespace darkroom {
 // The 1D Gaussian of standard deviation sigma_px, each tap the integral over its pixel,
 // truncated at 4 sigma and normalised to unit sum (one tap when sigma_px is negligible).
 std::vector<float> pixel_integrated_gaussian(double sigma_px);
+// The same to taps -radius ... radius.
+std::vector<float> pixel_integrated_gaussian(double sigma_px, int radius);
 
 // One row: out[x] = sum_k taps[k] in[x + k] for x in [0, width), `in` holding width +
 // taps - 1 values. Summed in float in one order for every x (vectorisable, and each value

@@ -46,6 +46,16 @@ double lab_chroma(const float* rgb) {
     return std::hypot(lab[1], lab[2]);
 }
 
+// The coarse Gaussian's mass beyond its taps' pixels (both sides), which its taps, truncated
+// and renormalised, leave out: they differ from the whole Gaussian by that much (half the sum
+// of their differences), so a field whose values span `range` along one direction moves by at
+// most range times it (along two directions, twice that).
+double coarse_tail(const CouplerStage& c, double sigma_px) {
+    const int d = c.spread.decimation;
+    const double coarse_sigma = std::sqrt(sigma_px * sigma_px - d * d / 4.0) / d;
+    return std::erfc((double(c.spread.taps.size() / 2) + 0.5) / (coarse_sigma * std::sqrt(2.0)));
+}
+
 }  // namespace
 
 TEST_CASE("DIR couplers at amount 0 give the pixels of the data sheet's curves, bit for bit", "[couplers]") {
@@ -196,8 +206,9 @@ TEST_CASE("the fast tiers' coarse inhibitor spreads a step within its grid's bou
     // on a grid of 2, twice as wide on a grid of 4. The exact spread of a unit step is
     // f(x) = Phi(x / sigma); linear interpolation between nodes d apart is within
     // d^2/8 max|f''| = d^2 phi(1) / (8 sigma^2) = 0.030 (d / sigma)^2 of it, and the block means
-    // and the narrowed Gaussian keep the exact one's variance, adding less than that. A step at
-    // every place within a block, across x and across y, on one plane.
+    // and the narrowed Gaussian keep the exact one's variance, adding less than that; the coarse
+    // taps' truncation (they reach 3 of its sigmas) adds at most their tail. A step at every
+    // place within a block, across x and across y, on one plane.
     const Stock film = find_stock("kodak-vision3-250d");
     const double pitch_um = 6.08;
     for (double spread : {1.0, 2.0}) {
@@ -205,7 +216,8 @@ TEST_CASE("the fast tiers' coarse inhibitor spreads a step within its grid's bou
         const double sigma_px = stock_dir_couplers(film).diffusion_um * spread / pitch_um;
         const int d = fast.spread.decimation;
         REQUIRE(d == int(sigma_px));
-        const double bound = std::exp(-0.5) / std::sqrt(2 * M_PI) * d * d / (8 * sigma_px * sigma_px);
+        const double bound = std::exp(-0.5) / std::sqrt(2 * M_PI) * d * d / (8 * sigma_px * sigma_px) +
+                             coarse_tail(fast, sigma_px);
         const std::vector<float> exact_taps = pixel_integrated_gaussian(sigma_px);
         const Window frame{0, 0, 96, 96};
         double worst = 0;
@@ -345,8 +357,9 @@ TEST_CASE("the fast tiers' coarse inhibition stays within its bound of the per-p
     // per-pixel path with the same tables, as the log10 of the inhibited exposures' ratio. The
     // coarse path differs from it in three ways, each bounded (log10 H, receiver i, donors j):
     //  1. the spread of the blocks' mean net densities on the coarse grid, interpolated: within
-    //     phi(1) d^2 / (8 sigma^2) of the exact spread of a unit step (the test above), so
-    //     sum_j |M_ij| dn_j times that for a step of net densities dn_j;
+    //     phi(1) d^2 / (8 sigma^2) of the exact spread of a unit step, and the truncated coarse
+    //     taps within their tail (the test above), so sum_j |M_ij| dn_j times that for a step of
+    //     net densities dn_j;
     //  2. a block's donor is its curve at the block's geometric mean exposure (by the floats'
     //     bits: the mean log10 H within 0.0259, docs/model/dir-couplers.md), not its mean net
     //     density: they differ by the curve's departure from its chord, delta_j, only in the
@@ -358,7 +371,7 @@ TEST_CASE("the fast tiers' coarse inhibition stays within its bound of the per-p
     //     nodes' difference in a; adjacent nodes of a step's spread differ by at most w dn_j,
     //     so D <= ln 10 w sum_j |M_ij| dn_j, and the error is at most D^2 / (8 ln 10).
     // A smooth field: the same three with (1) the exact shift's curvature in place of the
-    // step's, (2) every block's departure of its curve at its mean log exposure from its mean
+    // step's, and the tail twice (both directions) of each donor's range, (2) every block's departure of its curve at its mean log exposure from its mean
     // net density, with the pseudo logarithm's 0.0259 at the curve's steepest slope (every
     // block: weights summing to 1), and (3) the nodes' differences at most d times the exact
     // shift's largest gradient, in both directions.
@@ -388,7 +401,8 @@ TEST_CASE("the fast tiers' coarse inhibition stays within its bound of the per-p
                     delta[j] = std::max(delta[j], std::abs(net(j, (1 - f) * log_lo + f * log_hi + g) - chord));
             }
         }
-        const double interpolation = std::exp(-0.5) / std::sqrt(2 * M_PI) * d * d / (8 * sigma_px * sigma_px);
+        const double interpolation =
+            std::exp(-0.5) / std::sqrt(2 * M_PI) * d * d / (8 * sigma_px * sigma_px) + coarse_tail(coarse, sigma_px);
         for (int across_y = 0; across_y < 2; ++across_y)
             for (int edge = 48; edge < 48 + d; ++edge) {
                 std::array<Plane, 3> h{Plane::unset(frame), Plane::unset(frame), Plane::unset(frame)};
@@ -431,9 +445,11 @@ TEST_CASE("the fast tiers' coarse inhibition stays within its bound of the per-p
         const std::array<double, 3> worst = worst_log_ratio(inhibited(coarse, h, frame), exact_h);
         // Per donor: its curve's largest slope, and the largest departure of a block's curve at
         // its mean log exposure from its mean net density.
-        std::array<double, 3> slope{}, departure{};
+        std::array<double, 3> slope{}, departure{}, range{};
         for (size_t j = 0; j < 3; ++j) {
             const Curve& curve = film.layers[j].density_curve;
+            const auto [lo, hi] = std::minmax_element(log_h[j].pixels.begin(), log_h[j].pixels.end());
+            range[j] = net(j, *hi) - net(j, *lo);  // (the curve rises)
             for (size_t k = 1; k < curve.x.size(); ++k)
                 slope[j] = std::max(slope[j], (curve.y[k] - curve.y[k - 1]) / (curve.x[k] - curve.x[k - 1]));
             for (int by = 0; by < frame.y1 / d; ++by)
@@ -465,7 +481,9 @@ TEST_CASE("the fast tiers' coarse inhibition stays within its bound of the per-p
             // The coarse spread: its nodes' kernel (blocks and the narrowed Gaussian) is d^2/6
             // narrower in variance than the Gaussian, a shift of d^2/12 of the second derivative a
             // direction, which the interpolation (within d^2/8 of it) makes up on average.
-            const double spread = (1.0 / 12 + 1.0 / 8) * d * d * curvature;
+            double truncated = 0;
+            for (size_t j = 0; j < 3; ++j) truncated += std::abs(m[i][j]) * range[j] * 2 * coarse_tail(coarse, sigma_px);
+            const double spread = (1.0 / 12 + 1.0 / 8) * d * d * curvature + truncated;
             const double nodes = ln10 * d * gradient;
             const double bound = spread + donors + 2 * nodes * nodes / (8 * ln10);
             INFO("layer " << i << ": " << worst[i] << " against " << bound << " (" << spread << " + " << donors << " + "
