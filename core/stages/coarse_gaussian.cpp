@@ -401,7 +401,8 @@ void CoarseGaussianStream::along_x(const float* above, const float* below, float
         const ColumnRun& run = column_runs_[pair_runs_[0]];
         simd::dispatch<InterpolatePairs<multiply>>(coarse.from(run.block), tx_[size_t(run.begin)],
                                                    tx_[size_t(run.begin) + 1], int(pair_runs_[1] - pair_runs_[0]),
-                                                   multiply ? in + run.begin : nullptr, out + run.begin);
+                                                   // (not multiplying: out in place of in, never read)
+                                                   (multiply ? in : out) + run.begin, out + run.begin);
     }
     auto runs = [&](size_t first, size_t last) {
         for (size_t r = first; r < last; ++r) {
