@@ -12,8 +12,8 @@
 //              to the print's colour, the paper's MTF applied to the negative's densities
 //              and its grain folded into the film's; the PSF tapered to a compact kernel (a
 //              centre delta and separable terms), halation on an 8x coarser grid, the DIR
-//              couplers on a grid as coarse as their inhibitor's standard deviation (its
-//              spread, the donors and the inhibition's factors there), tabulated
+//              couplers on a grid up to 1.25 times their inhibitor's standard deviation
+//              (its spread, the donors and the inhibition's factors there), tabulated
 //              H&D curves, grain from hashed noise (sums of uniform bytes: core/random.h)
 //              through a kernel without its negligible outer taps
 //   preview    as fast, on a proxy of the frame whose pixels are NxN blocks of the frame's
@@ -48,8 +48,8 @@ struct QualityTier {
     ScatterDesign scatter;    // the MTF's kernel (stages/scatter.h)
     int halation_decimation;  // halation on a grid this many times coarser (1: the pixels)
     // The DIR couplers' inhibitor spread on a grid up to this many times coarser (1: the
-    // pixels), its spacing at most the Gaussian's standard deviation, the donors and the
-    // inhibition's factors evaluated there too (stages/couplers.h).
+    // pixels), its spacing at most 1.25 of the Gaussian's standard deviations, the donors and
+    // the inhibition's factors evaluated there too (stages/couplers.h).
     int coupler_decimation;
     GrainMethod grain;
     // Printing a colour negative on colour paper: 0 = per-pixel spectral integration in

@@ -99,9 +99,19 @@ struct Exp2OfPseudoLog2Row {
     }
 };
 
-// Grids of d = 2 (the DIR couplers' at a 4K frame's pitch): each block's two columns in vectors,
-// the same operations as the scalar loops for any d.
-constexpr int interleaved(int j, int lanes) { return j / 2 + (j % 2) * lanes; }  // a0 b0 a1 b1 ...
+// Grids of d up to kMaxRunDecimation (the DIR couplers' and halation's): the values of a
+// vector of blocks spread to the d vectors of their fine columns by permutes, and the d
+// vectors of a row's column sums gathered to its blocks likewise; the same operations as the
+// scalar loops, for every d.
+constexpr int kMaxRunDecimation = 8;
+
+// Fine vector v's lanes j, of the fine columns of `lanes` blocks from the first: each its
+// block's value, block (v lanes + j) / d.
+template <int d, int v, typename V, size_t... J>
+__attribute__((always_inline)) inline V spread_to_columns(const V& blocks, std::index_sequence<J...>) {
+    constexpr int lanes = sizeof(V) / sizeof(float);
+    return __builtin_shufflevector(blocks, blocks, ((v * lanes + int(J)) / d)...);
+}
 
 // What the interpolation along x does with each fine column's value: writes it, or
 // (multiply) writes the column of `in` times it.
@@ -116,12 +126,16 @@ __attribute__((always_inline)) inline void put(const float* in, float* out, cons
     }
 }
 
-template <bool multiply, typename V, size_t... J>
-__attribute__((always_inline)) inline void put_interleaved(const float* in, float* out, const V& a, const V& b,
-                                                           std::index_sequence<J...>) {
+// The d fine vectors of `lanes` blocks: each lane b0 + t step of its block, t its column's weight.
+template <bool multiply, int d, typename V, size_t... Vs>
+__attribute__((always_inline)) inline void put_columns(const V& b0, const V& step, const V* weights, const float* in,
+                                                       float* out, std::index_sequence<Vs...>) {
     constexpr int lanes = sizeof(V) / sizeof(float);
-    put<multiply>(in, out, V(__builtin_shufflevector(a, b, interleaved(int(J), lanes)...)));
-    put<multiply>(in + lanes, out + lanes, V(__builtin_shufflevector(a, b, interleaved(int(J) + lanes, lanes)...)));
+    constexpr auto lane_indices = std::make_index_sequence<lanes>();
+    (put<multiply>(in + int(Vs) * lanes, out + int(Vs) * lanes,
+                   V(spread_to_columns<d, int(Vs)>(b0, lane_indices) +
+                     weights[Vs] * spread_to_columns<d, int(Vs)>(step, lane_indices))),
+     ...);
 }
 
 // The coarse row's value at column k: coarse[k], or (between rows) above[k] + t (below[k] - above[k]),
@@ -142,60 +156,138 @@ struct CoarseRow {
     CoarseRow from(int block) const { return {above + block, below ? below + block : nullptr, t}; }
 };
 
-// out[2k + m] = c[k] + t[m] (c[k + 1] - c[k]) (multiply: times in[2k + m]), m = 0, 1, k < blocks, c
-// the coarse row: two fine columns per block, interpolated along x.
-template <bool multiply>
-struct InterpolatePairs {
+// out[d k + m] = c[k] + t[m] (c[k + 1] - c[k]) (multiply: times in[d k + m]), m < d, k < blocks, c
+// the coarse row: d fine columns per block, interpolated along x.
+template <bool multiply, int d>
+struct InterpolateRuns {
     template <int lanes>
-    __attribute__((always_inline)) static void run(CoarseRow coarse, float t0, float t1, int blocks, const float* in,
+    __attribute__((always_inline)) static void run(CoarseRow coarse, const float* t, int blocks, const float* in,
                                                    float* out) {
         using V = typename simd::Lanes<lanes>::F;
         int k = 0;
-        if constexpr (lanes > 1)
+        if constexpr (lanes > 1) {
+            V weights[d];  // fine vector v's lanes': t[(v lanes + j) % d]
+            for (int v = 0; v < d; ++v)
+                for (int j = 0; j < lanes; ++j) weights[v][j] = t[(v * lanes + j) % d];
             for (; k + lanes <= blocks; k += lanes) {
                 // (multiplying: a ring row read back, from memory)
-                if constexpr (multiply) simd::prefetch_ahead(in + 2 * k, 2 * lanes * int(sizeof(float)));
-                const V b0 = coarse.at<V>(k), b1 = coarse.at<V>(k + 1);
-                const V step = b1 - b0;
-                put_interleaved<multiply>(in + 2 * k, out + 2 * k, b0 + t0 * step, b0 + t1 * step,
-                                          std::make_index_sequence<lanes>());
+                if constexpr (multiply) simd::prefetch_ahead(in + d * k, d * lanes * int(sizeof(float)));
+                const V b0 = coarse.at<V>(k), step = coarse.at<V>(k + 1) - b0;
+                put_columns<multiply, d>(b0, step, weights, in + d * k, out + d * k, std::make_index_sequence<d>());
             }
+        }
         for (; k < blocks; ++k) {
             const simd::Float1 b0 = coarse.at<simd::Float1>(k), step = coarse.at<simd::Float1>(k + 1) - b0;
-            put<multiply>(in + 2 * k, out + 2 * k, simd::Float1{b0 + t0 * step});
-            put<multiply>(in + 2 * k + 1, out + 2 * k + 1, simd::Float1{b0 + t1 * step});
+            for (int m = 0; m < d; ++m) put<multiply>(in + d * k + m, out + d * k + m, simd::Float1{b0 + t[m] * step});
         }
     }
 };
 
-// means[k] = (0 + sums[2k] + sums[2k + 1]) / 4, k < blocks: the means of 2x2 blocks from
-// their column sums.
-struct PairMeans {
+// Lane j of `partial` from the vectors `in` from q on: sums[d j + m] where it lies in in[q].
+template <int d, int m, int q, typename V, size_t... J>
+__attribute__((always_inline)) inline V gather_column(const V& partial, const V* in, std::index_sequence<J...> lanes) {
+    if constexpr (q == d) {
+        return partial;
+    } else {
+        constexpr int n = sizeof(V) / sizeof(float);
+        const V merged = __builtin_shufflevector(
+            partial, in[q], ((d * int(J) + m) / n == q ? n + (d * int(J) + m) % n : int(J))...);
+        return gather_column<d, m, q + 1>(merged, in, lanes);
+    }
+}
+
+// The sum 0 + sums[d j] + ... + sums[d j + d - 1] of each block j of a vector's, from the d
+// vectors of its column sums.
+template <int d, typename V, size_t... Ms>
+__attribute__((always_inline)) inline V block_sums(const V* in, std::index_sequence<Ms...>) {
+    constexpr auto lanes = std::make_index_sequence<sizeof(V) / sizeof(float)>();
+    V sum = V{} + 0.0f;
+    ((sum = sum + gather_column<d, int(Ms), 0>(in[0], in, lanes)), ...);
+    return sum;
+}
+
+// means[k] = (0 + sums[d k] + ... + sums[d k + d - 1]) / d^2, k < blocks: the means of d x d
+// blocks from their column sums.
+template <int d>
+struct BlockMeans {
     template <int lanes>
     __attribute__((always_inline)) static void run(const float* sums, int blocks, float* means) {
         using V = typename simd::Lanes<lanes>::F;
         int k = 0;
         if constexpr (lanes > 1)
             for (; k + lanes <= blocks; k += lanes) {
-                V a, b;
-                simd::load(a, sums + 2 * k), simd::load(b, sums + 2 * k + lanes);
-                const V even = deinterleave(a, b, 0, std::make_index_sequence<lanes>());
-                const V odd = deinterleave(a, b, 1, std::make_index_sequence<lanes>());
-                simd::store(means + k, ((V{} + 0.0f) + even + odd) / 4.0f);
+                V in[d];
+                for (int v = 0; v < d; ++v) simd::load(in[v], sums + d * k + v * lanes);
+                simd::store(means + k, block_sums<d>(in, std::make_index_sequence<d>()) / float(d * d));
             }
-        for (; k < blocks; ++k) means[k] = (0.0f + sums[2 * k] + sums[2 * k + 1]) / 4.0f;
-    }
-    template <typename V, size_t... J>
-    __attribute__((always_inline)) static V deinterleave(const V& a, const V& b, int odd, std::index_sequence<J...>) {
-        return odd ? __builtin_shufflevector(a, b, (2 * int(J) + 1)...)
-                   : __builtin_shufflevector(a, b, (2 * int(J))...);
+        for (; k < blocks; ++k) {
+            simd::Float1 sum = simd::Float1{} + 0.0f;
+            for (int m = 0; m < d; ++m) sum = sum + simd::Float1{sums[d * k + m]};
+            means[k] = (sum / float(d * d))[0];
+        }
     }
 };
+
+// Kernel<d> dispatched for the decimation d in [2, kMaxRunDecimation].
+template <template <int> class Kernel, int d = 2, typename... Args>
+void dispatch_decimation(int decimation, Args... args) {
+    if (decimation == d)
+        simd::dispatch<Kernel<d>>(args...);
+    else if constexpr (d < kMaxRunDecimation)
+        dispatch_decimation<Kernel, d + 1>(decimation, args...);
+    else
+        throw std::logic_error("coarse Gaussian: a decimation past the vector kernels'");
+}
+template <int d>
+using InterpolateRunsWritten = InterpolateRuns<false, d>;
+template <int d>
+using InterpolateRunsMultiplied = InterpolateRuns<true, d>;
 
 // Fine pixel x sits at u = (x + 0.5)/d - 0.5 = (2x + 1 - d)/2d on the coarse grid, between
 // blocks floor(u) and floor(u) + 1 (exact in integers); the blocks a range of pixels needs.
 std::pair<int, int> coarse_range(int lo, int hi, int d) {
     return {floor_div(2 * lo + 1 - d, 2 * d), floor_div(2 * (hi - 1) + 1 - d, 2 * d) + 2};
+}
+
+}  // namespace
+
+namespace {
+
+// The coarse taps of standard deviation coarse_sigma, truncated as design_coarse_gaussian's.
+std::vector<float> coarse_taps(double coarse_sigma, double coarse_reach_sigmas) {
+    return coarse_reach_sigmas > 0
+               ? pixel_integrated_gaussian(coarse_sigma, int(std::ceil(coarse_reach_sigmas * coarse_sigma - 0.5)))
+               : pixel_integrated_gaussian(coarse_sigma);
+}
+
+// The largest difference between a unit step spread by the pixels' Gaussian (`exact_step`: its
+// value at x - edge, from -radius to radius) and by `taps` on a grid of d as the stream spreads
+// it (block means, edge pixels past the ends, the taps, interpolation at the pixels' places),
+// over every place of the step within a block: in one dimension, where the 2D filters are
+// separable.
+double worst_step_error(const std::vector<double>& exact_step, const std::vector<float>& taps, int d) {
+    const int exact_radius = int(exact_step.size() / 2), r = int(taps.size() / 2);
+    const int margin = exact_radius + (r + 2) * d;  // (no filter reads past the ends from within)
+    const int width = 2 * (margin + d), blocks = width / d;
+    double worst = 0;
+    for (int edge = width / 2; edge < width / 2 + d; ++edge) {
+        std::vector<double> means(size_t(blocks + 2 * r));  // (past the ends: the edge blocks)
+        for (int b = -r; b < blocks + r; ++b) {
+            const int clamped = std::clamp(b, 0, blocks - 1);
+            means[size_t(b + r)] = double(std::clamp(clamped * d + d - edge, 0, d)) / d;
+        }
+        std::vector<double> spread(static_cast<size_t>(blocks));
+        for (int b = 0; b < blocks; ++b)
+            for (int k = -r; k <= r; ++k) spread[size_t(b)] += taps[size_t(k + r)] * means[size_t(b + k + r)];
+        for (int x = margin; x < width - margin; ++x) {
+            const int i = floor_div(2 * x + 1 - d, 2 * d);
+            const double t = double(2 * x + 1 - d - 2 * d * i) / (2 * d);
+            const double coarse = spread[size_t(i)] + t * (spread[size_t(i + 1)] - spread[size_t(i)]);
+            const int offset = std::clamp(x - edge, -exact_radius - 1, exact_radius);
+            worst = std::max(worst, std::abs(coarse - (offset < -exact_radius ? 0.0 : exact_step[size_t(offset + exact_radius)])));
+        }
+    }
+    return worst;
 }
 
 }  // namespace
@@ -207,16 +299,35 @@ CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation, double co
     if (d == 1) {
         g.taps = pixel_integrated_gaussian(sigma_px);
         g.radius_px = int(g.taps.size() / 2);
-    } else {
-        // The block means and the interpolation add d^2/12 + d^2/6 of variance, taken off the
-        // coarse Gaussian's.
-        if (!(sigma_px * sigma_px > d * d / 4.0)) throw std::logic_error("a coarse Gaussian narrower than its grid");
-        const double coarse_sigma = std::sqrt(sigma_px * sigma_px - d * d / 4.0) / d;
-        g.taps = coarse_reach_sigmas > 0
-                     ? pixel_integrated_gaussian(coarse_sigma, int(std::ceil(coarse_reach_sigmas * coarse_sigma - 0.5)))
-                     : pixel_integrated_gaussian(coarse_sigma);
-        g.radius_px = (int(g.taps.size() / 2) + 2) * d;
+        return g;
     }
+    if (!(2 * sigma_px > d)) throw std::logic_error("a coarse Gaussian narrower than its grid");
+    // The coarse Gaussian's width that spreads a step closest to the pixels' Gaussian (golden-section
+    // search). Matching their variances instead (the blocks and the interpolation add about d^2/3)
+    // is as close on grids fine against sigma, but on one of 1.2 sigma the few taps' shape
+    // matters: its step was 0.072 off, against 0.039 (docs/model/dir-couplers.md).
+    const std::vector<float> exact = pixel_integrated_gaussian(sigma_px);
+    std::vector<double> exact_step(exact.size());  // at x - edge: the taps from edge - x on
+    for (size_t k = exact.size(); k-- > 0;)
+        exact_step[exact.size() - 1 - k] = (k + 1 < exact.size() ? exact_step[exact.size() - 2 - k] : 0.0) + exact[k];
+    auto error = [&](double coarse_sigma) {
+        return worst_step_error(exact_step, coarse_taps(coarse_sigma, coarse_reach_sigmas), d);
+    };
+    const double golden = (std::sqrt(5.0) - 1) / 2;
+    double lo = 0.2, hi = sigma_px / d;
+    double a = hi - golden * (hi - lo), b = lo + golden * (hi - lo), error_a = error(a), error_b = error(b);
+    for (int i = 0; i < 30; ++i) {
+        if (error_a < error_b) {
+            hi = b, b = a, error_b = error_a;
+            a = hi - golden * (hi - lo), error_a = error(a);
+        } else {
+            lo = a, a = b, error_a = error_b;
+            b = lo + golden * (hi - lo), error_b = error(b);
+        }
+    }
+    g.coarse_sigma = error_a < error_b ? a : b;
+    g.taps = coarse_taps(g.coarse_sigma, coarse_reach_sigmas);
+    g.radius_px = (int(g.taps.size() / 2) + 2) * d;
     return g;
 }
 
@@ -260,14 +371,14 @@ CoarseGaussianStream::CoarseGaussianStream(const std::vector<const std::vector<f
         if (column_runs_.empty() || column_runs_.back().block != block) column_runs_.push_back({column, column, block});
         column_runs_.back().end = column + 1;
     }
-    if (d_ == 2) {  // the runs of two columns, from the first on or the second
-        auto pair = [&](size_t r) {
-            return r < column_runs_.size() && column_runs_[r].end - column_runs_[r].begin == 2;
+    if (d_ <= kMaxRunDecimation) {  // the whole runs (d columns each), from the first on or the second
+        auto whole = [&](size_t r) {
+            return r < column_runs_.size() && column_runs_[r].end - column_runs_[r].begin == d_;
         };
-        size_t r = pair(0) ? 0 : 1;
-        pair_runs_[0] = r;
-        while (pair(r)) ++r;
-        pair_runs_[1] = r;
+        size_t r = whole(0) ? 0 : 1;
+        whole_runs_[0] = r;
+        while (whole(r)) ++r;
+        whole_runs_[1] = r;
     }
     std::vector<SeparableFilter> filters;
     for (size_t p : blurred_) {
@@ -350,8 +461,9 @@ void CoarseGaussianStream::block_means(int by, float* const* means) {
         std::vector<float>& sums = planes_[blurred_[i]].column_sums;
         std::fill(sums.begin(), sums.begin() + (inside0_ - px_begin), sums[inside0_ - px_begin]);
         std::fill(sums.begin() + (inside1_ - px_begin), sums.end(), sums[inside1_ - 1 - px_begin]);
-        if (d == 2) {
-            simd::dispatch<PairMeans>(sums.data(), means_window_.width(), means[i]);
+        if (d <= kMaxRunDecimation) {
+            dispatch_decimation<BlockMeans>(d, static_cast<const float*>(sums.data()), means_window_.width(),
+                                            means[i]);
         } else {
             for (int bx = means_window_.x0; bx < means_window_.x1; ++bx) {
                 float sum = 0;
@@ -391,18 +503,23 @@ void CoarseGaussianStream::multiply_by_interpolated(const float* above, const fl
     along_x<true>(above, below, t, fine, out);
 }
 
-// A run's two coarse values once, then a loop without indirection (which vectorises); with
-// d = 2, the whole runs (two columns each) in vectors.
+// The whole runs (d columns each) in vectors; the partial ones at the edges (and every run
+// past the vector kernels' decimations) a run's two coarse values once, then a loop without
+// indirection (which vectorises).
 template <bool multiply>
 void CoarseGaussianStream::along_x(const float* above, const float* below, float t, const float* in,
                                    float* out) const {
     const CoarseRow coarse{above, below, t};
-    if (pair_runs_[1] > pair_runs_[0]) {
-        const ColumnRun& run = column_runs_[pair_runs_[0]];
-        simd::dispatch<InterpolatePairs<multiply>>(coarse.from(run.block), tx_[size_t(run.begin)],
-                                                   tx_[size_t(run.begin) + 1], int(pair_runs_[1] - pair_runs_[0]),
-                                                   // (not multiplying: out in place of in, never read)
-                                                   (multiply ? in : out) + run.begin, out + run.begin);
+    if (whole_runs_[1] > whole_runs_[0]) {
+        const ColumnRun& run = column_runs_[whole_runs_[0]];
+        const int blocks = int(whole_runs_[1] - whole_runs_[0]);
+        const float* weights = tx_.data() + run.begin;
+        if constexpr (multiply)
+            dispatch_decimation<InterpolateRunsMultiplied>(d_, coarse.from(run.block), weights, blocks,
+                                                           in + run.begin, out + run.begin);
+        else  // (out in place of in, never read)
+            dispatch_decimation<InterpolateRunsWritten>(d_, coarse.from(run.block), weights, blocks,
+                                                        static_cast<const float*>(out + run.begin), out + run.begin);
     }
     auto runs = [&](size_t first, size_t last) {
         for (size_t r = first; r < last; ++r) {
@@ -419,8 +536,8 @@ void CoarseGaussianStream::along_x(const float* above, const float* below, float
             }
         }
     };
-    runs(0, pair_runs_[0]);
-    runs(pair_runs_[1], column_runs_.size());
+    runs(0, whole_runs_[0]);
+    runs(whole_runs_[1], column_runs_.size());
 }
 
 const CoarseGaussianStream::Row& CoarseGaussianStream::row(int y) { return read_row(y, true); }

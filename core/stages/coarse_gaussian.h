@@ -1,9 +1,9 @@
 // A wide Gaussian on a coarser grid, for the fast tiers' smooth fields (halation's halo, the
 // DIR couplers' inhibitor): block means of the image (blocks of d x d pixels aligned to the
 // frame's origin, so every window and band agrees), extended past the frame by its edge
-// pixels (as the exact filter reads it), the Gaussian with its variance reduced by the
-// blocks' and the interpolation's (d^2/12 + d^2/6), then bilinear interpolation back to the
-// pixels.
+// pixels (as the exact filter reads it), the Gaussian with its variance reduced by what the
+// blocks, the interpolation and its own taps add (d^2/3 - 1/12 in all), then bilinear
+// interpolation back to the pixels.
 #pragma once
 
 #include <cstdint>
@@ -21,6 +21,7 @@ namespace darkroom {
 struct CoarseGaussian {
     int decimation = 1;
     std::vector<float> taps;  // pixel-integrated, unit sum, on the coarse grid
+    double coarse_sigma = 0;  // their Gaussian's standard deviation, in coarse pixels
     int radius_px = 0;        // what a pixel's result reads around it
 };
 // The taps truncated at 4 of their sigmas (pixel_integrated_gaussian), or, with coarse_reach_sigmas
@@ -128,7 +129,7 @@ private:
     };
     std::vector<float> tx_;
     std::vector<ColumnRun> column_runs_;
-    size_t pair_runs_[2] = {0, 0};  // with d = 2: the runs [first, last) of two columns each, in vectors
+    size_t whole_runs_[2] = {0, 0};  // the runs [first, last) of d columns each, in vectors
     std::unique_ptr<SeparableStream> blur_;
     int coarse_row_[2] = {INT32_MIN, INT32_MIN}, across_row_[2] = {INT32_MIN, INT32_MIN};
     int read_x0_ = 0, read_x1_ = 0, slots_ = 0;

@@ -50,9 +50,9 @@ std::array<Curve, 3> curves_before_inhibition(const std::array<const Curve*, 3>&
 
 namespace {
 
-// How far the coarse Gaussian's taps reach, in its sigmas: its tail beyond 3 (0.2 % of it at a 4K
-// frame's pitch, where the last tap's pixel ends at 3.1) moves a step's spread by less than that,
-// a tenth of the grid's interpolation error; 4 would be 11 taps, not 7, and a deeper ring of the
+// How far the coarse Gaussian's taps reach, in its sigmas: its tail beyond 3 (0.03 % of it at a
+// 4K frame's pitch, where the last tap's pixel ends at 3.7) moves a step's spread by less than
+// that, a hundredth of the grid's interpolation error; more taps would be a deeper ring of the
 // rows read ahead (docs/model/dir-couplers.md).
 constexpr double kCoarseReachSigmas = 3;
 
@@ -81,12 +81,10 @@ CouplerStage design_couplers(const Stock& stock, double amount, double spread, d
         }
     }
     c.before = curves_before_inhibition(sheet, m, names);
-    // The coarse grid's spacing at most the Gaussian's standard deviation: a step's spread is
-    // then within 0.03 (d / sigma)^2 of the step of the exact one, and the taps' truncation
-    // within their tail (docs/model/dir-couplers.md).
     const double sigma_px = spec.diffusion_um * spread / pixel_pitch_um;
-    c.spread = design_coarse_gaussian(sigma_px, std::clamp(int(sigma_px), 1, std::max(1, max_decimation)),
-                                      kCoarseReachSigmas);
+    c.spread = design_coarse_gaussian(
+        sigma_px, std::clamp(int(kCouplerGridPerSigma * sigma_px), 1, std::max(1, max_decimation)),
+        kCoarseReachSigmas);
     return c;
 }
 

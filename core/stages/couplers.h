@@ -27,6 +27,13 @@ using CouplerMatrix = std::array<std::array<double, 3>, 3>;  // [receiver][donor
 std::array<Curve, 3> curves_before_inhibition(const std::array<const Curve*, 3>& sheet, const CouplerMatrix& m,
                                               const std::array<std::string, 3>& layer_names);
 
+// The fast tiers' coarse grid for the inhibitor's spread: its spacing d at most this many of
+// the Gaussian's standard deviations, so that a step's spread is within 0.030 (d / sigma)^2 <=
+// 0.047 of the exact one's, and the taps' truncation within their tail; at a 4K frame's pitch
+// (sigma 2.47 px) a grid of 3, where a grid of 2 cost the fast tier 5-10 % of its frame for a
+// fifth less error (docs/model/dir-couplers.md).
+constexpr double kCouplerGridPerSigma = 1.25;
+
 // The develop stage's couplers, designed for a plan.
 struct CouplerStage {
     std::array<float, 9> matrix{};  // M_ij at [3 i + j], the stock's times the amount

@@ -2,12 +2,15 @@
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include "core/demo_scene.h"
 #include "core/develop.h"
 #include "core/spectral.h"
 #include "core/stages/couplers.h"
+#include "core/simd.h"
+#include "core/stages/coarse_gaussian.h"
 #include "core/stages/filters.h"
 #include "test_support.h"
 
@@ -50,10 +53,8 @@ double lab_chroma(const float* rgb) {
 // and renormalised, leave out: they differ from the whole Gaussian by that much (half the sum
 // of their differences), so a field whose values span `range` along one direction moves by at
 // most range times it (along two directions, twice that).
-double coarse_tail(const CouplerStage& c, double sigma_px) {
-    const int d = c.spread.decimation;
-    const double coarse_sigma = std::sqrt(sigma_px * sigma_px - d * d / 4.0) / d;
-    return std::erfc((double(c.spread.taps.size() / 2) + 0.5) / (coarse_sigma * std::sqrt(2.0)));
+double coarse_tail(const CouplerStage& c) {
+    return std::erfc((double(c.spread.taps.size() / 2) + 0.5) / (c.spread.coarse_sigma * std::sqrt(2.0)));
 }
 
 }  // namespace
@@ -203,10 +204,10 @@ TEST_CASE("a step edge develops the adjacency effect of the inhibitor's Gaussian
 TEST_CASE("the fast tiers' coarse inhibitor spreads a step within its grid's bound of the exact Gaussian",
           "[couplers][quality]") {
     // The fast tier's design at a 4K frame's pitch (6.08 um): the 15 um inhibitor (sigma 2.47 px)
-    // on a grid of 2, twice as wide on a grid of 4. The exact spread of a unit step is
+    // on a grid of 3, twice as wide on a grid of 6. The exact spread of a unit step is
     // f(x) = Phi(x / sigma); linear interpolation between nodes d apart is within
-    // d^2/8 max|f''| = d^2 phi(1) / (8 sigma^2) = 0.030 (d / sigma)^2 of it, and the block means
-    // and the narrowed Gaussian keep the exact one's variance, adding less than that; the coarse
+    // d^2/8 max|f''| = d^2 phi(1) / (8 sigma^2) = 0.030 (d / sigma)^2 of it, and the coarse
+    // Gaussian's width is the one that brings a step closest, adding less than that; the coarse
     // taps' truncation (they reach 3 of its sigmas) adds at most their tail. A step at every
     // place within a block, across x and across y, on one plane.
     const Stock film = find_stock("kodak-vision3-250d");
@@ -215,9 +216,9 @@ TEST_CASE("the fast tiers' coarse inhibitor spreads a step within its grid's bou
         const CouplerStage fast = design_couplers(film, 1, spread, pitch_um, 6, 8);
         const double sigma_px = stock_dir_couplers(film).diffusion_um * spread / pitch_um;
         const int d = fast.spread.decimation;
-        REQUIRE(d == int(sigma_px));
+        REQUIRE(d == int(kCouplerGridPerSigma * sigma_px));
         const double bound = std::exp(-0.5) / std::sqrt(2 * M_PI) * d * d / (8 * sigma_px * sigma_px) +
-                             coarse_tail(fast, sigma_px);
+                             coarse_tail(fast);
         const std::vector<float> exact_taps = pixel_integrated_gaussian(sigma_px);
         const Window frame{0, 0, 96, 96};
         double worst = 0;
@@ -245,11 +246,71 @@ TEST_CASE("the fast tiers' coarse inhibitor spreads a step within its grid's bou
     }
 }
 
+TEST_CASE("a coarse Gaussian's interpolation and block means are their scalar definitions on every grid and "
+          "instruction set", "[couplers][simd]") {
+    test::IsaScope scope;
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.01f, 1.0f);
+    // Grids of 2 to 8 run vector kernels, 9 the scalar loops; a window from an odd column, so
+    // that its first and last blocks are partial, wide enough for several vectors and a tail.
+    for (int d = 2; d <= 9; ++d) {
+        const Window frame{0, 0, 16 * 9 * 3 + 13, 4 * d + 40}, out{5, 0, frame.x1 - 3, frame.y1};
+        const std::vector<float> taps = design_coarse_gaussian(1.2 * d, d).taps;
+        const int reach = (int(taps.size() / 2) + 3) * d;  // past it from the frame's edges, no clamping
+        Plane fine = Plane::unset(frame), ramp = Plane::unset(frame);
+        for (int y = 0; y < frame.y1; ++y)
+            for (int x = 0; x < frame.x1; ++x) {
+                fine.at(x, y) = u(rng);
+                ramp.at(x, y) = 1.0f + 0.01f * float(x) + 0.02f * float(y);
+            }
+        // The blocks' column of out's first column, as the stream counts them.
+        const int first_block = floor_div(2 * out.x0 + 1 - d, 2 * d);
+        std::vector<std::vector<float>> products;
+        for (simd::Isa isa : test::runnable_isas()) {
+            simd::set_isa(isa);
+            CoarseGaussianStream random({&taps}, d, out, frame, [&](int y, int x_begin, int x_end, float* const* rows) {
+                std::copy(fine.row(y) + x_begin, fine.row(y) + x_end, rows[0]);
+            });
+            CoarseGaussianStream linear({&taps}, d, out, frame, [&](int y, int x_begin, int x_end, float* const* rows) {
+                std::copy(ramp.row(y) + x_begin, ramp.row(y) + x_end, rows[0]);
+            });
+            std::vector<float> product(size_t(out.width())), all;
+            long long differ = 0;
+            double worst_ramp = 0;
+            for (int y = out.y0; y < out.y1; ++y) {
+                const CoarseGaussianStream::Row& r = random.coarse_row(y);
+                random.multiply_by_interpolated(r.above[0], r.below[0], r.t, fine.row(y) + out.x0, product.data());
+                for (int x = out.x0; x < out.x1; ++x) {
+                    // The definition: along y on the coarse nodes either side, along x, times the pixel.
+                    const int i = floor_div(2 * x + 1 - d, 2 * d), k = i - first_block;
+                    const float tx = float(2 * x + 1 - d - 2 * d * i) / float(2 * d);
+                    const float c0 = r.above[0][k] + r.t * (r.below[0][k] - r.above[0][k]);
+                    const float c1 = r.above[0][k + 1] + r.t * (r.below[0][k + 1] - r.above[0][k + 1]);
+                    if (product[size_t(x - out.x0)] != fine.at(x, y) * (c0 + tx * (c1 - c0))) ++differ;
+                }
+                all.insert(all.end(), product.begin(), product.end());
+                // A linear ramp is its own block means, blur and interpolation, away from the edges.
+                const CoarseGaussianStream::Row& s = linear.row(y);
+                if (y < reach || y >= frame.y1 - reach) continue;
+                for (int x = std::max(out.x0, reach); x < std::min(out.x1, frame.x1 - reach); ++x) {
+                    const double value = s.above[0][x - out.x0] + s.t * (s.below[0][x - out.x0] - s.above[0][x - out.x0]);
+                    worst_ramp = std::max(worst_ramp, std::abs(value / ramp.at(x, y) - 1));
+                }
+            }
+            INFO("grid " << d << ", " << simd::isa_name(isa));
+            CHECK(differ == 0);
+            CHECK(worst_ramp < 1e-5);
+            products.push_back(std::move(all));
+        }
+        for (size_t i = 1; i < products.size(); ++i) CHECK(products[i] == products[0]);
+    }
+}
+
 TEST_CASE("DIR couplers give the same pixels for any thread count and window", "[couplers][determinism]") {
     const Stock film = find_stock("kodak-vision3-250d"), paper = find_stock("kodak-2383");
     const Image scene = demo_scene(160, 120);
-    // ~3 um pixels: the inhibitor reaches 20 px, on a grid of 5 in the fast tiers; a 4K
-    // frame's 6.08 um: on a grid of 2 (its vector loops).
+    // ~3 um pixels: the inhibitor on a coarse grid twice as coarse as at a 4K frame's 6.08 um
+    // (3).
     for (auto [q, frame_width_mm] : {std::pair{Quality::high, 0.5}, std::pair{Quality::fast, 0.5},
                                      std::pair{Quality::preview, 0.5}, std::pair{Quality::fast, 160 * 0.00608}}) {
         DevelopSettings s;
@@ -353,7 +414,7 @@ std::array<double, 3> worst_log_ratio(const std::array<Plane, 3>& coarse, const 
 }  // namespace
 
 TEST_CASE("the fast tiers' coarse inhibition stays within its bound of the per-pixel one", "[couplers][quality]") {
-    // The fast tier at a 4K frame's pitch (6.08 um: sigma 2.47 px, a grid of d = 2) against the
+    // The fast tier at a 4K frame's pitch (6.08 um: sigma 2.47 px, a grid of d = 3) against the
     // per-pixel path with the same tables, as the log10 of the inhibited exposures' ratio. The
     // coarse path differs from it in three ways, each bounded (log10 H, receiver i, donors j):
     //  1. the spread of the blocks' mean net densities on the coarse grid, interpolated: within
@@ -380,7 +441,7 @@ TEST_CASE("the fast tiers' coarse inhibition stays within its bound of the per-p
     const CouplerStage coarse = design_couplers(film, 1, 1, pitch_um, 6, 8);
     const CouplerStage exact = design_couplers(film, 1, 1, pitch_um, 6, 1);
     const int d = coarse.spread.decimation;
-    REQUIRE(d == 2);
+    REQUIRE(d == 3);
     REQUIRE(exact.spread.decimation == 1);
     const CouplerMatrix m = stock_dir_couplers(film).matrix;
     const double sigma_px = stock_dir_couplers(film).diffusion_um / pitch_um;
@@ -402,7 +463,7 @@ TEST_CASE("the fast tiers' coarse inhibition stays within its bound of the per-p
             }
         }
         const double interpolation =
-            std::exp(-0.5) / std::sqrt(2 * M_PI) * d * d / (8 * sigma_px * sigma_px) + coarse_tail(coarse, sigma_px);
+            std::exp(-0.5) / std::sqrt(2 * M_PI) * d * d / (8 * sigma_px * sigma_px) + coarse_tail(coarse);
         for (int across_y = 0; across_y < 2; ++across_y)
             for (int edge = 48; edge < 48 + d; ++edge) {
                 std::array<Plane, 3> h{Plane::unset(frame), Plane::unset(frame), Plane::unset(frame)};
@@ -482,7 +543,7 @@ TEST_CASE("the fast tiers' coarse inhibition stays within its bound of the per-p
             // narrower in variance than the Gaussian, a shift of d^2/12 of the second derivative a
             // direction, which the interpolation (within d^2/8 of it) makes up on average.
             double truncated = 0;
-            for (size_t j = 0; j < 3; ++j) truncated += std::abs(m[i][j]) * range[j] * 2 * coarse_tail(coarse, sigma_px);
+            for (size_t j = 0; j < 3; ++j) truncated += std::abs(m[i][j]) * range[j] * 2 * coarse_tail(coarse);
             const double spread = (1.0 / 12 + 1.0 / 8) * d * d * curvature + truncated;
             const double nodes = ln10 * d * gradient;
             const double bound = spread + donors + 2 * nodes * nodes / (8 * ln10);
