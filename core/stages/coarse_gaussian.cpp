@@ -166,9 +166,10 @@ struct InterpolateRuns {
         using V = typename simd::Lanes<lanes>::F;
         int k = 0;
         if constexpr (lanes > 1) {
-            V weights[d];  // fine vector v's lanes': t[(v lanes + j) % d]
-            for (int v = 0; v < d; ++v)
-                for (int j = 0; j < lanes; ++j) weights[v][j] = t[(v * lanes + j) % d];
+            float pattern[d * lanes];  // fine column i's weight t[i % d]; vector v's from v lanes
+            for (int i = 0; i < d * lanes; ++i) pattern[i] = t[i % d];
+            V weights[d];
+            for (int v = 0; v < d; ++v) simd::load(weights[v], pattern + v * lanes);
             for (; k + lanes <= blocks; k += lanes) {
                 // (multiplying: a ring row read back, from memory)
                 if constexpr (multiply) simd::prefetch_ahead(in + d * k, d * lanes * int(sizeof(float)));
