@@ -285,7 +285,8 @@ double worst_step_error(const std::vector<double>& exact_step, const std::vector
             const double t = double(2 * x + 1 - d - 2 * d * i) / (2 * d);
             const double coarse = spread[size_t(i)] + t * (spread[size_t(i + 1)] - spread[size_t(i)]);
             const int offset = std::clamp(x - edge, -exact_radius - 1, exact_radius);
-            worst = std::max(worst, std::abs(coarse - (offset < -exact_radius ? 0.0 : exact_step[size_t(offset + exact_radius)])));
+            const double exact = offset < -exact_radius ? 0.0 : exact_step[size_t(offset + exact_radius)];
+            worst = std::max(worst, std::abs(coarse - exact));
         }
     }
     return worst;
@@ -308,12 +309,13 @@ CoarseGaussian design_coarse_gaussian(double sigma_px, int decimation, double co
     // is as close on grids fine against sigma, but on one of 1.2 sigma the few taps' shape
     // matters: its step was 0.072 off, against 0.039 (docs/model/dir-couplers.md).
     const std::vector<float> exact = pixel_integrated_gaussian(sigma_px);
-    std::vector<double> exact_step(exact.size());  // at x - edge: the taps from edge - x on
-    for (size_t k = exact.size(); k-- > 0;)
-        exact_step[exact.size() - 1 - k] = (k + 1 < exact.size() ? exact_step[exact.size() - 2 - k] : 0.0) + exact[k];
+    std::vector<double> exact_step(exact.size());  // at x - edge: the sum of the taps from edge - x on
+    double sum = 0;
+    for (size_t n = 0; n < exact.size(); ++n) exact_step[n] = sum += exact[exact.size() - 1 - n];
     auto error = [&](double coarse_sigma) {
         return worst_step_error(exact_step, coarse_taps(coarse_sigma, coarse_reach_sigmas), d);
     };
+    // (From a Gaussian of one tap to the whole sigma on the grid; 30 steps narrow it 1e-6 times.)
     const double golden = (std::sqrt(5.0) - 1) / 2;
     double lo = 0.2, hi = sigma_px / d;
     double a = hi - golden * (hi - lo), b = lo + golden * (hi - lo), error_a = error(a), error_b = error(b);

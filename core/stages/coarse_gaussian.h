@@ -1,9 +1,9 @@
 // A wide Gaussian on a coarser grid, for the fast tiers' smooth fields (halation's halo, the
 // DIR couplers' inhibitor): block means of the image (blocks of d x d pixels aligned to the
 // frame's origin, so every window and band agrees), extended past the frame by its edge
-// pixels (as the exact filter reads it), the Gaussian with its variance reduced by what the
-// blocks, the interpolation and its own taps add (d^2/3 - 1/12 in all), then bilinear
-// interpolation back to the pixels.
+// pixels (as the exact filter reads it), a Gaussian of the width that brings a step's spread
+// through the blocks, its taps and the interpolation closest to the pixels' Gaussian's, then
+// bilinear interpolation back to the pixels.
 #pragma once
 
 #include <cstdint>
