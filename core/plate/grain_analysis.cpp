@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/parallel.h"
+#include "core/plate/block_surface.h"
 #include "core/plate/grain_synthesis.h"
 #include "core/plate/symmetric_eigenvalues.h"
 #include "core/stages/filters.h"
@@ -63,140 +64,6 @@ double gamma_quantile_over_mean(double shape, double z) {
     const double h = 1.0 / (9 * shape);
     return std::pow(1 - h + z * std::sqrt(h), 3.0);
 }
-
-// Lags |dx|, |dy| <= radius, row-major from (-radius, -radius).
-struct LagGrid {
-    int radius = 0;
-    int side() const { return 2 * radius + 1; }
-    size_t size() const { return (size_t)side() * side(); }
-    size_t index(int dx, int dy) const { return (size_t)(dy + radius) * side() + dx + radius; }
-};
-
-// Sum over pixel pairs (p, p + d) inside a size x size block of f(p) g(p + d), for each lag d.
-std::vector<double> cross_correlation(const double* f, const double* g, int size, const LagGrid& lags) {
-    std::vector<double> out(lags.size(), 0.0);
-    for (int dy = -lags.radius; dy <= lags.radius; ++dy)
-        for (int dx = -lags.radius; dx <= lags.radius; ++dx) {
-            double sum = 0;
-            for (int y = std::max(0, -dy); y < std::min(size, size - dy); ++y) {
-                const double* fr = f + (size_t)y * size;
-                const double* gr = g + (size_t)(y + dy) * size + dx;
-                for (int x = std::max(0, -dx); x < std::min(size, size - dx); ++x) sum += fr[x] * gr[x];
-            }
-            out[lags.index(dx, dy)] = sum;
-        }
-    return out;
-}
-
-// cross_correlation(f, f): symmetric, so only half the lags are summed.
-std::vector<double> autocorrelation(const double* f, int size, const LagGrid& lags) {
-    std::vector<double> out(lags.size(), 0.0);
-    for (int dy = 0; dy <= lags.radius; ++dy)
-        for (int dx = dy == 0 ? 0 : -lags.radius; dx <= lags.radius; ++dx) {
-            double sum = 0;
-            for (int y = 0; y < size - dy; ++y) {
-                const double* fr = f + (size_t)y * size;
-                const double* gr = f + (size_t)(y + dy) * size + dx;
-                for (int x = std::max(0, -dx); x < std::min(size, size - dx); ++x) sum += fr[x] * gr[x];
-            }
-            out[lags.index(dx, dy)] = out[lags.index(-dx, -dy)] = sum;
-        }
-    return out;
-}
-
-double pair_count(int size, int dx, int dy) { return double(size - std::abs(dx)) * (size - std::abs(dy)); }
-
-// R v: the covariance (in units of sigma^2) of grain of autocorrelation rho applied to v, an
-// n x n block.
-std::vector<double> apply_autocorrelation(const std::vector<double>& rho, const LagGrid& lags, int n,
-                                          const std::vector<double>& v) {
-    std::vector<double> out((size_t)n * n, 0.0);
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-            double sum = 0;
-            for (int dy = std::max(-lags.radius, -y); dy <= std::min(lags.radius, n - 1 - y); ++dy)
-                for (int dx = std::max(-lags.radius, -x); dx <= std::min(lags.radius, n - 1 - x); ++dx)
-                    sum += rho[lags.index(dx, dy)] * v[(size_t)(y + dy) * n + x + dx];
-            out[(size_t)y * n + x] = sum;
-        }
-    return out;
-}
-
-// The least-squares quadratic surface on a block (1, x, y, x^2, xy, y^2), as an
-// orthonormal basis: it follows shading and gentle gradients, not edges or texture.
-struct SurfaceFit {
-    static constexpr int kTerms = 6;
-    int size = 0;
-    std::vector<double> basis[kTerms];
-    std::vector<double> basis_xcorr[kTerms][kTerms];  // cross_correlation(basis k, basis l)
-
-    SurfaceFit(int block, const LagGrid& lags) : size(block) {
-        const double centre = (block - 1) / 2.0;
-        for (int y = 0; y < block; ++y)
-            for (int x = 0; x < block; ++x) {
-                const double u = (x - centre) / block, v = (y - centre) / block;
-                const double monomial[kTerms] = {1, u, v, u * u, u * v, v * v};
-                for (int k = 0; k < kTerms; ++k) basis[k].push_back(monomial[k]);
-            }
-        // Gram-Schmidt, twice for accuracy.
-        for (int k = 0; k < kTerms; ++k)
-            for (int pass = 0; pass < 2; ++pass) {
-                for (int l = 0; l < k; ++l) {
-                    double dot = 0;
-                    for (size_t p = 0; p < basis[k].size(); ++p) dot += basis[k][p] * basis[l][p];
-                    for (size_t p = 0; p < basis[k].size(); ++p) basis[k][p] -= dot * basis[l][p];
-                }
-                double norm = 0;
-                for (double b : basis[k]) norm += b * b;
-                for (double& b : basis[k]) b /= std::sqrt(norm);
-            }
-        for (int k = 0; k < kTerms; ++k)
-            for (int l = 0; l < kTerms; ++l)
-                basis_xcorr[k][l] = cross_correlation(basis[k].data(), basis[l].data(), block, lags);
-    }
-
-    // v less its least-squares surface (v: a block, row-major).
-    void subtract_from(double* v) const {
-        const int npx = size * size;
-        double coef[kTerms] = {};
-        for (int k = 0; k < kTerms; ++k)
-            for (int p = 0; p < npx; ++p) coef[k] += basis[k][p] * v[p];
-        for (int p = 0; p < npx; ++p)
-            for (int k = 0; k < kTerms; ++k) v[p] -= coef[k] * basis[k][p];
-    }
-
-    // What the fit does to grain of autocorrelation rho, in units of sigma^2: the
-    // expected residual sum of squares is N - trace, and the mean residual product at lag
-    // d is rho(d) - lag_bias[d].
-    struct Bias {
-        double trace = 0;
-        std::vector<double> lag_bias;
-    };
-    Bias bias(const std::vector<double>& rho, const LagGrid& lags) const {
-        const int n = size;
-        std::vector<double> applied[kTerms];  // R b_k
-        for (int k = 0; k < kTerms; ++k) applied[k] = apply_autocorrelation(rho, lags, n, basis[k]);
-        double m[kTerms][kTerms];
-        for (int k = 0; k < kTerms; ++k)
-            for (int l = 0; l < kTerms; ++l) {
-                m[k][l] = 0;
-                for (size_t p = 0; p < applied[l].size(); ++p) m[k][l] += basis[k][p] * applied[l][p];
-            }
-        Bias out;
-        for (int k = 0; k < kTerms; ++k) out.trace += m[k][k];
-        out.lag_bias.assign(lags.size(), 0.0);
-        for (int k = 0; k < kTerms; ++k) {
-            std::vector<double> bv = cross_correlation(basis[k].data(), applied[k].data(), n, lags);
-            // cross_correlation(v, b) at d is cross_correlation(b, v) at -d.
-            for (size_t i = 0; i < lags.size(); ++i) out.lag_bias[i] += bv[i] + bv[lags.size() - 1 - i];
-            for (int l = 0; l < kTerms; ++l)
-                for (size_t i = 0; i < lags.size(); ++i) out.lag_bias[i] -= m[k][l] * basis_xcorr[k][l][i];
-        }
-        for (int dy = -lags.radius; dy <= lags.radius; ++dy)
-            for (int dx = -lags.radius; dx <= lags.radius; ++dx) out.lag_bias[lags.index(dx, dy)] /= pair_count(n, dx, dy);
-        return out;
-    }
-};
 
 // A block's low frequencies: the means of its residual over a grid of square cells. Picture
 // content a few pixels across (gradients, soft texture, a defocused background) that the
@@ -642,17 +509,6 @@ long long count_blocks(const std::vector<ConstImageView>& frames, int size) {
     return n;
 }
 
-// Sum over lags of pair_count(size) * rho^2: the variance of a block's sum of squares is
-// twice this (in units of sigma^4), for Gaussian grain.
-double sum_rho2(const std::vector<double>& rho, const LagGrid& lags, int size) {
-    double sum = 0;
-    for (int dy = -lags.radius; dy <= lags.radius; ++dy)
-        for (int dx = -lags.radius; dx <= lags.radius; ++dx)
-            if (std::abs(dx) < size && std::abs(dy) < size)
-                sum += pair_count(size, dx, dy) * rho[lags.index(dx, dy)] * rho[lags.index(dx, dy)];
-    return sum;
-}
-
 // The block size whose lag grid holds the measured grain's correlation (kBlockPerGrainSize).
 int block_size_for_grain(const BlockAnalysis& a) {
     int needed = kSmallestBlockPx;
@@ -914,8 +770,9 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
     };
 
     auto update_statistics = [&](ChannelState& s) {
-        s.dof = npx - surface.bias(s.rho, lags).trace;
-        s.relative_sd = std::sqrt(2.0 * sum_rho2(s.rho, lags, bs)) / s.dof;
+        const SurfaceFit::Bias fit_bias = surface.bias(s.rho, lags);
+        s.dof = npx - fit_bias.trace;
+        s.relative_sd = std::sqrt(fit_bias.squares_variance) / s.dof;
         s.low_band = low_band.expectation(s.rho, lags);
     };
 

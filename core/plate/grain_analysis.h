@@ -4,8 +4,9 @@
 // stands in for the picture (shading, gentle gradients), and the residual is grain plus
 // whatever the surface cannot follow (edges, texture). Blocks are binned by their level;
 // a block is kept only while it looks like grain alone:
-// - its residual variance is within 3.5 standard deviations (those of a sample variance
-//   of that many correlated pixels) of the response curve at its level,
+// - its residual variance is within 3.5 standard deviations (those of the fit residual's
+//   sum of squares for grain of the measured autocorrelation: block_surface.h) of the
+//   response curve at its level,
 // - its own autocorrelation at a few short lags is typical of the kept blocks,
 // - its four quadrants' variances agree (stationary), and
 // - its gradient covariance's largest eigenvalue is within what grain of the curve's sigma

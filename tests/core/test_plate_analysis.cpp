@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <random>
 
+#include "core/plate/block_surface.h"
 #include "core/plate/grain_analysis.h"
 #include "core/plate/grain_compare.h"
 #include "core/plate/grain_synthesis.h"
@@ -177,5 +178,72 @@ TEST_CASE("the patch space's eigenvalues: a second difference's closed form, Jac
                 INFO(size << " x " << size << (repeated ? ", repeated" : "") << ": eigenvalue " << k);
                 CHECK(values[k] == Approx(jacobi[k]).margin(1e-12));
             }
+        }
+}
+
+TEST_CASE("a block's surface fit takes from grain what its closed forms say: sum of squares, spread, lag products",
+          "[plate][analysis]") {
+    const int n = 16;
+    const LagGrid lags{n / 4};
+    const SurfaceFit fit(n, lags);
+    // White grain: the residual's sum of squares is chi-square with N - 6 degrees of freedom.
+    std::vector<double> white(lags.size(), 0.0);
+    white[lags.index(0, 0)] = 1;
+    const SurfaceFit::Bias white_bias = fit.bias(white, lags);
+    CHECK(white_bias.trace == Approx(SurfaceFit::kTerms).margin(1e-9));
+    CHECK(white_bias.squares_variance == Approx(2.0 * (n * n - SurfaceFit::kTerms)).margin(1e-6));
+
+    // Correlated grain: white noise through the 3 x 3 binomial kernel, whose autocorrelation
+    // is exact (the kernel's own, normalised), against 20000 blocks of it.
+    const double kernel_1d[3] = {1, 2, 1};
+    double energy = 0;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) energy += std::pow(kernel_1d[i] * kernel_1d[j], 2);
+    std::vector<double> rho(lags.size(), 0.0);
+    for (int dy = -2; dy <= 2; ++dy)
+        for (int dx = -2; dx <= 2; ++dx) {
+            double sum = 0;
+            for (int y = std::max(0, -dy); y < std::min(3, 3 - dy); ++y)
+                for (int x = std::max(0, -dx); x < std::min(3, 3 - dx); ++x)
+                    sum += kernel_1d[y] * kernel_1d[x] * kernel_1d[y + dy] * kernel_1d[x + dx];
+            rho[lags.index(dx, dy)] = sum / energy;
+        }
+    const SurfaceFit::Bias bias = fit.bias(rho, lags);
+    const int blocks = 20000;
+    std::mt19937_64 random(17);
+    std::normal_distribution<double> normal;
+    std::vector<double> noise((n + 2) * (n + 2)), block(n * n), squares;
+    std::vector<double> products(lags.size(), 0.0);
+    for (int b = 0; b < blocks; ++b) {
+        for (double& v : noise) v = normal(random);
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                double sum = 0;
+                for (int i = 0; i < 3; ++i)
+                    for (int j = 0; j < 3; ++j) sum += kernel_1d[i] * kernel_1d[j] * noise[(y + i) * (n + 2) + x + j];
+                block[y * n + x] = sum / std::sqrt(energy);
+            }
+        fit.subtract_from(block.data());
+        double sum = 0;
+        for (double v : block) sum += v * v;
+        squares.push_back(sum);
+        const std::vector<double> p = autocorrelation(block.data(), n, lags);
+        for (size_t l = 0; l < lags.size(); ++l) products[l] += p[l] / blocks;
+    }
+    double mean = 0, variance = 0;
+    for (double s : squares) mean += s / blocks;
+    for (double s : squares) variance += (s - mean) * (s - mean) / (blocks - 1);
+    const double dof = n * n - bias.trace;
+    INFO("sum of squares: mean " << mean << " against " << dof << ", variance " << variance << " against "
+                                 << bias.squares_variance << " (without the fit " << 2 * sum_rho2(rho, lags, n) << ")");
+    // Standard errors: the mean's sqrt(var / blocks) (0.1 %), the variance's about
+    // sqrt(2 / blocks) (1 %).
+    CHECK(mean == Approx(dof).epsilon(0.005));
+    CHECK(variance == Approx(bias.squares_variance).epsilon(0.04));
+    for (int dy = -lags.radius; dy <= lags.radius; ++dy)
+        for (int dx = -lags.radius; dx <= lags.radius; ++dx) {
+            INFO("lag (" << dx << ", " << dy << ")");
+            const double measured = products[lags.index(dx, dy)] / pair_count(n, dx, dy);
+            CHECK(measured == Approx(rho[lags.index(dx, dy)] - bias.lag_bias[lags.index(dx, dy)]).margin(0.005));
         }
 }
