@@ -23,7 +23,7 @@ struct Published {
     std::string stock_id;
     std::string datasheet;  // folder under datasheets/, or empty
     std::string profile;    // spektrafilm profile, when the data sheet folder lacks curves
-    std::string spectra;    // folder of the sensitivities, when the curves' folder lacks them
+    std::string spectra{};  // folder of the sensitivities, when the curves' folder lacks them
     bool anchored = false;  // the sheet's log H axis is offset: the preset gives the box speed (ISO 5800)
 };
 
