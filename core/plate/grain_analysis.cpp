@@ -22,6 +22,16 @@ constexpr double kRejectionSigmas = 3.5;   // a block further from the curve tha
 // Blocks the autocorrelation is measured on: enough for a stable estimate at bounded cost
 // (fewer in the early passes, which only steer the block selection).
 constexpr int kMaxAutocorrelationBlocks = 256, kEarlyAutocorrelationBlocks = 48;
+// The last pass reads the autocorrelation (which whitens the response and is reported) from
+// this share of the accepted blocks, those whose neighbourhoods (the 8 blocks around) are
+// quietest: picture content faint enough to pass the block tests adds its own, smoother
+// correlation, which the whitening would take for grain. Such content is spatially coherent,
+// and a block's neighbours hold other grain than its own, so choosing by them does not bias
+// the grain's correlation as choosing by the block's own variance would (a block quiet by
+// chance is quiet in its low frequencies). The earlier passes, which steer the selection,
+// read all the accepted blocks: on a plate textured throughout, choosing by neighbourhoods
+// there drifted the selection into the texture.
+constexpr double kQuietNeighbourhoodShare = 0.5;
 // Minimal-residual steps of the fit-bias correction of the autocorrelation per pass.
 constexpr int kEarlySolverSteps = 3, kFinalSolverSteps = 10;
 // The default block size follows the grain: the analysis starts at the smallest block and
@@ -604,8 +614,26 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
         }
     });
     std::vector<Block>& blocks = a.blocks;
+    std::vector<int> index_of(all.size(), -1);  // in blocks, of each of all
     for (size_t i = 0; i < all.size(); ++i)
-        if (finite[i]) blocks.push_back(std::move(all[i]));
+        if (finite[i]) index_of[i] = (int)blocks.size(), blocks.push_back(std::move(all[i]));
+    // The blocks around each (origins run row by row through each frame's grid).
+    std::vector<std::vector<int>> neighbours(blocks.size());
+    for (size_t i = 0, frame_start = 0; i < origins.size(); ++i) {
+        const Window& w = frames[origins[i].frame].window;
+        if (i > 0 && origins[i].frame != origins[i - 1].frame) frame_start = i;
+        const int columns = w.width() / bs, rows = w.height() / bs;
+        const int column = (origins[i].x - w.x0) / bs, row = (origins[i].y - w.y0) / bs;
+        if (index_of[i] < 0) continue;
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                const int x = column + dx, y = row + dy;
+                if ((dx || dy) && x >= 0 && x < columns && y >= 0 && y < rows) {
+                    const int j = index_of[frame_start + (size_t)y * columns + x];
+                    if (j >= 0) neighbours[index_of[i]].push_back(j);
+                }
+            }
+    }
     if (blocks.empty()) throw GrainAnalysisError("every block of the plate holds non-finite pixels");
     const int nblocks = (int)blocks.size();
     const int nbins = a.bins = std::max(1, settings.level_bins);
@@ -776,6 +804,33 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
         s.low_band = low_band.expectation(s.rho, lags);
     };
 
+    // Of the given blocks, those whose neighbourhoods are quietest (kQuietNeighbourhoodShare of
+    // them, at least kEarlyAutocorrelationBlocks), in index order. A neighbourhood's excess is
+    // the mean of its blocks' variance over the curve's, each capped at the acceptance limit:
+    // an edge beside a block weighs no more than any block the tests reject.
+    auto in_quietest_neighbourhoods = [&](int c, const std::vector<int>& candidates) {
+        const ChannelState& s = state[c];
+        std::vector<std::pair<double, int>> by_excess;
+        for (int i : candidates) {
+            double excess = 0;
+            int counted = 0;
+            for (int j : neighbours[i]) {
+                const double expected = s.curve.at(blocks[j].level[c]);
+                if (!(expected > 0)) continue;
+                excess += std::min(blocks[j].squares[c] / s.dof / expected - 1, kRejectionSigmas * s.relative_sd);
+                ++counted;
+            }
+            by_excess.push_back({counted ? excess / counted : INFINITY, i});
+        }
+        std::sort(by_excess.begin(), by_excess.end());
+        const size_t kept = std::max(std::min(by_excess.size(), (size_t)kEarlyAutocorrelationBlocks),
+                                     (size_t)std::lround(kQuietNeighbourhoodShare * by_excess.size()));
+        std::vector<int> quiet;
+        for (size_t j = 0; j < kept; ++j) quiet.push_back(by_excess[j].second);
+        std::sort(quiet.begin(), quiet.end());
+        return quiet;
+    };
+
     for (int pass = 0; pass < 3; ++pass) {
         parallel_for(0, nch, settings.threads, [&](int c_begin, int c_end) {
             for (int c = c_begin; c < c_end; ++c) {
@@ -810,12 +865,14 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                     s.accepted[i] = s.candidate[i] && expected > 0 &&
                                     std::abs(variance / expected - 1.0) <= kRejectionSigmas * s.relative_sd;
                 }
-                // Autocorrelation of the accepted blocks (evenly thinned), each normalised by
-                // the curve's variance at its level.
+                // Autocorrelation of the accepted blocks (in the last pass those in the quietest
+                // neighbourhoods; evenly thinned), each normalised by the curve's variance at
+                // its level.
                 std::vector<int> chosen;
                 for (int i = 0; i < nblocks; ++i)
                     if (s.accepted[i]) chosen.push_back(i);
                 if (chosen.empty()) continue;
+                if (pass == 2) chosen = in_quietest_neighbourhoods(c, chosen);
                 const int cap = pass == 2 ? kMaxAutocorrelationBlocks : kEarlyAutocorrelationBlocks;
                 int step = std::max<int>(1, (int)(chosen.size() + cap - 1) / cap);
                 std::vector<double> measured(lags.size(), 0.0);

@@ -24,8 +24,10 @@
 //   is low-rank among patches, after Liu, Tanaka and Okutomi; which eigenvalues are the
 //   grain's, after Chen, Zhu and Heng), divided by the same statistic of synthetic grain of
 //   that R in as many blocks (its small-sample bias);
-// - the autocorrelation: residual products at each lag, normalised by sigma^2 and
-//   corrected for the fit the same way (a linear solve, the correction being linear in R);
+// - the autocorrelation: residual products at each lag of the kept blocks in the quieter
+//   half of the neighbourhoods (content is spatially coherent, grain is not), normalised by
+//   sigma^2 and corrected for the fit the same way (a linear solve, the correction being
+//   linear in R);
 // - the channel correlation: the pooled correlation of the residuals at lag 0, each block's
 //   normalised by the selection curve.
 // Limits: a plate textured alike everywhere cannot be told from coarse grain this way.
