@@ -226,7 +226,7 @@ TEST_CASE("frames missing from a sequence on disk are named, as ranges, by the r
                       args = "develop " + in + " -o " + (dir / "out.####.exr").string() + " --no-grain --no-mtf";
     const std::string warning = "darkroom: warning: the input sequence '" + in +
                                 "' has frames 1-12 on disk but not 6, 8-9, which are left out";
-    for (const std::string& flags : {" -n", " -q"}) {
+    for (const char* flags : {" -n", " -q"}) {
         Result r = darkroom(args + flags);
         INFO(flags << "\n" << r.output);
         CHECK(r.exit_code == 0);
