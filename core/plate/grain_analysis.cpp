@@ -503,8 +503,40 @@ struct BlockAnalysis {
     int next_block_px = 0;  // the block size to analyse next: block_px where this one is final
     LagGrid lags;
     std::vector<Block> blocks;
+    std::vector<std::vector<int>> neighbours;  // per block, the blocks around it in its frame
     std::vector<ChannelState> state;
 };
+
+// How far a block's neighbourhood is above grain in channel c: the mean of its neighbours'
+// variance over the curve's, less 1, each capped at the acceptance limit (an edge beside a
+// block weighs no more than any block the tests reject). INFINITY without neighbours.
+double neighbourhood_excess(const BlockAnalysis& a, int c, int i) {
+    const ChannelState& s = a.state[c];
+    double excess = 0;
+    int counted = 0;
+    for (int j : a.neighbours[i]) {
+        const double expected = s.curve.at(a.blocks[j].level[c]);
+        if (!(expected > 0)) continue;
+        excess += std::min(a.blocks[j].squares[c] / s.dof / expected - 1, kRejectionSigmas * s.relative_sd);
+        ++counted;
+    }
+    return counted ? excess / counted : INFINITY;
+}
+
+// Of the given blocks, the share whose neighbourhoods are quietest by excess(i) (at least
+// at_least of them), in index order.
+template <class Excess>
+std::vector<int> in_quietest_neighbourhoods(const std::vector<int>& candidates, Excess excess, double share,
+                                            size_t at_least) {
+    std::vector<std::pair<double, int>> by_excess;
+    for (int i : candidates) by_excess.push_back({excess(i), i});
+    std::sort(by_excess.begin(), by_excess.end());
+    const size_t kept = std::max(std::min(by_excess.size(), at_least), (size_t)std::lround(share * by_excess.size()));
+    std::vector<int> quiet;
+    for (size_t j = 0; j < kept; ++j) quiet.push_back(by_excess[j].second);
+    std::sort(quiet.begin(), quiet.end());
+    return quiet;
+}
 
 std::string format_level(double v) {
     std::ostringstream s;
@@ -618,7 +650,8 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
     for (size_t i = 0; i < all.size(); ++i)
         if (finite[i]) index_of[i] = (int)blocks.size(), blocks.push_back(std::move(all[i]));
     // The blocks around each (origins run row by row through each frame's grid).
-    std::vector<std::vector<int>> neighbours(blocks.size());
+    std::vector<std::vector<int>>& neighbours = a.neighbours;
+    neighbours.assign(blocks.size(), {});
     for (size_t i = 0, frame_start = 0; i < origins.size(); ++i) {
         const Window& w = frames[origins[i].frame].window;
         if (i > 0 && origins[i].frame != origins[i - 1].frame) frame_start = i;
@@ -804,33 +837,6 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
         s.low_band = low_band.expectation(s.rho, lags);
     };
 
-    // Of the given blocks, those whose neighbourhoods are quietest (kQuietNeighbourhoodShare of
-    // them, at least kEarlyAutocorrelationBlocks), in index order. A neighbourhood's excess is
-    // the mean of its blocks' variance over the curve's, each capped at the acceptance limit:
-    // an edge beside a block weighs no more than any block the tests reject.
-    auto in_quietest_neighbourhoods = [&](int c, const std::vector<int>& candidates) {
-        const ChannelState& s = state[c];
-        std::vector<std::pair<double, int>> by_excess;
-        for (int i : candidates) {
-            double excess = 0;
-            int counted = 0;
-            for (int j : neighbours[i]) {
-                const double expected = s.curve.at(blocks[j].level[c]);
-                if (!(expected > 0)) continue;
-                excess += std::min(blocks[j].squares[c] / s.dof / expected - 1, kRejectionSigmas * s.relative_sd);
-                ++counted;
-            }
-            by_excess.push_back({counted ? excess / counted : INFINITY, i});
-        }
-        std::sort(by_excess.begin(), by_excess.end());
-        const size_t kept = std::max(std::min(by_excess.size(), (size_t)kEarlyAutocorrelationBlocks),
-                                     (size_t)std::lround(kQuietNeighbourhoodShare * by_excess.size()));
-        std::vector<int> quiet;
-        for (size_t j = 0; j < kept; ++j) quiet.push_back(by_excess[j].second);
-        std::sort(quiet.begin(), quiet.end());
-        return quiet;
-    };
-
     for (int pass = 0; pass < 3; ++pass) {
         parallel_for(0, nch, settings.threads, [&](int c_begin, int c_end) {
             for (int c = c_begin; c < c_end; ++c) {
@@ -872,7 +878,10 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                 for (int i = 0; i < nblocks; ++i)
                     if (s.accepted[i]) chosen.push_back(i);
                 if (chosen.empty()) continue;
-                if (pass == 2) chosen = in_quietest_neighbourhoods(c, chosen);
+                if (pass == 2)
+                    chosen = in_quietest_neighbourhoods(
+                        chosen, [&](int i) { return neighbourhood_excess(a, c, i); }, kQuietNeighbourhoodShare,
+                        kEarlyAutocorrelationBlocks);
                 const int cap = pass == 2 ? kMaxAutocorrelationBlocks : kEarlyAutocorrelationBlocks;
                 int step = std::max<int>(1, (int)(chosen.size() + cap - 1) / cap);
                 std::vector<double> measured(lags.size(), 0.0);
@@ -946,12 +955,13 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                                  std::to_string(kMinBlockCount) + " blocks of " + std::to_string(first_size) + "x" +
                                  std::to_string(first_size) + " px");
     }
-    BlockAnalysis a = analyse_blocks(frames, settings, nch, first_size, automatic);
+    BlockAnalysis analysis = analyse_blocks(frames, settings, nch, first_size, automatic);
     // Automatic: larger blocks while the grain needs them and the plate has them.
-    while (a.next_block_px != a.block_px) a = analyse_blocks(frames, settings, nch, a.next_block_px, automatic);
-    const int bs = a.block_px, npx = bs * bs, nblocks = (int)a.blocks.size(), nbins = a.bins;
-    const std::vector<Block>& blocks = a.blocks;
-    const std::vector<ChannelState>& state = a.state;
+    while (analysis.next_block_px != analysis.block_px)
+        analysis = analyse_blocks(frames, settings, nch, analysis.next_block_px, automatic);
+    const int bs = analysis.block_px, npx = bs * bs, nblocks = (int)analysis.blocks.size(), nbins = analysis.bins;
+    const std::vector<Block>& blocks = analysis.blocks;
+    const std::vector<ChannelState>& state = analysis.state;
 
     // Results, and what could not be estimated.
     GrainProfile profile;
@@ -1001,7 +1011,7 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                                               seen_levels);
         }
         profile.sparse_levels.insert(profile.sparse_levels.end(), sparse.begin(), sparse.end());
-        ch.acf_radius = a.lags.radius;
+        ch.acf_radius = analysis.lags.radius;
         ch.autocorrelation = s.rho;
         profile.channels.push_back(std::move(ch));
     }
@@ -1013,14 +1023,29 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
     }
 
     // Channel correlation at lag 0, pooled over blocks that are grain-only in every channel, each
-    // normalised by the curve they were selected by.
+    // normalised by the curve they were selected by. Content is common to the channels and
+    // would correlate them: of those blocks, the ones in the quieter neighbourhoods
+    // (kQuietNeighbourhoodShare; their excess averaged over the channels).
     profile.channel_correlation.assign((size_t)nch * nch, 0.0);
-    std::vector<double> numerator((size_t)nch * nch, 0.0), denominator((size_t)nch * nch, 0.0);
+    std::vector<int> grain_only;
     for (int i = 0; i < nblocks; ++i) {
         bool everywhere = true;
         for (int c = 0; c < nch; ++c) everywhere &= state[c].accepted[i] && state[c].curve.at(blocks[i].level[c]) > 0;
-        if (!everywhere) continue;
-        ++profile.blocks_used;
+        if (everywhere) grain_only.push_back(i);
+    }
+    profile.blocks_used = (long long)grain_only.size();
+    if (grain_only.empty())
+        throw GrainAnalysisError("no block is grain-only in every channel: cannot measure the channel correlation");
+    const std::vector<int> quiet = in_quietest_neighbourhoods(
+        grain_only,
+        [&](int i) {
+            double sum = 0;
+            for (int c = 0; c < nch; ++c) sum += neighbourhood_excess(analysis, c, i);
+            return sum / nch;
+        },
+        kQuietNeighbourhoodShare, kEarlyAutocorrelationBlocks);
+    std::vector<double> numerator((size_t)nch * nch, 0.0), denominator((size_t)nch * nch, 0.0);
+    for (int i : quiet) {
         for (int a = 0; a < nch; ++a)
             for (int b = 0; b < nch; ++b) {
                 const double* ra = &blocks[i].residual[(size_t)a * npx];
@@ -1032,8 +1057,6 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                 denominator[(size_t)a * nch + b] += std::sqrt(state[a].dof * state[b].dof);
             }
     }
-    if (profile.blocks_used == 0)
-        throw GrainAnalysisError("no block is grain-only in every channel: cannot measure the channel correlation");
     for (int a = 0; a < nch; ++a)
         for (int b = 0; b < nch; ++b) {
             double r = a == b ? 1.0 : numerator[(size_t)a * nch + b] / denominator[(size_t)a * nch + b];

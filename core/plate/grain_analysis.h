@@ -28,8 +28,9 @@
 //   half of the neighbourhoods (content is spatially coherent, grain is not), normalised by
 //   sigma^2 and corrected for the fit the same way (a linear solve, the correction being
 //   linear in R);
-// - the channel correlation: the pooled correlation of the residuals at lag 0, each block's
-//   normalised by the selection curve.
+// - the channel correlation: the pooled correlation of the residuals at lag 0 of the blocks
+//   kept in every channel, in the quieter half of the neighbourhoods, each block's normalised
+//   by the selection curve.
 // Limits: a plate textured alike everywhere cannot be told from coarse grain this way.
 // Several frames pool their blocks.
 #pragma once
