@@ -523,15 +523,15 @@ double neighbourhood_excess(const BlockAnalysis& a, int c, int i) {
     return counted ? excess / counted : INFINITY;
 }
 
-// Of the given blocks, the share whose neighbourhoods are quietest by excess(i) (at least
-// at_least of them), in index order.
+// Of the given blocks, those whose neighbourhoods are quietest by excess(i)
+// (kQuietNeighbourhoodShare of them, at least kEarlyAutocorrelationBlocks), in index order.
 template <class Excess>
-std::vector<int> in_quietest_neighbourhoods(const std::vector<int>& candidates, Excess excess, double share,
-                                            size_t at_least) {
+std::vector<int> in_quietest_neighbourhoods(const std::vector<int>& candidates, Excess excess) {
     std::vector<std::pair<double, int>> by_excess;
     for (int i : candidates) by_excess.push_back({excess(i), i});
     std::sort(by_excess.begin(), by_excess.end());
-    const size_t kept = std::max(std::min(by_excess.size(), at_least), (size_t)std::lround(share * by_excess.size()));
+    const size_t kept = std::max(std::min(by_excess.size(), (size_t)kEarlyAutocorrelationBlocks),
+                                 (size_t)std::lround(kQuietNeighbourhoodShare * by_excess.size()));
     std::vector<int> quiet;
     for (size_t j = 0; j < kept; ++j) quiet.push_back(by_excess[j].second);
     std::sort(quiet.begin(), quiet.end());
@@ -879,9 +879,7 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                     if (s.accepted[i]) chosen.push_back(i);
                 if (chosen.empty()) continue;
                 if (pass == 2)
-                    chosen = in_quietest_neighbourhoods(
-                        chosen, [&](int i) { return neighbourhood_excess(a, c, i); }, kQuietNeighbourhoodShare,
-                        kEarlyAutocorrelationBlocks);
+                    chosen = in_quietest_neighbourhoods(chosen, [&](int i) { return neighbourhood_excess(a, c, i); });
                 const int cap = pass == 2 ? kMaxAutocorrelationBlocks : kEarlyAutocorrelationBlocks;
                 int step = std::max<int>(1, (int)(chosen.size() + cap - 1) / cap);
                 std::vector<double> measured(lags.size(), 0.0);
@@ -1036,14 +1034,11 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
     profile.blocks_used = (long long)grain_only.size();
     if (grain_only.empty())
         throw GrainAnalysisError("no block is grain-only in every channel: cannot measure the channel correlation");
-    const std::vector<int> quiet = in_quietest_neighbourhoods(
-        grain_only,
-        [&](int i) {
-            double sum = 0;
-            for (int c = 0; c < nch; ++c) sum += neighbourhood_excess(analysis, c, i);
-            return sum / nch;
-        },
-        kQuietNeighbourhoodShare, kEarlyAutocorrelationBlocks);
+    const std::vector<int> quiet = in_quietest_neighbourhoods(grain_only, [&](int i) {
+        double sum = 0;
+        for (int c = 0; c < nch; ++c) sum += neighbourhood_excess(analysis, c, i);
+        return sum / nch;
+    });
     std::vector<double> numerator((size_t)nch * nch, 0.0), denominator((size_t)nch * nch, 0.0);
     for (int i : quiet) {
         for (int a = 0; a < nch; ++a)
