@@ -27,8 +27,9 @@ struct GrainChannel {
     std::string name;
     // Response curve: grain standard deviation at each signal level (sorted ascending).
     std::vector<double> level, sigma;
-    // Pixels behind each level, and the relative standard error of its sigma (the analysis'
-    // confidence); empty for a predicted profile.
+    // Pixels behind each level, and the relative standard error of its sigma as the level
+    // measures it alone (the analysis' confidence; the response pools each level with its
+    // neighbours); empty for a predicted profile.
     std::vector<long long> samples;
     std::vector<double> sigma_error;
     // Pixels of the plate at each level, grain-only or not (the trust verdict weighs levels

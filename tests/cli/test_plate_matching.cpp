@@ -105,35 +105,33 @@ TEST_CASE("known grain put on the real pictures analyses back to the known grain
         return;
     }
     // The plate's own grain adds to the known: the expected grain is their sum (sum_of_grains),
-    // the plate's as analysed alone. The pictures' content is what the analysis must see past;
-    // texture of the grain's own correlation it cannot (the guide's Limits), so the bounds
-    // depend on the grain's size.
+    // the plate's as analysed alone. The pictures' content is what the analysis must see past,
+    // within plate matching's tolerances (GrainMatchTolerance); texture of the grain's own
+    // correlation passes the block tests in proportion to the grain (the guide's Limits), which
+    // the response's pooling across levels brought within them.
     struct Case {
         const char* what;
         GrainProfile known;
-        double response_percent, nps_db, correlation;
     };
     const std::vector<double> correlation = {1, 0.5, 0.3, 0.5, 1, 0.4, 0.3, 0.4, 1};
     const Case cases[] = {
         // White grain about the plates' own amount (2-4 code values of 255). Measured (seed
-        // 11): 1.2-2.3 % (up to 4.0 % over seeds 11-13), 0.07-0.54 dB, correlation 0.004-0.020.
+        // 11): 0.9-2.6 % (up to 4.0 % over seeds 11-22), 0.07-0.54 dB, correlation 0.004-0.020.
         {"white grain, the plates' amount",
          known_profile({{0.0075, 0.005, 1.0, 0}, {0.0075, 0.00375, 1.0, 0}, {0.00875, 0.005, 1.0, 0}}, correlation,
-                       SignalEncoding::display, 0, 1),
-         5, 1.0, 0.05},
+                       SignalEncoding::display, 0, 1)},
         // Grain of 1 px (lag-1 0.7-0.8), the plates' own amount: the size of the pictures'
-        // fine texture (water, feathers), which the weak-texture test rejects. Measured 2.1-4.1 %
-        // (up to 5.5 % over seeds 11-13), 0.13-0.26 dB, correlation 0.028-0.038.
+        // fine texture (water, feathers), which the weak-texture test rejects. Measured 1.5-3.2 %
+        // (up to 4.99 % over seeds 11-22; up to 5.9 % before the response pooled each level with
+        // its neighbours), 0.13-0.26 dB, correlation 0.028-0.038.
         {"1 px grain, the plates' amount",
          known_profile({{0.0075, 0.005, 1.0, 1.0}, {0.0075, 0.00375, 1.0, 0.8}, {0.00875, 0.005, 1.0, 1.2}}, correlation,
-                       SignalEncoding::display, 0, 1),
-         6, 1.0, 0.05},
-        // The same 3-5x the plates' own, in 16 px blocks like the rest. Measured 1.9-4.1 %
-        // (up to 4.1 % over seeds 11-13), 0.10-0.37 dB, correlation 0.013-0.021.
+                       SignalEncoding::display, 0, 1)},
+        // The same 3-5x the plates' own, in 16 px blocks like the rest. Measured 1.2-4.1 %
+        // (up to 4.7 % over seeds 11-22), 0.10-0.37 dB, correlation 0.013-0.021.
         {"1 px grain, 3-5x the plates'",
          known_profile({{0.03, 0.02, 1.0, 1.0}, {0.03, 0.015, 1.0, 0.8}, {0.035, 0.02, 1.0, 1.2}}, correlation,
-                       SignalEncoding::display, 0, 1),
-         5, 1.0, 0.05},
+                       SignalEncoding::display, 0, 1)},
     };
     for (const Case& k : cases)
         for (const char* name : {"kodim10", "kodim23"}) {
@@ -153,13 +151,11 @@ TEST_CASE("known grain put on the real pictures analyses back to the known grain
             }
             apply_grain_profile(k.known, plate.view(), 11, 0, 0);
             const GrainMatch m = compare_grain_profiles(expected, analyse(plate));
-            for (const ChannelMatch& c : m.channels) {
-                INFO(k.what << ", " << name << " " << c.name << ": response " << c.response_error_percent << " %, NPS "
-                            << c.nps_distance_db << " dB, correlation " << m.max_correlation_difference);
-                CHECK(c.response_error_percent < k.response_percent);
-                CHECK(c.nps_distance_db < k.nps_db);
-            }
-            CHECK(m.max_correlation_difference < k.correlation);
+            std::ostringstream figures;
+            for (const ChannelMatch& c : m.channels)
+                figures << " " << c.name << " " << c.response_error_percent << " % " << c.nps_distance_db << " dB;";
+            INFO(k.what << ", " << name << ":" << figures.str() << " correlation " << m.max_correlation_difference);
+            CHECK(m.passes());
         }
 }
 
@@ -168,9 +164,10 @@ TEST_CASE("known grain on a CG render with sharp detail analyses back within the
     // The demo scene (ramps, a step wedge, sine bursts, a Siemens star, a colour chart), clean,
     // in display code values: every block the analysis keeps must be grain alone, however
     // sharp the detail beside it. White and 1 px grain of a plate's amount and 3-5x that.
-    // Measured (seed 11, the largest channel): 0.7-1.7 %, 0.17-0.39 dB, correlation
-    // 0.004-0.024 (with the response a quantile of the blocks' variances: 0.8-2.8 %; before
-    // the weak-texture test: 0.5-4.0 %).
+    // Measured (seed 11, the largest channel): 0.3-1.3 %, 0.14-0.33 dB, correlation
+    // 0.008-0.029 (before the response pooled each level with its neighbours: 0.7-1.7 %; with
+    // the response a quantile of the blocks' variances: 0.8-2.8 %; before the weak-texture
+    // test: 0.5-4.0 %).
     Image scene = demo_scene(768, 512);
     for (int y = 0; y < scene.window.height(); ++y)
         for (int x = 0; x < scene.window.width(); ++x)
