@@ -174,6 +174,7 @@ struct Block {
     std::vector<double> shape;     // per channel, the block's autocorrelation at kShapeLags
     std::vector<double> gradient;  // per channel, mean gh^2, gv^2, gh gv (forward differences)
     std::vector<double> low_band;  // per channel, LowBand::power of the residual
+    std::vector<float> extremes;   // per channel, its lowest and highest pixel
 };
 
 // The largest eigenvalue of the symmetric 2x2 matrix [[a, b], [b, c]].
@@ -302,62 +303,45 @@ void drop_levels_above_envelope(LevelCurve& curve, SignalEncoding encoding) {
 // block tests there (known 1 px grain on the Kodak plates: 10-20 % in variance at levels of
 // 4-15 blocks). The reported response is a local quadratic fit of log variance against level
 // (log level in a linear encoding, where grain scales with the signal), weighted by each
-// level's precision and by a Gaussian of kResponseSmoothingWidth of the measured range.
-constexpr double kResponseSmoothingWidth = 0.5;
-// A level this many of its standard errors below what the other levels give there (or of the
-// levels' own scatter, where that is wider) is kept as measured and left out of the fit:
-// picture content only adds variance, so such a level is the grain's (clipped highlights hold
-// less).
-constexpr double kBelowFitErrors = 4.0;
+// level's precision, by a Gaussian of kResponseSmoothingWidth of the measured range, and by a
+// Gaussian of how far apart the two levels' variances are in kPooledApartErrors of their
+// combined standard errors: a step the data show plainly (a stock's toe, where grain rises
+// from almost none; 25 % off in a predicted Tri-X's round trip when pooled) stays a step.
+constexpr double kResponseSmoothingWidth = 0.5, kPooledApartErrors = 5.0;
 
 void smooth_response(LevelCurve& curve, SignalEncoding encoding) {
     const size_t n = curve.level.size();
     if (n < 3) return;
     bool log_level = encoding == SignalEncoding::linear;
     for (double l : curve.level) log_level &= l > 0;
-    std::vector<double> x(n), log_variance(n);
-    std::vector<char> fitted(n);
+    std::vector<double> x(n);
     for (size_t k = 0; k < n; ++k) {
+        if (!(curve.variance[k] > 0 && curve.error[k] > 0)) return;  // no grain at a level: nothing to pool
         x[k] = log_level ? std::log(curve.level[k]) : curve.level[k];
-        fitted[k] = curve.variance[k] > 0 && curve.error[k] > 0;
-        log_variance[k] = fitted[k] ? std::log(curve.variance[k]) : 0.0;
     }
     const double width = kResponseSmoothingWidth * (x.back() - x.front());
     if (!(width > 0)) return;
-    // The fit's value at x0, without level `skip` (n: with all): weighted least squares on 1, u,
-    // u^2 with u = (x - x0) / width; the weighted mean where the levels in reach cannot hold a
-    // quadratic.
-    auto fit_at = [&](double x0, size_t skip) -> double {
+    // Weighted least squares on 1, u, u^2 with u = (x - x0) / width, at each level's x0; the
+    // weighted mean where the levels in reach cannot hold a quadratic.
+    std::vector<double> smooth(n);
+    for (size_t j = 0; j < n; ++j) {
         glm::dmat3 normal(0.0);
         glm::dvec3 right(0.0);
         double weights = 0, mean = 0;
         for (size_t k = 0; k < n; ++k) {
-            if (!fitted[k] || k == skip) continue;
-            const double u = (x[k] - x0) / width;
-            const double w = std::exp(-0.5 * u * u) / (curve.error[k] * curve.error[k]);
+            const double u = (x[k] - x[j]) / width, y = std::log(curve.variance[k]);
+            const double apart =
+                (y - std::log(curve.variance[j])) / (2 * kPooledApartErrors * std::hypot(curve.error[k], curve.error[j]));
+            const double w = std::exp(-0.5 * u * u - 0.5 * apart * apart) / (curve.error[k] * curve.error[k]);
             const glm::dvec3 f(1.0, u, u * u);
             normal += w * glm::outerProduct(f, f);
-            right += w * log_variance[k] * f;
-            weights += w, mean += w * log_variance[k];
+            right += w * y * f;
+            weights += w, mean += w * y;
         }
-        if (!(weights > 0)) return NAN;
-        if (std::abs(glm::determinant(normal)) <= 1e-9 * normal[0][0] * normal[1][1] * normal[2][2]) return mean / weights;
-        return (glm::inverse(normal) * right)[0];
-    };
-    // Each level against what the others give there, in its standard errors (log variance has
-    // twice sigma's relative error), judged by the levels' own scatter where that is wider.
-    std::vector<double> residual(n, 0.0), scatter;
-    for (size_t k = 0; k < n; ++k) {
-        const double r = fitted[k] ? (log_variance[k] - fit_at(x[k], k)) / (2 * curve.error[k]) : NAN;
-        if (std::isfinite(r)) scatter.push_back(std::abs(residual[k] = r));
+        const bool solvable = std::abs(glm::determinant(normal)) > 1e-9 * normal[0][0] * normal[1][1] * normal[2][2];
+        smooth[j] = std::exp(solvable ? (glm::inverse(normal) * right)[0] : mean / weights);
     }
-    const double limit = kBelowFitErrors * std::max(1.0, 1.4826 * median_of(scatter));
-    for (size_t k = 0; k < n; ++k)
-        if (residual[k] < -limit) fitted[k] = 0;
-    std::vector<double> smooth(n);
-    for (size_t k = 0; k < n; ++k) smooth[k] = fitted[k] ? fit_at(x[k], n) : NAN;
-    for (size_t k = 0; k < n; ++k)
-        if (std::isfinite(smooth[k])) curve.variance[k] = std::exp(smooth[k]);
+    curve.variance = smooth;
 }
 
 // Grain variance in patch space (Liu, Tanaka and Okutomi, "Single-image noise level estimation
@@ -554,6 +538,7 @@ struct ChannelState {
     std::vector<double> rho;        // autocorrelation on the lag grid
     std::vector<char> candidate;    // per block: grain-like short-range correlation, stationary
     std::vector<char> accepted;     // per block: a candidate whose variance fits the curve
+    std::vector<char> clipped;      // per block: reaches the plate's lowest or highest value
     std::vector<int> bin;           // per block
     LevelCurve curve;               // the blocks' selection: the quantile of their variances
     LevelCurve response;            // reported: the same blocks' variance in patch space
@@ -673,12 +658,15 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
             b.residual.resize((size_t)nch * npx);
             for (int c = 0; c < nch; ++c) {
                 double* r = &b.residual[(size_t)c * npx];
+                float lowest = INFINITY, highest = -INFINITY;
                 for (int y = 0; y < bs; ++y)
                     for (int x = 0; x < bs; ++x) {
                         float v = view.at(origins[i].x + x, origins[i].y + y)[c];
                         if (!std::isfinite(v)) finite[i] = 0;
                         r[y * bs + x] = v;
+                        lowest = std::min(lowest, v), highest = std::max(highest, v);
                     }
+                b.extremes.insert(b.extremes.end(), {lowest, highest});
                 double mean = 0;
                 for (int p = 0; p < npx; ++p) mean += r[p];
                 b.level.push_back(mean / npx);
@@ -752,6 +740,16 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
             s.bin.push_back(width > 0 ? std::clamp((int)std::floor((b.level[c] - lo) / width), 0, nbins - 1) : 0);
         s.accepted.assign(nblocks, 0);
         s.candidate.assign(nblocks, 0);
+        // A block reaching the plate's lowest or highest value may be clipped there: its grain is
+        // cut off (none at all where the whole block is), so it is never grain-only. An
+        // unclipped plate loses the one or two blocks holding its extreme pixels; a constant
+        // channel none (it has no grain, which the profile says).
+        float plate_lowest = INFINITY, plate_highest = -INFINITY;
+        for (const Block& b : blocks)
+            plate_lowest = std::min(plate_lowest, b.extremes[2 * c]), plate_highest = std::max(plate_highest, b.extremes[2 * c + 1]);
+        for (const Block& b : blocks)
+            s.clipped.push_back(plate_lowest < plate_highest &&
+                                (b.extremes[2 * c] <= plate_lowest || b.extremes[2 * c + 1] >= plate_highest));
     }
 
     // Whether each block's short-range correlation is near the median of the reference
@@ -913,7 +911,8 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                     // No grain-only blocks yet to compare shapes with: picture content only adds
                     // variance, so start from the quietest quarter of each bin.
                     std::vector<std::vector<std::pair<double, int>>> per_bin(nbins);
-                    for (int i = 0; i < nblocks; ++i) per_bin[s.bin[i]].push_back({blocks[i].squares[c], i});
+                    for (int i = 0; i < nblocks; ++i)
+                        if (!s.clipped[i]) per_bin[s.bin[i]].push_back({blocks[i].squares[c], i});
                     for (auto& bin : per_bin) {
                         std::sort(bin.begin(), bin.end());
                         for (size_t j = 0; j < (bin.size() + 3) / 4; ++j) reference[bin[j].second] = 1;
@@ -924,7 +923,7 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
                 for (int iteration = 0; iteration < kWeakTextureIterations; ++iteration) {
                     const std::vector<char> weak = weak_textured_blocks(c), smooth = low_band_blocks(c, pass);
                     for (int i = 0; i < nblocks; ++i)
-                        s.candidate[i] = typical[i] && stationary[i] && weak[i] && smooth[i];
+                        s.candidate[i] = !s.clipped[i] && typical[i] && stationary[i] && weak[i] && smooth[i];
                     LevelCurve next = fit_curve(c, false);
                     bool settled = next.bin == s.curve.bin;
                     for (size_t k = 0; settled && k < next.variance.size(); ++k)

@@ -278,16 +278,14 @@ TEST_CASE("the grain's correlation is read from the quieter neighbourhoods, past
     }
 }
 
-TEST_CASE("the response pools each level with its neighbours, and keeps a clipped level as measured",
-          "[plate][analysis]") {
-    // 1 px grain, linear in level, on ramps (display code values).
+TEST_CASE("the response pools each level with its neighbours", "[plate][analysis]") {
+    // 1 px grain, linear in level, on a small ramp (display code values, 16 blocks a level): a
+    // level read on its own misses the truth by 0.8 of its standard error on average (a
+    // normal's mean |x|; measured 0.87 over these seeds); pooled with its neighbours, by 0.52.
     const GrainProfile grain = known_profile({{0.01, 0.01, 1, 1}, {0.01, 0.01, 1, 1}, {0.01, 0.01, 1, 1}},
                                              {1, 0, 0, 0, 1, 0, 0, 0, 1}, SignalEncoding::display, 0, 1.5);
     GrainAnalysisSettings settings;
     settings.encoding = SignalEncoding::display;
-    // A small plate, 16 blocks a level: a level read on its own misses the truth by 0.8 of its
-    // standard error on average (a normal's mean |x|; measured 0.87 over these seeds); pooled
-    // with its neighbours, by 0.51.
     double error_sum = 0, own_error_sum = 0;
     for (uint64_t seed = 1; seed <= 6; ++seed) {
         Image plate = ramp(256, 256, 3, 0.1, 0.9);
@@ -300,22 +298,33 @@ TEST_CASE("the response pools each level with its neighbours, and keeps a clippe
     }
     INFO("mean |error| / mean standard error of a level: " << error_sum / own_error_sum);
     CHECK(error_sum / own_error_sum < 0.65);
+}
 
-    // The ramp's top clipped at 1: the top level's blocks hold less grain, which the fit must
-    // neither spread to the levels below nor lift (measured: the top 0.41-0.82 of the grain, the
-    // rest within 5.7 %; pooled with the top level, G's next two read 9-13 % low).
+TEST_CASE("blocks clipped at the plate's extremes are left out, however much of the plate they cover",
+          "[plate][analysis]") {
+    // A ramp whose top third clips at 1 (a blown-out sky), with 1 px grain linear in level.
+    // Measured: every level within 4.6 % of the grain. Before clipped blocks were left out,
+    // their variance (none, or cut off) set the curve: G found no level at seed 1, and B read
+    // 0.48-0.54 of the grain at seed 2.
+    const GrainProfile grain = known_profile({{0.01, 0.01, 1, 1}, {0.01, 0.01, 1, 1}, {0.01, 0.01, 1, 1}},
+                                             {1, 0, 0, 0, 1, 0, 0, 0, 1}, SignalEncoding::display, 0, 1.5);
+    GrainAnalysisSettings settings;
+    settings.encoding = SignalEncoding::display;
     for (uint64_t seed = 1; seed <= 3; ++seed) {
-        Image plate = ramp(512, 256, 3, 0.1, 1.08);
+        Image plate = ramp(512, 256, 3, 0.1, 1.4);
         apply_grain_profile(grain, plate.view(), seed, 0, 0);
         for (int y = 0; y < plate.window.height(); ++y)
             for (int x = 0; x < plate.window.width(); ++x)
                 for (int c = 0; c < 3; ++c) plate.at(x, y)[c] = std::min(plate.at(x, y)[c], 1.0f);
-        for (const GrainChannel& c : analyze_grain({plate.view()}, settings).channels)
+        INFO("seed " << seed);
+        const GrainProfile measured = analyze_grain({plate.view()}, settings);
+        for (const GrainChannel& c : measured.channels) {
+            CHECK(c.level.size() >= 8);
             for (size_t i = 0; i < c.level.size(); ++i) {
                 const double ratio = c.sigma[i] / grain.channels[0].sigma_at(c.level[i]);
-                INFO("seed " << seed << " " << c.name << " level " << c.level[i] << ": " << ratio << " of the grain");
-                if (c.level[i] > 0.97) CHECK(ratio < 0.85);
-                else CHECK(ratio == Approx(1).epsilon(0.07));
+                INFO(c.name << " level " << c.level[i] << ": " << ratio << " of the grain");
+                CHECK(ratio == Approx(1).epsilon(0.06));
             }
+        }
     }
 }
