@@ -116,7 +116,9 @@ struct AnalyzeOptions {
     std::string output, colorspace, encoding, frames, plot;
     std::optional<std::string> layer;  // --layer
     std::vector<int> region;
-    int block_size = 0, levels = 16, min_blocks = 4, threads = 0;
+    // The analysis' own defaults.
+    int block_size = GrainAnalysisSettings{}.block_size_px, levels = GrainAnalysisSettings{}.level_bins,
+        min_blocks = GrainAnalysisSettings{}.min_blocks_per_level, threads = 0;
 };
 
 GrainProfile analyze_files(const std::vector<std::string>& paths, const AnalyzeOptions& o, const std::vector<int>& region,
@@ -384,9 +386,12 @@ void add_analysis_flags(CLI::App& cmd, AnalyzeOptions& o) {
                                              "integer files and linear for float files)");
     cmd.add_option("--block-size", o.block_size, "Block size in pixels (default: from the grain, 16 to 64)")
         ->check(CLI::Range(8, 256));
-    cmd.add_option("--levels", o.levels, "Signal level bins of the response curve")->check(CLI::Range(1, 256));
+    cmd.add_option("--levels", o.levels, "Signal level bins of the response curve")
+        ->check(CLI::Range(1, 256))
+        ->capture_default_str();
     cmd.add_option("--min-blocks", o.min_blocks, "Grain-only blocks a level needs to be estimated")
-        ->check(CLI::Range(1, 100000));
+        ->check(CLI::Range(1, 100000))
+        ->capture_default_str();
     cmd.add_option("--threads", o.threads, "Worker threads, 0 = all cores");
     add_layer_flag(cmd, o.layer, "measure");
 }
