@@ -221,7 +221,9 @@ void print_profile(const GrainProfile& p) {
                     ch.level.back(), lo, hi);
         if (!ch.sigma_error.empty())
             std::printf(" (within %.1f %%)", 100 * *std::max_element(ch.sigma_error.begin(), ch.sigma_error.end()));
-        std::printf(", %lld px; half-power %.3f cycles/px, noise-equivalent area %.2f px^2\n", samples,
+        std::printf(", %lld px", samples);
+        if (ch.clipped_samples > 0) std::printf(" (%lld px left out as clipped)", ch.clipped_samples);
+        std::printf("; half-power %.3f cycles/px, noise-equivalent area %.2f px^2\n",
                     half_power_frequency(radial_power_spectrum(ch)), noise_equivalent_area_px2(ch));
     }
     const size_t n = p.channels.size();

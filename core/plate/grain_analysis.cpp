@@ -1074,6 +1074,7 @@ GrainProfile analyze_grain(const std::vector<ConstImageView>& frames, const Grai
                                               seen_levels);
         }
         profile.sparse_levels.insert(profile.sparse_levels.end(), sparse.begin(), sparse.end());
+        ch.clipped_samples = (long long)std::count(s.clipped.begin(), s.clipped.end(), 1) * npx;
         ch.acf_radius = analysis.lags.radius;
         ch.autocorrelation = s.rho;
         profile.channels.push_back(std::move(ch));

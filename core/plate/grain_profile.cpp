@@ -207,6 +207,8 @@ GrainProfile parse_grain_profile_json(const std::string& text, const std::string
         }
         if (response.contains("relative_error"))
             ch.sigma_error = number_array(response["relative_error"], origin, at + ".response.relative_error");
+        if (cj.contains("clipped_samples"))
+            ch.clipped_samples = integer_value(cj["clipped_samples"], 0, LLONG_MAX, origin, at + ".clipped_samples");
         const json& acf = member(cj, "autocorrelation", origin, at);
         ch.acf_radius = (int)integer_value(member(acf, "radius", origin, at + ".autocorrelation"), 0, 64, origin,
                                            at + ".autocorrelation.radius");
@@ -270,6 +272,7 @@ std::string grain_profile_to_json(const GrainProfile& p) {
         if (!ch.sigma_error.empty()) response["relative_error"] = ch.sigma_error;
         channels.push_back({{"name", ch.name},
                             {"response", response},
+                            {"clipped_samples", ch.clipped_samples},
                             {"autocorrelation", {{"radius", ch.acf_radius}, {"values", ch.autocorrelation}}},
                             {"derived",
                              {{"noise_equivalent_area_px2", noise_equivalent_area_px2(ch)},

@@ -35,6 +35,9 @@ struct GrainChannel {
     // Pixels of the plate at each level, grain-only or not (the trust verdict weighs levels
     // by them); empty for a predicted profile.
     std::vector<long long> plate_samples;
+    // The plate's pixels in blocks left out as clipped (holding the channel's lowest or highest
+    // value on the plate); 0 for a predicted profile.
+    long long clipped_samples = 0;
     // Normalised autocorrelation, (2 radius + 1)^2 values, row-major from (-r, -r).
     int acf_radius = 0;
     std::vector<double> autocorrelation{1.0};

@@ -290,11 +290,13 @@ TEST_CASE("the response pools each level with its neighbours", "[plate][analysis
     for (uint64_t seed = 1; seed <= 6; ++seed) {
         Image plate = ramp(256, 256, 3, 0.1, 0.9);
         apply_grain_profile(grain, plate.view(), seed, 0, 0);
-        for (const GrainChannel& c : analyze_grain({plate.view()}, settings).channels)
+        for (const GrainChannel& c : analyze_grain({plate.view()}, settings).channels) {
+            CHECK(c.clipped_samples <= 2 * 16 * 16);  // unclipped: the blocks of its extreme pixels
             for (size_t i = 0; i < c.level.size(); ++i) {
                 error_sum += std::abs(c.sigma[i] / grain.channels[0].sigma_at(c.level[i]) - 1);
                 own_error_sum += c.sigma_error[i];
             }
+        }
     }
     INFO("mean |error| / mean standard error of a level: " << error_sum / own_error_sum);
     CHECK(error_sum / own_error_sum < 0.65);
@@ -319,6 +321,8 @@ TEST_CASE("blocks clipped at the plate's extremes are left out, however much of 
         INFO("seed " << seed);
         const GrainProfile measured = analyze_grain({plate.view()}, settings);
         for (const GrainChannel& c : measured.channels) {
+            // Each channel's ramp reaches 1 over 31 % of the plate's width (more of its blocks).
+            CHECK(c.clipped_samples > 0.31 * 512 * 256);
             CHECK(c.level.size() >= 8);
             for (size_t i = 0; i < c.level.size(); ++i) {
                 const double ratio = c.sigma[i] / grain.channels[0].sigma_at(c.level[i]);

@@ -19,6 +19,7 @@ GrainProfile sample_profile() {
     p.blocks_used = 12;
     p.channels[0].samples.assign(p.channels[0].level.size(), 4096);
     p.channels[0].plate_samples.assign(p.channels[0].level.size(), 16384);
+    p.channels[1].clipped_samples = 8192;
     p.sparse_levels.push_back({"G", 0.95, 2048, 8192});
     return p;
 }
@@ -46,6 +47,7 @@ TEST_CASE("a grain profile survives writing and reading", "[plate][profile]") {
         CHECK(q.channels[c].sigma == p.channels[c].sigma);
         CHECK(q.channels[c].samples == p.channels[c].samples);
         CHECK(q.channels[c].plate_samples == p.channels[c].plate_samples);
+        CHECK(q.channels[c].clipped_samples == p.channels[c].clipped_samples);
         CHECK(q.channels[c].acf_radius == p.channels[c].acf_radius);
         CHECK(q.channels[c].autocorrelation == p.channels[c].autocorrelation);
     }
@@ -121,6 +123,7 @@ TEST_CASE("a corrupt or inconsistent profile gets an error naming the field", "[
     CHECK_THAT(with("\"block_size_px\": 64", "\"block_size_px\": \"64\""), Catch::Contains("analysis.block_size_px"));
     CHECK_THAT(with("\"analysis\": {", "\"analysis\": 5, \"unused\": {"), Catch::Contains("field 'analysis'"));
     CHECK_THAT(with("\"level\": 0.95", "\"level\": \"high\""), Catch::Contains("analysis.sparse_levels[0].level"));
+    CHECK_THAT(with("\"clipped_samples\": 8192", "\"clipped_samples\": -1"), Catch::Contains("channels[1].clipped_samples"));
     CHECK_THAT(error_of(R"({"format": "darkroom-grain-profile", "version": 1e999})"), Catch::Contains("not valid JSON"));
     const std::string deep = std::string(200000, '[') + std::string(200000, ']');  // dump() would overflow the stack
     CHECK_THAT(error_of("{\"format\": " + deep + "}"), Catch::Contains("field 'format': expected a string, got an array"));
