@@ -330,8 +330,8 @@ void smooth_response(LevelCurve& curve, SignalEncoding encoding) {
         double weights = 0, mean = 0;
         for (size_t k = 0; k < n; ++k) {
             const double u = (x[k] - x[j]) / width, y = std::log(curve.variance[k]);
-            const double apart =
-                (y - std::log(curve.variance[j])) / (2 * kPooledApartErrors * std::hypot(curve.error[k], curve.error[j]));
+            const double combined_error = std::hypot(curve.error[k], curve.error[j]);
+            const double apart = (y - std::log(curve.variance[j])) / (2 * kPooledApartErrors * combined_error);
             const double w = std::exp(-0.5 * u * u - 0.5 * apart * apart) / (curve.error[k] * curve.error[k]);
             const glm::dvec3 f(1.0, u, u * u);
             normal += w * glm::outerProduct(f, f);
@@ -745,8 +745,10 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
         // unclipped plate loses the one or two blocks holding its extreme pixels; a constant
         // channel none (it has no grain, which the profile says).
         float plate_lowest = INFINITY, plate_highest = -INFINITY;
-        for (const Block& b : blocks)
-            plate_lowest = std::min(plate_lowest, b.extremes[2 * c]), plate_highest = std::max(plate_highest, b.extremes[2 * c + 1]);
+        for (const Block& b : blocks) {
+            plate_lowest = std::min(plate_lowest, b.extremes[2 * c]);
+            plate_highest = std::max(plate_highest, b.extremes[2 * c + 1]);
+        }
         for (const Block& b : blocks)
             s.clipped.push_back(plate_lowest < plate_highest &&
                                 (b.extremes[2 * c] <= plate_lowest || b.extremes[2 * c + 1] >= plate_highest));
@@ -875,7 +877,7 @@ BlockAnalysis analyse_blocks(const std::vector<ConstImageView>& frames, const Gr
             const int n = (int)variance[k].size();
             if (n < min_blocks) continue;
             curve.level.push_back(level[k] / n);
-            if (space && calibration) {
+            if (calibration) {
                 PatchMoments moments(space->dim);
                 for (int i : members[k]) space->accumulate(&blocks[i].residual[(size_t)c * npx], bs, moments);
                 const PatchCalibration::Bias bias = calibration->at(n);

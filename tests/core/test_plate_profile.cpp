@@ -123,7 +123,8 @@ TEST_CASE("a corrupt or inconsistent profile gets an error naming the field", "[
     CHECK_THAT(with("\"block_size_px\": 64", "\"block_size_px\": \"64\""), Catch::Contains("analysis.block_size_px"));
     CHECK_THAT(with("\"analysis\": {", "\"analysis\": 5, \"unused\": {"), Catch::Contains("field 'analysis'"));
     CHECK_THAT(with("\"level\": 0.95", "\"level\": \"high\""), Catch::Contains("analysis.sparse_levels[0].level"));
-    CHECK_THAT(with("\"clipped_samples\": 8192", "\"clipped_samples\": -1"), Catch::Contains("channels[1].clipped_samples"));
+    CHECK_THAT(with("\"clipped_samples\": 8192", "\"clipped_samples\": -1"),
+               Catch::Contains("channels[1].clipped_samples"));
     CHECK_THAT(error_of(R"({"format": "darkroom-grain-profile", "version": 1e999})"), Catch::Contains("not valid JSON"));
     const std::string deep = std::string(200000, '[') + std::string(200000, ']');  // dump() would overflow the stack
     CHECK_THAT(error_of("{\"format\": " + deep + "}"), Catch::Contains("field 'format': expected a string, got an array"));
