@@ -109,6 +109,9 @@ TEST_CASE("known grain put on the real pictures analyses back to the known grain
     // within plate matching's tolerances (GrainMatchTolerance); texture of the grain's own
     // correlation passes the block tests in proportion to the grain (the guide's Limits), which
     // the response's pooling across levels brought within them.
+    // Three realisations of the known grain: the estimator scatters from one to the next (over
+    // seeds 11-22, 2 of the 96 readings reach 5.3-5.4 %, both 1 px grain).
+    constexpr uint64_t kKnownGrainSeeds[] = {11, 12, 13};
     struct Case {
         const char* what;
         GrainProfile known;
@@ -116,20 +119,21 @@ TEST_CASE("known grain put on the real pictures analyses back to the known grain
     const std::vector<double> correlation = {1, 0.5, 0.3, 0.5, 1, 0.4, 0.3, 0.4, 1};
     const Case cases[] = {
         // White grain about the plates' own amount (2-4 code values of 255). Measured (seed
-        // 11): 1.1-2.4 % (up to 4.2 % over seeds 11-22), NPS up to 0.57 dB, correlation
-        // 0.003-0.020.
+        // 11): 1.1-2.4 % (up to 4.2 % over seeds 11-13, and 11-22), NPS up to 0.57 dB (0.87),
+        // correlation 0.003-0.020.
         {"white grain, the plates' amount",
          known_profile({{0.0075, 0.005, 1.0, 0}, {0.0075, 0.00375, 1.0, 0}, {0.00875, 0.005, 1.0, 0}}, correlation,
                        SignalEncoding::display, 0, 1)},
         // Grain of 1 px (lag-1 0.7-0.8), the plates' own amount: the size of the pictures'
         // fine texture (water, feathers), which the weak-texture test rejects. Measured 1.8-3.1 %
-        // (over seeds 11-22 up to 5.4 %, 2 of 24 readings above 5 %), NPS up to 0.30 dB,
-        // correlation 0.027-0.038.
+        // (up to 4.8 % over seeds 11-13; over 11-22 up to 5.4 %, 2 of 24 readings above 5 %),
+        // NPS up to 0.30 dB (0.67), correlation 0.027-0.038.
         {"1 px grain, the plates' amount",
          known_profile({{0.0075, 0.005, 1.0, 1.0}, {0.0075, 0.00375, 1.0, 0.8}, {0.00875, 0.005, 1.0, 1.2}}, correlation,
                        SignalEncoding::display, 0, 1)},
         // The same 3-5x the plates' own, in 16 px blocks like the rest. Measured 0.7-3.3 %
-        // (up to 4.9 % over seeds 11-22), NPS up to 0.30 dB, correlation 0.013-0.020.
+        // (up to 4.7 % over seeds 11-13, 4.9 % over 11-22), NPS up to 0.30 dB (0.53),
+        // correlation 0.013-0.020 (0.021).
         {"1 px grain, 3-5x the plates'",
          known_profile({{0.03, 0.02, 1.0, 1.0}, {0.03, 0.015, 1.0, 0.8}, {0.035, 0.02, 1.0, 1.2}}, correlation,
                        SignalEncoding::display, 0, 1)},
@@ -150,13 +154,17 @@ TEST_CASE("known grain put on the real pictures analyses back to the known grain
                         level.push_back(e.level[i]), sigma.push_back(e.sigma[i]);
                 e.level = level, e.sigma = sigma;
             }
-            apply_grain_profile(k.known, plate.view(), 11, 0, 0);
-            const GrainMatch m = compare_grain_profiles(expected, analyse(plate));
-            std::ostringstream figures;
-            for (const ChannelMatch& c : m.channels)
-                figures << " " << c.name << " " << c.response_error_percent << " % " << c.nps_distance_db << " dB;";
-            INFO(k.what << ", " << name << ":" << figures.str() << " correlation " << m.max_correlation_difference);
-            CHECK(m.passes());
+            for (uint64_t seed : kKnownGrainSeeds) {
+                Image grained = plate;
+                apply_grain_profile(k.known, grained.view(), seed, 0, 0);
+                const GrainMatch m = compare_grain_profiles(expected, analyse(grained));
+                std::ostringstream figures;
+                for (const ChannelMatch& c : m.channels)
+                    figures << " " << c.name << " " << c.response_error_percent << " % " << c.nps_distance_db << " dB;";
+                INFO(k.what << ", " << name << ", seed " << seed << ":" << figures.str() << " correlation "
+                            << m.max_correlation_difference);
+                CHECK(m.passes());
+            }
         }
 }
 
