@@ -314,10 +314,11 @@ void smooth_response(LevelCurve& curve, SignalEncoding encoding) {
     if (n < 3) return;
     bool log_level = encoding == SignalEncoding::linear;
     for (double l : curve.level) log_level &= l > 0;
-    std::vector<double> x(n);
+    std::vector<double> x(n), log_variance(n);
     for (size_t k = 0; k < n; ++k) {
         if (!(curve.variance[k] > 0 && curve.error[k] > 0)) return;  // no grain at a level: nothing to pool
         x[k] = log_level ? std::log(curve.level[k]) : curve.level[k];
+        log_variance[k] = std::log(curve.variance[k]);
     }
     const double width = kResponseSmoothingWidth * (x.back() - x.front());
     if (!(width > 0)) return;
@@ -329,9 +330,9 @@ void smooth_response(LevelCurve& curve, SignalEncoding encoding) {
         glm::dvec3 right(0.0);
         double weights = 0, mean = 0;
         for (size_t k = 0; k < n; ++k) {
-            const double u = (x[k] - x[j]) / width, y = std::log(curve.variance[k]);
+            const double u = (x[k] - x[j]) / width, y = log_variance[k];
             const double combined_error = std::hypot(curve.error[k], curve.error[j]);
-            const double apart = (y - std::log(curve.variance[j])) / (2 * kPooledApartErrors * combined_error);
+            const double apart = (y - log_variance[j]) / (2 * kPooledApartErrors * combined_error);
             const double w = std::exp(-0.5 * u * u - 0.5 * apart * apart) / (curve.error[k] * curve.error[k]);
             const glm::dvec3 f(1.0, u, u * u);
             normal += w * glm::outerProduct(f, f);
